@@ -1,0 +1,147 @@
+"""Claims registry and the one verdict rule used by every chapter.
+
+A chapter records each claim of its paper as a :class:`Claim` with the
+published value (if the paper gives one), our reproduced value, our Monte Carlo
+uncertainty (a standard error) and, where the claim is about an ordering or a
+trend, whether that statement holds in our runs (computed by code, never
+typed). :func:`verdict` turns those numbers into one of four verdicts:
+
+``reproduced``
+    a numeric claim whose published value lies within 2 standard errors of ours,
+    or within the claim's stated relative tolerance (default 10 %); or a purely
+    qualitative claim (no published number) whose statement holds.
+``qualitatively reproduced``
+    the numbers do not match, but the claim's ordering/trend holds.
+``not reproduced``
+    neither: our honest run contradicts the claim.
+``not checkable``
+    the paper gives nothing we can compare with (no number and no testable
+    statement).
+
+Each chapter saves its claims to ``<claims dir>/<paper>.json``; the scorecard
+page gathers all of them. The claims directory is ``$PFREPRO_CLAIMS_DIR`` or
+``./_claims`` relative to the working directory of the notebook (``book/``).
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import pandas as pd
+
+__all__ = ["Claim", "ClaimsRegistry", "verdict", "VERDICTS", "claims_dir", "load_all_claims",
+           "DEFAULT_REL_TOL", "Z_CRIT"]
+
+VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable")
+#: relative tolerance for numeric claims when none is stated
+DEFAULT_REL_TOL = 0.10
+#: a published value within Z_CRIT standard errors of ours counts as inside our uncertainty
+Z_CRIT = 2.0
+
+
+def _isnum(v) -> bool:
+    return v is not None and isinstance(v, (int, float)) and math.isfinite(v)
+
+
+def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, qualitative=None) -> str:
+    """The verdict rule (see module docstring). All inputs are numbers or None/bool."""
+    if _isnum(published) and _isnum(reproduced):
+        diff = abs(reproduced - published)
+        inside = _isnum(se) and se > 0 and diff <= Z_CRIT * se
+        close = rel_tol is not None and diff <= rel_tol * abs(published)
+        if inside or close:
+            return "reproduced"
+        if qualitative is True:
+            return "qualitatively reproduced"
+        return "not reproduced"
+    if qualitative is None:
+        return "not checkable"
+    return "reproduced" if bool(qualitative) else "not reproduced"
+
+
+@dataclass
+class Claim:
+    """One claim of one paper, with the numbers its verdict is computed from."""
+
+    paper: str
+    claim_id: str
+    text: str
+    published: float | None = None
+    reproduced: float | None = None
+    se: float | None = None
+    rel_tol: float | None = DEFAULT_REL_TOL
+    qualitative: bool | None = None
+    source: str = ""   # where in the paper (table/figure/section)
+    note: str = ""     # what was compared, in a few words
+
+    @property
+    def verdict(self) -> str:
+        return verdict(self.published, self.reproduced, self.se, self.rel_tol, self.qualitative)
+
+    def as_row(self) -> dict:
+        d = asdict(self)
+        d["verdict"] = self.verdict
+        return d
+
+
+def claims_dir() -> Path:
+    return Path(os.environ.get("PFREPRO_CLAIMS_DIR", Path.cwd() / "_claims"))
+
+
+def _clean(v):
+    """JSON-safe scalars (numpy -> python, NaN -> None)."""
+    if v is None or isinstance(v, (str, bool)):
+        return v
+    try:
+        import numpy as np
+
+        if isinstance(v, np.bool_):
+            return bool(v)
+        v = float(v)
+    except (TypeError, ValueError):
+        return v
+    return v if math.isfinite(v) else None
+
+
+class ClaimsRegistry:
+    """Collects a chapter's claims and saves them for the scorecard."""
+
+    def __init__(self, paper: str):
+        self.paper = paper
+        self.claims: list[Claim] = []
+
+    def add(self, claim_id: str, text: str, *, published=None, reproduced=None, se=None,
+            rel_tol=DEFAULT_REL_TOL, qualitative=None, source="", note="") -> Claim:
+        if any(c.claim_id == claim_id for c in self.claims):
+            raise ValueError(f"claim {claim_id!r} already recorded for {self.paper}")
+        if qualitative is not None and not isinstance(qualitative, (bool,)):
+            qualitative = bool(qualitative)
+        c = Claim(self.paper, claim_id, text, _clean(published), _clean(reproduced), _clean(se),
+                  _clean(rel_tol), qualitative, source, note)
+        self.claims.append(c)
+        return c
+
+    def to_frame(self) -> pd.DataFrame:
+        return pd.DataFrame([c.as_row() for c in self.claims])
+
+    def save(self, directory: Path | None = None) -> Path:
+        d = Path(directory) if directory is not None else claims_dir()
+        d.mkdir(parents=True, exist_ok=True)
+        path = d / f"{self.paper}.json"
+        path.write_text(json.dumps([c.as_row() for c in self.claims], indent=1), encoding="utf-8")
+        return path
+
+
+def load_all_claims(directory: Path | None = None) -> pd.DataFrame:
+    """Every saved claim, with verdicts recomputed by :func:`verdict` (never read back as text)."""
+    d = Path(directory) if directory is not None else claims_dir()
+    rows = []
+    for path in sorted(d.glob("*.json")):
+        for row in json.loads(path.read_text(encoding="utf-8")):
+            row.pop("verdict", None)
+            rows.append(Claim(**row).as_row())
+    cols = list(Claim.__dataclass_fields__) + ["verdict"]
+    return pd.DataFrame(rows, columns=cols)

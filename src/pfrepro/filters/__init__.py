@@ -1,0 +1,16 @@
+"""Filters: Kalman family, bootstrap particle filter with resampling schemes, grid filter."""
+from .base import Filter, FilterDivergenceError, FilterResult, GaussianFilter
+from .grid import GridFilter
+from .kalman import ExtendedKalmanFilter, KalmanFilter, kalman_update
+from .particle import BootstrapParticleFilter, normalize_log_weights
+from .resampling import (RESAMPLING_SCHEMES, effective_sample_size, multinomial_resample,
+                         offspring_counts, resample, residual_resample, stratified_resample,
+                         systematic_resample)
+from .sigma_points import ScaledSigmaPoints, unscented_transform
+from .ukf import UnscentedKalmanFilter
+
+__all__ = ["Filter", "FilterResult", "GaussianFilter", "FilterDivergenceError", "KalmanFilter",
+           "ExtendedKalmanFilter", "kalman_update", "UnscentedKalmanFilter", "ScaledSigmaPoints",
+           "unscented_transform", "BootstrapParticleFilter", "normalize_log_weights", "GridFilter",
+           "resample", "multinomial_resample", "stratified_resample", "systematic_resample",
+           "residual_resample", "offspring_counts", "effective_sample_size", "RESAMPLING_SCHEMES"]

@@ -1,0 +1,107 @@
+"""What every filter returns, and the small shared interface."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..validation import as_measurements
+
+__all__ = ["FilterResult", "Filter", "GaussianFilter", "FilterDivergenceError"]
+
+
+class FilterDivergenceError(FloatingPointError):
+    """Raised when a filter's state becomes non-finite (e.g. a covariance loses definiteness)."""
+
+
+@dataclass
+class FilterResult:
+    """Filtered estimates for ``runs`` runs of ``T`` steps.
+
+    Attributes
+    ----------
+    x : ndarray (runs, T, dim_x)
+        Posterior means E[x_k | y_1:k]; ``x[:, k - 1]`` estimates x_k.
+    P : ndarray (runs, T, dim_x, dim_x) or None
+        Posterior covariances, where the filter provides them.
+    diagnostics : dict
+        Filter-specific extras (effective sample sizes, resampling flags,
+        collapse counts, lost grid mass, ...).
+    """
+
+    x: np.ndarray
+    P: np.ndarray | None = None
+    diagnostics: dict = field(default_factory=dict)
+
+    @property
+    def runs(self) -> int:
+        return self.x.shape[0]
+
+
+class Filter:
+    """Base class: a filter is built from a model plus settings, then run on measurements.
+
+    ``filter(y, rng)`` takes measurements ``(runs, T, dim_y)`` (or one run) and
+    returns a :class:`FilterResult`; all runs are processed in one call.
+    Deterministic filters ignore ``rng``.
+    """
+
+    name = "filter"
+    needs_rng = False
+
+    def __init__(self, model):
+        self.model = model
+
+    def _prepare(self, y, rng):
+        y = as_measurements(y, self.model.dim_y)
+        if self.needs_rng and not isinstance(rng, np.random.Generator):
+            raise TypeError(f"{type(self).__name__}.filter needs rng=numpy.random.Generator, got {rng!r}")
+        return y
+
+    def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.name})"
+
+
+class GaussianFilter(Filter):
+    """Shared recursion of the Kalman-family filters (KF, EKF, UKF).
+
+    Subclasses provide ``predict(x, P, k)`` and ``update(x, P, y)`` on batched
+    ``x`` (runs, n) and ``P`` (runs, n, n); this class runs them over time and
+    checks the result. ``m0``/``P0`` override the model's initial distribution.
+    """
+
+    def __init__(self, model, m0=None, P0=None):
+        from ..validation import as_covariance, as_vector
+
+        super().__init__(model)
+        self.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)
+        self.P0 = model.P0 if P0 is None else as_covariance(P0, "P0", model.dim_x)
+
+    def predict(self, x, P, k):
+        raise NotImplementedError
+
+    def update(self, x, P, y):
+        raise NotImplementedError
+
+    def filter(self, y, rng=None) -> FilterResult:
+        y = self._prepare(y, rng)
+        runs, T, _ = y.shape
+        n = self.model.dim_x
+        x = np.broadcast_to(self.m0, (runs, n)).copy()
+        P = np.broadcast_to(self.P0, (runs, n, n)).copy()
+        xs = np.empty((runs, T, n))
+        Ps = np.empty((runs, T, n, n))
+        with np.errstate(all="ignore"):
+            for k in range(1, T + 1):
+                x, P = self.predict(x, P, k)
+                x, P = self.update(x, P, y[:, k - 1])
+                xs[:, k - 1], Ps[:, k - 1] = x, P
+        bad = ~np.all(np.isfinite(xs.reshape(runs, -1)), axis=1)
+        if bad.any():
+            raise FilterDivergenceError(
+                f"{self.name} produced non-finite estimates in runs {np.flatnonzero(bad)[:10].tolist()}"
+                f"{' ...' if bad.sum() > 10 else ''} ({bad.sum()} of {runs})")
+        return FilterResult(xs, Ps)

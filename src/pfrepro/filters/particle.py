@@ -1,0 +1,133 @@
+"""Bootstrap particle filter (Gordon, Salmond & Smith 1993), batched over runs and particles.
+
+Particles are ``(runs, N, dim_x)``; log-weights ``(runs, N)``. One call runs all
+Monte Carlo runs; the only Python loop is over time.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..validation import check_positive_int, check_probability
+from .base import Filter, FilterResult
+from .resampling import RESAMPLING_SCHEMES, resample_counts
+
+__all__ = ["BootstrapParticleFilter", "normalize_log_weights"]
+
+
+def normalize_log_weights(logw):
+    """Normalised weights and log-normaliser from log-weights ``(runs, N)`` (log-sum-exp).
+
+    Returns ``(w, log_sum, collapsed)``; a run whose log-weights are all -inf
+    or NaN (weight collapse) gets uniform weights and ``collapsed = True``.
+    """
+    logw = np.where(np.isnan(logw), -np.inf, logw)
+    m = logw.max(axis=1, keepdims=True)
+    collapsed = ~np.isfinite(m[:, 0])
+    if collapsed.any():
+        logw = logw.copy()
+        logw[collapsed] = 0.0
+        m = np.where(collapsed[:, None], 0.0, m)
+    w = np.exp(logw - m)
+    s = w.sum(axis=1, keepdims=True)
+    w /= s
+    log_sum = (m + np.log(s))[:, 0]
+    log_sum[collapsed] = -np.inf
+    return w, log_sum, collapsed
+
+
+class BootstrapParticleFilter(Filter):
+    """Sequential importance resampling with the transition prior as proposal.
+
+    For k = 1..T: propagate x_k^i ~ p(x_k | x_{k-1}^i); weight
+    w_k^i ∝ w_{k-1}^i p(y_k | x_k^i) (log domain); estimate E[x_k | y_1:k] by
+    the weighted mean; resample when ESS < ``ess_threshold`` * N
+    (``ess_threshold=None``: every step, as the papers' algorithms do).
+
+    Parameters
+    ----------
+    n_particles : N >= 1.
+    resampling : "systematic" (default), "stratified", "multinomial" or "residual".
+    ess_threshold : None or a fraction in [0, 1].
+    return_cov : also return the weighted covariance of the particles.
+    m0, P0 : override the model's initial distribution N(m0, P0).
+
+    Diagnostics: ``ess`` (runs, T) before resampling, ``resampled`` (runs, T),
+    ``log_evidence`` (runs,) — the estimate of log p(y_1:T) — and
+    ``collapsed`` (runs, T): steps where every weight underflowed.
+    """
+
+    name = "PF"
+    needs_rng = True
+
+    def __init__(self, model, n_particles: int, resampling: str = "systematic",
+                 ess_threshold: float | None = None, return_cov: bool = False, m0=None, P0=None):
+        super().__init__(model)
+        self.n_particles = check_positive_int(n_particles, "n_particles")
+        if resampling not in RESAMPLING_SCHEMES:
+            raise ValueError(f"unknown resampling scheme {resampling!r}; choose from {sorted(RESAMPLING_SCHEMES)}")
+        self.resampling = resampling
+        self.ess_threshold = None if ess_threshold is None else check_probability(ess_threshold, "ess_threshold")
+        self.return_cov = bool(return_cov)
+        from ..validation import as_covariance, as_vector
+
+        self.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)
+        self.P0 = model.P0 if P0 is None else as_covariance(P0, "P0", model.dim_x)
+
+    def initial_particles(self, runs: int, rng: np.random.Generator) -> np.ndarray:
+        z = rng.standard_normal((runs, self.n_particles, self.model.dim_x))
+        return self.m0 + z @ np.linalg.cholesky(self.P0).T
+
+    def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
+        y = self._prepare(y, rng)
+        runs, T, _ = y.shape
+        N, n = self.n_particles, self.model.dim_x
+        x = self.initial_particles(runs, rng)
+        logw = np.full((runs, N), -np.log(N))
+        xs = np.empty((runs, T, n))
+        Ps = np.empty((runs, T, n, n)) if self.return_cov else None
+        ess = np.empty((runs, T))
+        resampled = np.zeros((runs, T), dtype=bool)
+        collapsed = np.zeros((runs, T), dtype=bool)
+        log_evidence = np.zeros(runs)
+        for k in range(1, T + 1):
+            if not np.all(np.isfinite(x)):
+                from .base import FilterDivergenceError
+
+                raise FilterDivergenceError(f"PF particles became non-finite at step {k}")
+            x = self.model.sample_transition(x, k, rng)
+            # log p(y_k | y_1:k-1) ≈ log sum_i w_{k-1}^i p(y_k | x_k^i) with normalised w_{k-1}
+            logw = logw + self.model.log_likelihood(y[:, k - 1], x)
+            w, log_sum, coll = normalize_log_weights(logw)
+            log_evidence += log_sum
+            collapsed[:, k - 1] = coll
+            xs[:, k - 1] = (w[:, None, :] @ x)[:, 0]
+            if Ps is not None:
+                d = x - xs[:, k - 1, None, :]
+                Ps[:, k - 1] = np.einsum("rn,rni,rnj->rij", w, d, d)
+            ess_k = 1.0 / np.sum(w * w, axis=1)
+            ess[:, k - 1] = ess_k
+            do = np.ones(runs, bool) if self.ess_threshold is None else ess_k < self.ess_threshold * N
+            if do.all():
+                # offspring counts + one repeat: no index gather over (runs, N, n)
+                counts = resample_counts(w, rng, self.resampling)
+                x = np.repeat(x.reshape(runs * N, n), counts.ravel(), axis=0).reshape(runs, N, n)
+                logw = np.full((runs, N), -np.log(N))
+            elif do.any():
+                sel = np.flatnonzero(do)
+                counts = resample_counts(w[sel], rng, self.resampling)
+                x[sel] = np.repeat(x[sel].reshape(-1, n), counts.ravel(), axis=0).reshape(len(sel), N, n)
+                with np.errstate(divide="ignore"):
+                    logw = np.log(w)
+                logw[sel] = -np.log(N)
+            else:
+                with np.errstate(divide="ignore"):
+                    logw = np.log(w)
+            resampled[:, k - 1] = do
+        return FilterResult(xs, Ps, diagnostics={
+            "ess": ess, "resampled": resampled, "log_evidence": log_evidence, "collapsed": collapsed,
+            "n_collapsed": int(collapsed.sum()),
+        })
+
+    def __repr__(self) -> str:
+        return (f"BootstrapParticleFilter(N={self.n_particles}, resampling={self.resampling!r}, "
+                f"ess_threshold={self.ess_threshold})")

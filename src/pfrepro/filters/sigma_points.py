@@ -1,0 +1,78 @@
+"""Scaled unscented transform (Julier 2002; Wan & van der Merwe 2000).
+
+Same parameterisation and point ordering as filterpy's
+``MerweScaledSigmaPoints``: lambda = alpha^2 (n + kappa) - n, points
+x, x + col_i(sqrt((n + lambda) P)), x - col_i(...), with the lower Cholesky
+factor as the matrix square root, and weights
+
+    Wm_0 = lambda / (n + lambda),  Wc_0 = Wm_0 + 1 - alpha^2 + beta,
+    Wm_i = Wc_i = 1 / (2 (n + lambda)),  i = 1..2n.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["ScaledSigmaPoints", "unscented_transform", "safe_cholesky"]
+
+
+def safe_cholesky(A, name="covariance"):
+    """Batched lower Cholesky factor; symmetrises and adds a small jitter if needed.
+
+    A covariance that stays non-positive-definite after jitter up to 1e-6 of its
+    scale raises ``numpy.linalg.LinAlgError`` naming it.
+    """
+    A = 0.5 * (A + np.swapaxes(A, -1, -2))
+    try:
+        return np.linalg.cholesky(A)
+    except np.linalg.LinAlgError:
+        pass
+    scale = np.max(np.abs(np.diagonal(A, axis1=-2, axis2=-1)), axis=-1, keepdims=True)[..., None]
+    eye = np.eye(A.shape[-1])
+    for rel in (1e-12, 1e-10, 1e-8, 1e-6):
+        try:
+            return np.linalg.cholesky(A + rel * scale * eye)
+        except np.linalg.LinAlgError:
+            continue
+    raise np.linalg.LinAlgError(f"{name} is not positive definite (even after jitter)")
+
+
+class ScaledSigmaPoints:
+    """2n + 1 scaled sigma points with explicit ``alpha``, ``beta``, ``kappa``."""
+
+    def __init__(self, n: int, alpha: float, beta: float, kappa: float):
+        if n < 1:
+            raise ValueError("n must be >= 1")
+        self.n, self.alpha, self.beta, self.kappa = int(n), float(alpha), float(beta), float(kappa)
+        lam = alpha**2 * (n + kappa) - n
+        if n + lam <= 0:
+            raise ValueError(f"n + lambda = {n + lam} must be positive (alpha={alpha}, kappa={kappa})")
+        self.lam = lam
+        c = 0.5 / (n + lam)
+        self.Wm = np.full(2 * n + 1, c)
+        self.Wc = np.full(2 * n + 1, c)
+        self.Wm[0] = lam / (n + lam)
+        self.Wc[0] = lam / (n + lam) + 1.0 - alpha**2 + beta
+
+    @property
+    def num_points(self) -> int:
+        return 2 * self.n + 1
+
+    def sigma_points(self, x, P):
+        """Points for batched ``x`` (..., n), ``P`` (..., n, n) -> (..., 2n + 1, n)."""
+        L = safe_cholesky((self.n + self.lam) * P)
+        offsets = np.swapaxes(L, -1, -2)  # rows = columns of L
+        x = x[..., None, :]
+        return np.concatenate([x, x + offsets, x - offsets], axis=-2)
+
+    def __repr__(self) -> str:
+        return f"ScaledSigmaPoints(n={self.n}, alpha={self.alpha}, beta={self.beta}, kappa={self.kappa})"
+
+
+def unscented_transform(sigmas, Wm, Wc, noise_cov=None, residual=None):
+    """Weighted mean and covariance of transformed sigma points ``(..., 2n+1, m)``."""
+    mean = np.einsum("i,...ij->...j", Wm, sigmas)
+    d = sigmas - mean[..., None, :] if residual is None else residual(sigmas, mean[..., None, :])
+    cov = np.einsum("i,...ij,...ik->...jk", Wc, d, d)
+    if noise_cov is not None:
+        cov = cov + noise_cov
+    return mean, cov, d

@@ -1,0 +1,58 @@
+"""The papers' published numbers, kept as data.
+
+One CSV per paper in ``pfrepro/data/published/<paper>.csv`` with columns
+``table, row, column, value, note`` (``table`` is the paper's own id, e.g.
+"Table 1" or "Fig. 3"). Chapters read them here to put each reproduced table
+beside the published one; nothing in the book types a published number.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+from importlib import resources
+
+import pandas as pd
+
+__all__ = ["PAPERS", "load", "value", "table"]
+
+#: paper keys used throughout the package and the book
+PAPERS = {
+    "gpff_zhang2016": "Zhang, Zhou, Feng (2016), Gaussian particle flow filter",
+    "dpf_hou2008": "Hou, Yin (2008), dual particle filter",
+    "ekf_pf_li2012": "Li, Li, Fang, Bai (2012), EKF and PF in target tracking",
+    "cmspf_ning2011": "Ning, Chen, Zhao, He, Shi (2011), chaos map sampling PF",
+    "immpfor_zhou2017": "Zhou, Sun, Chu, Cui (2017), IMM-PF optimised resampling",
+}
+
+
+@lru_cache(maxsize=None)
+def load(paper: str) -> pd.DataFrame:
+    """All published numbers of ``paper`` as a DataFrame (table, row, column, value, note)."""
+    if paper not in PAPERS:
+        raise KeyError(f"unknown paper {paper!r}; known: {sorted(PAPERS)}")
+    path = resources.files("pfrepro") / "data" / "published" / f"{paper}.csv"
+    if not path.is_file():
+        raise FileNotFoundError(f"no published numbers recorded for {paper} ({path})")
+    with path.open("r", encoding="utf-8") as fh:
+        df = pd.read_csv(fh, comment="#", dtype={"table": str, "row": str, "column": str})
+    df.insert(0, "paper", paper)
+    return df
+
+
+def table(paper: str, table_id: str) -> pd.DataFrame:
+    """One published table pivoted to rows x columns."""
+    df = load(paper)
+    sub = df[df["table"] == table_id]
+    if sub.empty:
+        raise KeyError(f"{paper} has no published table {table_id!r}; has {sorted(df['table'].unique())}")
+    order_r = list(dict.fromkeys(sub["row"]))
+    order_c = list(dict.fromkeys(sub["column"]))
+    return sub.pivot(index="row", columns="column", values="value").loc[order_r, order_c]
+
+
+def value(paper: str, table_id: str, row: str, column: str) -> float:
+    """A single published number."""
+    df = load(paper)
+    hit = df[(df["table"] == table_id) & (df["row"] == row) & (df["column"] == column)]
+    if len(hit) != 1:
+        raise KeyError(f"{paper} {table_id}: no unique entry for row={row!r}, column={column!r}")
+    return float(hit["value"].iloc[0])
