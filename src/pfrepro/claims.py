@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import json
 import math
+import numbers
 import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -43,7 +44,8 @@ Z_CRIT = 2.0
 
 
 def _isnum(v) -> bool:
-    return v is not None and isinstance(v, (int, float)) and math.isfinite(v)
+    # numpy scalars (float32, int64, ...) are numbers too; booleans are not
+    return isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
 
 
 def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, qualitative=None) -> str:
@@ -51,10 +53,10 @@ def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, q
     if _isnum(published) and _isnum(reproduced):
         diff = abs(reproduced - published)
         inside = _isnum(se) and se > 0 and diff <= Z_CRIT * se
-        close = rel_tol is not None and diff <= rel_tol * abs(published)
+        close = diff <= (rel_tol or 0.0) * abs(published)  # rel_tol None: exact agreement only
         if inside or close:
             return "reproduced"
-        if qualitative is True:
+        if qualitative is not None and bool(qualitative):  # also numpy.bool_(True)
             return "qualitatively reproduced"
         return "not reproduced"
     if qualitative is None:

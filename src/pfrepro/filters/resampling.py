@@ -30,9 +30,13 @@ def normalize_weights(weights) -> np.ndarray:
         raise ValueError(f"weights must have shape (runs, N) with N >= 1, got {w.shape}")
     if not np.all(np.isfinite(w)) or np.any(w < 0):
         raise ValueError("weights must be finite and non-negative")
-    s = w.sum(axis=1, keepdims=True)
+    with np.errstate(over="ignore"):
+        s = w.sum(axis=1, keepdims=True)
     if np.any(s <= 0):
         raise ValueError("every row of weights needs a positive sum (all-zero weights: weight collapse)")
+    if not np.all(np.isfinite(s)):  # huge finite weights whose sum overflows: rescale first
+        w = w / w.max(axis=1, keepdims=True)
+        s = w.sum(axis=1, keepdims=True)
     return w / s
 
 

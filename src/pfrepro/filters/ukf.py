@@ -18,9 +18,10 @@ class UnscentedKalmanFilter(GaussianFilter):
     K = Pxy Pyy^{-1}, x = x- + K (y - y_hat), P = P- - K Pyy K^T.
 
     ``redraw=True`` (default) draws fresh sigma points from N(x-, P-) for the
-    update, the textbook additive-noise UKF, so Q enters Pxy and Pyy.
-    ``redraw=False`` reuses the propagated points, as filterpy's
-    ``UnscentedKalmanFilter`` does.
+    update, the textbook additive-noise UKF, so Q enters Pxy and Pyy; this is
+    also what filterpy's ``UnscentedKalmanFilter`` does (its ``predict`` ends by
+    redrawing ``sigmas_f`` from N(x-, P-); checked against filterpy 2.0.0).
+    ``redraw=False`` reuses the propagated points f(X_{k-1}) for the update.
     """
 
     name = "UKF"

@@ -1,0 +1,195 @@
+"""Metrics on hand-computable arrays; the verdict rule branch by branch; claims round trip; published data."""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pfrepro import published
+from pfrepro.claims import VERDICTS, Claim, ClaimsRegistry, claims_dir, load_all_claims, verdict
+from pfrepro.metrics import (mc_summary, mse, mse_per_component, mse_per_component_over_time, rmse,
+                             rmse_over_time)
+
+# runs = 2, T = 2, dim_x = 2; squared errors run 0: [[1, 0], [0, 4]], run 1: [[9, 0], [0, 0]]
+X_TRUE = np.zeros((2, 2, 2))
+X_EST = np.array([[[1.0, 0.0], [0.0, -2.0]], [[3.0, 0.0], [0.0, 0.0]]])
+
+
+def test_mse_eq56():
+    np.testing.assert_allclose(mse(X_TRUE, X_EST), [5 / 4, 9 / 4], rtol=1e-15)
+    # errors, not values: shifting both arguments changes nothing
+    np.testing.assert_allclose(mse(X_TRUE + 7.0, X_EST + 7.0), [5 / 4, 9 / 4], rtol=1e-14)
+
+
+def test_mse_per_component_over_time_eq61():
+    np.testing.assert_allclose(mse_per_component_over_time(X_TRUE, X_EST), [[5.0, 0.0], [0.0, 2.0]], rtol=1e-15)
+
+
+def test_mse_per_component():
+    np.testing.assert_allclose(mse_per_component(X_TRUE, X_EST), [[0.5, 2.0], [4.5, 0.0]], rtol=1e-15)
+
+
+def test_rmse_and_rmse_over_time():
+    np.testing.assert_allclose(rmse(X_TRUE, X_EST), [math.sqrt(2.5), math.sqrt(4.5)], rtol=1e-15)
+    np.testing.assert_allclose(rmse_over_time(X_TRUE, X_EST), [math.sqrt(5.0), math.sqrt(2.0)], rtol=1e-15)
+
+
+def test_metric_shape_errors():
+    for fn in (mse, mse_per_component_over_time, mse_per_component, rmse, rmse_over_time):
+        with pytest.raises(ValueError, match=r"must both be \(runs, T, dim_x\)"):
+            fn(X_TRUE, X_EST[:, :1])
+        with pytest.raises(ValueError, match=r"must both be \(runs, T, dim_x\)"):
+            fn(X_TRUE[..., 0], X_EST[..., 0])
+
+
+def test_mc_summary():
+    s = mc_summary([1.0, 2.0, 3.0, 4.0])
+    assert s.mean == 2.5 and s.n == 4
+    np.testing.assert_allclose(s.std, math.sqrt(5 / 3), rtol=1e-15)
+    np.testing.assert_allclose(s.se, math.sqrt(5 / 3) / 2, rtol=1e-15)
+    lo, hi = s.interval()
+    np.testing.assert_allclose([lo, hi], [2.5 - 1.96 * s.se, 2.5 + 1.96 * s.se], rtol=1e-15)
+    np.testing.assert_allclose(s.interval(1.0), (2.5 - s.se, 2.5 + s.se), rtol=1e-15)
+    assert mc_summary(np.ones((2, 3))).n == 6  # flattened
+    one = mc_summary([3.0])
+    assert one.mean == 3.0 and math.isnan(one.std) and math.isnan(one.se)
+    with pytest.raises(ValueError, match="no values"):
+        mc_summary([])
+
+
+# ------------------------------------------------------------------ verdict rule -----------------
+@pytest.mark.parametrize("kwargs, expected", [
+    # numeric: inside 2 standard errors (no relative tolerance)
+    (dict(published=10.0, reproduced=11.0, se=0.6, rel_tol=None), "reproduced"),
+    (dict(published=10.0, reproduced=11.0, se=0.5, rel_tol=None), "reproduced"),      # exactly 2 se
+    (dict(published=10.0, reproduced=11.0, se=0.49, rel_tol=None), "not reproduced"),
+    # numeric: inside the relative tolerance (default 10 %)
+    (dict(published=10.0, reproduced=10.9), "reproduced"),
+    (dict(published=10.0, reproduced=9.0), "reproduced"),                              # exactly 10 %
+    (dict(published=-10.0, reproduced=-10.9), "reproduced"),                           # |published|
+    (dict(published=10.0, reproduced=11.5), "not reproduced"),
+    (dict(published=10.0, reproduced=11.5, rel_tol=0.2), "reproduced"),
+    # numbers disagree: the qualitative statement decides between the two lower verdicts
+    (dict(published=10.0, reproduced=20.0, se=1.0, qualitative=True), "qualitatively reproduced"),
+    (dict(published=10.0, reproduced=20.0, se=1.0, qualitative=False), "not reproduced"),
+    (dict(published=10.0, reproduced=20.0, se=1.0, qualitative=None), "not reproduced"),
+    # a zero, negative or non-finite se gives no interval
+    (dict(published=10.0, reproduced=10.5, se=0.0, rel_tol=None), "not reproduced"),
+    (dict(published=10.0, reproduced=10.5, se=-1.0, rel_tol=None), "not reproduced"),
+    (dict(published=10.0, reproduced=10.5, se=float("nan"), rel_tol=None), "not reproduced"),
+    # no published number: purely qualitative
+    (dict(qualitative=True), "reproduced"),
+    (dict(qualitative=False), "not reproduced"),
+    (dict(), "not checkable"),
+    (dict(reproduced=3.0, se=0.1), "not checkable"),
+    (dict(published=3.0), "not checkable"),
+    (dict(published=float("nan"), reproduced=3.0), "not checkable"),
+    (dict(published=3.0, reproduced=float("inf"), qualitative=True), "reproduced"),
+    # numpy scalars are numbers
+    (dict(published=np.float32(10.0), reproduced=np.float64(10.5)), "reproduced"),
+    (dict(published=np.int64(10), reproduced=np.float32(12.0), qualitative=np.bool_(True)),
+     "qualitatively reproduced"),
+])
+def test_verdict_branches(kwargs, expected):
+    assert verdict(**kwargs) == expected
+    assert expected in VERDICTS
+
+
+def test_claim_verdict_property():
+    c = Claim("p", "c1", "text", published=1.0, reproduced=1.05)
+    assert c.verdict == "reproduced" and c.as_row()["verdict"] == "reproduced"
+
+
+# ------------------------------------------------------------------ registry round trip ----------
+def test_registry_save_load_round_trip(tmp_path):
+    reg = ClaimsRegistry("paper_a")
+    reg.add("c1", "MSE table", published=1.0, reproduced=np.float64(1.05), se=np.float32(0.01), source="Table 1")
+    reg.add("c2", "ordering holds", qualitative=np.bool_(True))
+    reg.add("c3", "number off, trend holds", published=2.0, reproduced=3.0, se=float("nan"), qualitative=True)
+    reg.add("c4", "nothing to compare")
+    with pytest.raises(ValueError, match="already recorded"):
+        reg.add("c1", "again")
+    path = reg.save(tmp_path)
+    assert path == tmp_path / "paper_a.json"
+    ClaimsRegistry("paper_b").save(tmp_path)  # an empty chapter
+    reg_c = ClaimsRegistry("paper_c")
+    reg_c.add("x", "fails", published=1.0, reproduced=5.0, se=0.1)
+    reg_c.save(tmp_path)
+
+    # a stale verdict written in the file is ignored: verdicts are recomputed on load
+    rows = json.loads(path.read_text())
+    rows[3]["verdict"] = "reproduced"
+    path.write_text(json.dumps(rows))
+
+    df = load_all_claims(tmp_path)
+    assert list(df["paper"]) == ["paper_a"] * 4 + ["paper_c"]
+    assert list(df["verdict"]) == ["reproduced", "reproduced", "qualitatively reproduced", "not checkable",
+                                   "not reproduced"]
+    assert df.loc[0, "se"] == pytest.approx(0.01, rel=1e-6) and df.loc[0, "source"] == "Table 1"
+    assert df.loc[2, "se"] is None or pd.isna(df.loc[2, "se"])  # NaN saved as null
+    pd.testing.assert_frame_equal(df[df.paper == "paper_a"].reset_index(drop=True),
+                                  reg.to_frame().reset_index(drop=True), check_dtype=False)
+
+
+def test_empty_claims_dir_and_env_var(tmp_path, monkeypatch):
+    df = load_all_claims(tmp_path)
+    assert df.empty and "verdict" in df.columns and "claim_id" in df.columns
+    monkeypatch.setenv("PFREPRO_CLAIMS_DIR", str(tmp_path / "claims"))
+    assert claims_dir() == tmp_path / "claims"
+    reg = ClaimsRegistry("paper_env")
+    reg.add("c", "t", qualitative=False)
+    assert reg.save() == tmp_path / "claims" / "paper_env.json"
+    assert list(load_all_claims()["verdict"]) == ["not reproduced"]
+
+
+# ------------------------------------------------------------------ published numbers ------------
+def test_published_unknown_paper():
+    with pytest.raises(KeyError, match="unknown paper 'nobody2099'"):
+        published.load("nobody2099")
+    with pytest.raises(KeyError, match="unknown paper"):
+        published.value("nobody2099", "Table 1", "a", "b")
+
+
+@pytest.mark.parametrize("paper", sorted(published.PAPERS))
+def test_published_known_papers_load_or_say_missing(paper):
+    try:
+        df = published.load(paper)
+    except FileNotFoundError as err:
+        assert "no published numbers recorded" in str(err)
+        return
+    assert list(df.columns) == ["paper", "table", "row", "column", "value", "note"]
+    assert (df["paper"] == paper).all() and len(df) > 0
+    assert pd.api.types.is_numeric_dtype(df["value"])
+
+
+@pytest.fixture
+def fake_paper(tmp_path, monkeypatch):
+    d = tmp_path / "data" / "published"
+    d.mkdir(parents=True)
+    (d / "fake2000.csv").write_text(
+        "# comment line\n"
+        "table,row,column,value,note\n"
+        "Table 1,PF,MSE,1.5,\n"
+        "Table 1,PF,time,0.2,seconds\n"
+        "Table 1,UKF,MSE,2.5,\n"
+        "Table 1,UKF,time,0.01,\n"
+        "Fig. 2,N=100,RMSE,3.0,read off the plot\n", encoding="utf-8")
+    monkeypatch.setitem(published.PAPERS, "fake2000", "a test paper")
+    monkeypatch.setattr(published.resources, "files", lambda pkg: tmp_path)
+    published.load.cache_clear()
+    yield "fake2000"
+    published.load.cache_clear()
+
+
+def test_published_table_and_value(fake_paper):
+    assert published.value(fake_paper, "Table 1", "UKF", "MSE") == 2.5
+    t = published.table(fake_paper, "Table 1")
+    assert list(t.index) == ["PF", "UKF"] and list(t.columns) == ["MSE", "time"]
+    assert t.loc["PF", "time"] == 0.2
+    with pytest.raises(KeyError, match="no published table 'Table 9'"):
+        published.table(fake_paper, "Table 9")
+    with pytest.raises(KeyError, match="no unique entry"):
+        published.value(fake_paper, "Table 1", "EKF", "MSE")
