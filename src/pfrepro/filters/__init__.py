@@ -1,5 +1,7 @@
 """Filters: Kalman family, bootstrap particle filter with resampling schemes, grid filter."""
 from .base import Filter, FilterDivergenceError, FilterResult, GaussianFilter
+from .cmspf import CMSParticleFilter, OracleCMSParticleFilter
+from .espf import EvolutionSamplingParticleFilter
 from .grid import GridFilter
 from .kalman import ExtendedKalmanFilter, KalmanFilter, kalman_update
 from .particle import BootstrapParticleFilter, normalize_log_weights
@@ -13,4 +15,5 @@ __all__ = ["Filter", "FilterResult", "GaussianFilter", "FilterDivergenceError", 
            "ExtendedKalmanFilter", "kalman_update", "UnscentedKalmanFilter", "ScaledSigmaPoints",
            "unscented_transform", "BootstrapParticleFilter", "normalize_log_weights", "GridFilter",
            "resample", "multinomial_resample", "stratified_resample", "systematic_resample",
-           "residual_resample", "offspring_counts", "effective_sample_size", "RESAMPLING_SCHEMES"]
+           "residual_resample", "offspring_counts", "effective_sample_size", "RESAMPLING_SCHEMES",
+           "CMSParticleFilter", "OracleCMSParticleFilter", "EvolutionSamplingParticleFilter"]

@@ -1,0 +1,182 @@
+"""Chaotic carrier sequences for the chaos-map-sampling particle filter (Ning et al. 2011).
+
+Three carriers ``r`` for the map of Step 2.2 (see :mod:`pfrepro.filters.cmspf`):
+
+* :func:`logistic_sequence` -- the logistic map, Ning et al. 2011 eq (1),
+  ``x_{n+1} = u x_n (1 - x_n)``; values in (0, 1) (onto (0, 1) only for u = 4).
+* :func:`chebyshev_sequence` -- the map of eq (6), ``x_{n+1} = 1 - 2 x_n^2``
+  (printed as ``x(k+1) = 1 - 2 x^2(k+1)``, a misprint: the right side must use
+  ``x(k)``); values in (-1, 1), zero mean.
+* :func:`gaussian_sequence` -- the ``randn`` carrier of Table 3 (CMS1-PF).
+
+Every chaotic generator iterates ``burn_in`` (the paper's T0, sec 3.3) times
+before recording, and is vectorised over independent chains: the initial value
+``x0`` may be an array, and the result has shape ``(n, *x0.shape)`` (iteration
+index first). :class:`ChaosCarrier` packages a carrier for a filter: per Monte
+Carlo run and map slot one chain, started from a seeded random initial value,
+burnt in, and advanced one iteration per time step.
+
+In double precision an orbit that comes within ~1e-8 of 1/2 (u = 4) or 0
+(eq 6) rounds onto the end point of the interval and then sticks at a fixed
+point (1 -> 0 -> 0, or 1 -> -1 -> -1): with 10^4 chains of 10^3 iterations this
+happens in practice. Every iterate is therefore kept ``EDGE = 1e-12`` inside
+the open interval (a change of at most 1e-12 to values that would otherwise
+end the chaotic orbit); the end points are repelling, so the orbit leaves them
+again. Initial values on (pre-)fixed points are rejected.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .validation import check_positive_int
+
+__all__ = ["logistic_sequence", "chebyshev_sequence", "gaussian_sequence", "ChaosCarrier",
+           "CARRIERS", "DEFAULT_BURN_IN", "EDGE"]
+
+#: default number of discarded iterations T0 (sec 3.3 leaves it open)
+DEFAULT_BURN_IN = 1000
+
+#: distance kept from the interval's end points (see the module docstring)
+EDGE = 1e-12
+
+#: carrier names accepted by :class:`ChaosCarrier`
+CARRIERS = ("randn", "logistic", "chebyshev")
+
+
+def _check_burn_in(burn_in) -> int:
+    if isinstance(burn_in, (bool, np.bool_)) or not isinstance(burn_in, (int, np.integer)) or burn_in < 0:
+        raise ValueError(f"burn_in (T0) must be a non-negative integer, got {burn_in!r}")
+    return int(burn_in)
+
+
+def _check_initial(x0, lo, hi, bad, name):
+    x = np.asarray(x0, dtype=float)
+    if not np.all(np.isfinite(x)):
+        raise ValueError(f"{name}: initial value contains NaN or inf")
+    if np.any(x <= lo) or np.any(x >= hi):
+        raise ValueError(f"{name}: initial values must lie in the open interval ({lo}, {hi}), got {x0!r}")
+    for b in bad:
+        if np.any(x == b):
+            raise ValueError(f"{name}: initial value {b} is a (pre-)fixed point of the map; the orbit is not chaotic")
+    return x.copy()
+
+
+def logistic_sequence(n: int, x0=0.3, u: float = 4.0, burn_in: int = DEFAULT_BURN_IN) -> np.ndarray:
+    """Logistic-map sequence, Ning et al. 2011 eq (1): ``x_{k+1} = u x_k (1 - x_k)``.
+
+    Parameters
+    ----------
+    n : number of recorded values (after the burn-in).
+    x0 : initial value(s) in (0, 1); an array gives independent chains.
+    u : control parameter; the paper's range is (3.56, 4.0]. The map is onto
+        (0, 1) only for u = 4 (for u < 4 the values stay below u / 4), and the
+        range contains periodic windows (e.g. near u = 3.83), so u = 4 is the default.
+    burn_in : iterations T0 discarded before recording (sec 3.3).
+
+    Returns ``(n, *shape(x0))`` values in (0, 1).
+    """
+    n = check_positive_int(n, "n")
+    burn_in = _check_burn_in(burn_in)
+    u = float(u)
+    if not 3.56 < u <= 4.0:
+        raise ValueError(f"u must lie in (3.56, 4.0] (eq 1), got {u}")
+    x = _check_initial(x0, 0.0, 1.0, (0.5, 0.75) if u == 4.0 else (1.0 - 1.0 / u,), "logistic_sequence")
+    lo, hi = EDGE, 1.0 - EDGE
+    out = np.empty((n,) + x.shape)
+    t = np.empty_like(x)
+    for i in range(burn_in + n):
+        np.subtract(1.0, x, out=t)
+        t *= x
+        t *= u
+        np.minimum(t, hi, out=x)
+        np.maximum(x, lo, out=x)
+        if i >= burn_in:
+            out[i - burn_in] = x
+    if not (np.all(out > 0.0) and np.all(out < 1.0)):
+        raise FloatingPointError("logistic orbit left (0, 1)")
+    return out
+
+
+def chebyshev_sequence(n: int, x0=0.3, burn_in: int = DEFAULT_BURN_IN) -> np.ndarray:
+    """Sequence of the map of Ning et al. 2011 eq (6): ``x_{k+1} = 1 - 2 x_k^2`` on (-1, 1).
+
+    (The second-order Chebyshev map; printed as ``x(k+1) = 1 - 2x^2(k+1)``,
+    see the chapter's errata.) Its invariant density is the arcsine density
+    ``1 / (pi sqrt(1 - x^2))`` with mean 0, so map particles fall on both sides
+    of their centre. ``x0`` in (-1, 1), not 0, +-1/2 (pre-images of the fixed
+    point -1 or the fixed point 1/2). Returns ``(n, *shape(x0))``.
+    """
+    n = check_positive_int(n, "n")
+    burn_in = _check_burn_in(burn_in)
+    x = _check_initial(x0, -1.0, 1.0, (0.0, 0.5, -0.5), "chebyshev_sequence")
+    lo, hi = -1.0 + EDGE, 1.0 - EDGE
+    out = np.empty((n,) + x.shape)
+    t = np.empty_like(x)
+    for i in range(burn_in + n):
+        np.multiply(x, x, out=t)
+        t *= -2.0
+        t += 1.0
+        np.minimum(t, hi, out=x)
+        np.maximum(x, lo, out=x)
+        if i >= burn_in:
+            out[i - burn_in] = x
+    if not (np.all(out > -1.0) and np.all(out < 1.0)):
+        raise FloatingPointError("eq (6) orbit left (-1, 1)")
+    return out
+
+
+def gaussian_sequence(n: int, rng: np.random.Generator, shape=()) -> np.ndarray:
+    """The ``randn`` carrier of Table 3 (CMS1-PF): iid N(0, 1), shape ``(n, *shape)``."""
+    n = check_positive_int(n, "n")
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"rng must be a numpy.random.Generator, got {rng!r}")
+    shape = tuple(int(s) for s in np.atleast_1d(shape)) if np.ndim(shape) or shape != () else ()
+    return rng.standard_normal((n,) + shape)
+
+
+class ChaosCarrier:
+    """A carrier ``r`` for the CMS map (Ning et al. 2011, Step 2.2, sec 3.3).
+
+    Parameters
+    ----------
+    kind : ``"randn"`` (CMS1), ``"logistic"`` (eq 1, CMS2) or ``"chebyshev"`` (eq 6, CMS3).
+    u : logistic control parameter (eq 1).
+    burn_in : T0 of sec 3.3.
+
+    :meth:`generate` returns ``(T, *shape)`` values: one chain per entry of
+    ``shape`` (runs x map slots x state components), its initial value drawn
+    from ``rng`` (uniform on the open interval, away from the excluded points),
+    burnt in for T0 iterations, then advanced once per time step -- the
+    sequence is computed "offline" before filtering, as sec 2.1 suggests.
+    """
+
+    def __init__(self, kind: str = "logistic", u: float = 4.0, burn_in: int = DEFAULT_BURN_IN):
+        if kind not in CARRIERS:
+            raise ValueError(f"unknown carrier {kind!r}; choose from {CARRIERS}")
+        self.kind = kind
+        self.u = float(u)
+        if kind == "logistic" and not 3.56 < self.u <= 4.0:
+            raise ValueError(f"u must lie in (3.56, 4.0] (eq 1), got {u}")
+        self.burn_in = _check_burn_in(burn_in)
+
+    @property
+    def support(self) -> tuple[float, float]:
+        return {"randn": (-np.inf, np.inf), "logistic": (0.0, 1.0), "chebyshev": (-1.0, 1.0)}[self.kind]
+
+    def generate(self, T: int, shape, rng: np.random.Generator) -> np.ndarray:
+        T = check_positive_int(T, "T")
+        shape = tuple(int(s) for s in np.atleast_1d(shape))
+        if not isinstance(rng, np.random.Generator):
+            raise TypeError(f"rng must be a numpy.random.Generator, got {rng!r}")
+        if self.kind == "randn":
+            return rng.standard_normal((T,) + shape)
+        # initial values uniform on (0.01, 0.99) of the interval: away from its end points
+        # (pre-fixed points such as 0.5 have probability zero under a continuous draw)
+        v = rng.uniform(0.01, 0.99, shape)
+        if self.kind == "logistic":
+            return logistic_sequence(T, v, self.u, self.burn_in)
+        return chebyshev_sequence(T, 2.0 * v - 1.0, self.burn_in)
+
+    def __repr__(self) -> str:
+        extra = f", u={self.u}" if self.kind == "logistic" else ""
+        return f"ChaosCarrier({self.kind!r}{extra}, burn_in={self.burn_in})"

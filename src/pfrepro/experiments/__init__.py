@@ -1,0 +1,1 @@
+"""Experiment definitions, one module per reproduced paper (which model, filters and settings)."""

@@ -1,0 +1,211 @@
+"""Tests for the chaos carriers, CMS-PF, its oracle and the ESPF reconstruction (Ning et al. 2011)."""
+import numpy as np
+import pytest
+
+from pfrepro import published
+from pfrepro.chaos import ChaosCarrier, chebyshev_sequence, gaussian_sequence, logistic_sequence
+from pfrepro.filters import (BootstrapParticleFilter, CMSParticleFilter, EvolutionSamplingParticleFilter,
+                             OracleCMSParticleFilter)
+from pfrepro.filters.cmspf import map_particles, select_top_likelihood
+from pfrepro.filters.espf import sbx_children
+from pfrepro.models import UNGM
+from pfrepro.montecarlo import run_monte_carlo
+
+
+# -- chaos generators ----------------------------------------------------------------------
+def test_logistic_range_and_equation():
+    s = logistic_sequence(5000, x0=0.3, burn_in=0)
+    assert s.shape == (5000,)
+    assert np.all((s > 0) & (s < 1))
+    np.testing.assert_allclose(s[1:], 4.0 * s[:-1] * (1 - s[:-1]), rtol=0, atol=1e-12)   # eq (1)
+    assert s.max() > 0.99 and s.min() < 0.01   # onto (0, 1) for u = 4
+
+
+def test_chebyshev_range_mean_and_equation():
+    s = chebyshev_sequence(20000, x0=0.3, burn_in=100)
+    assert np.all((s > -1) & (s < 1))
+    np.testing.assert_allclose(s[1:], 1.0 - 2.0 * s[:-1] ** 2, atol=1e-12)            # eq (6), corrected
+    assert abs(s.mean()) < 0.03                                                        # zero mean
+    assert abs(np.corrcoef(s[:-1], s[1:])[0, 1]) < 0.03                                # white-noise-like
+
+
+def test_burn_in_is_a_shift_and_generators_deterministic():
+    a = logistic_sequence(50, x0=0.123, burn_in=0)
+    b = logistic_sequence(40, x0=0.123, burn_in=10)
+    np.testing.assert_array_equal(a[10:], b)
+    np.testing.assert_array_equal(chebyshev_sequence(30, 0.7, 5), chebyshev_sequence(30, 0.7, 5))
+    c1 = ChaosCarrier("chebyshev").generate(7, (3, 4, 1), np.random.default_rng(5))
+    c2 = ChaosCarrier("chebyshev").generate(7, (3, 4, 1), np.random.default_rng(5))
+    np.testing.assert_array_equal(c1, c2)
+    assert c1.shape == (7, 3, 4, 1)
+    g = gaussian_sequence(6, np.random.default_rng(1), (2,))
+    assert g.shape == (6, 2)
+
+
+def test_chains_vectorised_and_no_collapse():
+    x0 = np.random.default_rng(0).uniform(0.01, 0.99, (200, 50))
+    s = logistic_sequence(1000, x0, burn_in=1000)
+    assert s.shape == (1000, 200, 50)
+    assert np.all((s > 0) & (s < 1))
+    assert np.std(s[-1]) > 0.2                  # chains have not collapsed onto a fixed point
+
+
+@pytest.mark.parametrize("bad", [dict(x0=0.0), dict(x0=1.0), dict(x0=0.5), dict(x0=np.nan), dict(u=3.0),
+                                 dict(u=4.5), dict(burn_in=-1), dict(burn_in=1.5)])
+def test_logistic_rejects_bad_input(bad):
+    kw = dict(n=10, x0=0.3)
+    kw.update(bad)
+    with pytest.raises(ValueError):
+        logistic_sequence(**kw)
+
+
+def test_chebyshev_and_carrier_reject_bad_input():
+    for x0 in (-1.0, 1.0, 0.0, 0.5, 2.0):
+        with pytest.raises(ValueError):
+            chebyshev_sequence(10, x0)
+    with pytest.raises((ValueError, TypeError)):
+        chebyshev_sequence(0, 0.3)
+    with pytest.raises(ValueError):
+        ChaosCarrier("lorenz")
+    with pytest.raises(TypeError):
+        ChaosCarrier("randn").generate(3, (2,), rng=1)
+
+
+# -- candidate selection and the map -------------------------------------------------------------
+def test_selection_keeps_exactly_the_n_highest():
+    rng = np.random.default_rng(3)
+    ll = rng.normal(size=(6, 40))
+    sel = select_top_likelihood(ll, 20)
+    assert sel.shape == (6, 20)
+    for r in range(6):
+        assert len(set(sel[r])) == 20
+        np.testing.assert_array_equal(np.sort(ll[r, sel[r]])[::-1], np.sort(ll[r])[::-1][:20])
+        assert np.all(np.diff(ll[r, sel[r]]) <= 0)            # sorted, largest first
+    unsorted = select_top_likelihood(ll, 20, sort=False)
+    np.testing.assert_array_equal(np.sort(unsorted, 1), np.sort(sel, 1))
+    ll[0, 5] = np.nan                                          # NaN never beats a number
+    assert 5 not in select_top_likelihood(ll, 39)[0]
+    with pytest.raises(ValueError):
+        select_top_likelihood(ll, 41)
+    with pytest.raises(ValueError):
+        select_top_likelihood(ll[0], 3)
+
+
+def test_map_particles_formula():
+    x = np.array([[[0.0], [1.0], [2.0], [3.0]]])            # weights increase with x
+    lw = np.log(np.array([[0.1, 0.2, 0.3, 0.4]]))
+    r = np.full((1, 4, 1), 0.5)
+    x2, lwm, idx = map_particles(x, lw, np.zeros((1, 4)), r, eta=2.0, n_big=1)
+    xhat = 0.1 * 0 + 0.2 * 1 + 0.3 * 2 + 0.4 * 3
+    # centres cycle x_hat, big; spread big - small = 3 - 0
+    np.testing.assert_allclose(x2[0, :, 0], [xhat + 3.0, 3 + 3.0, xhat + 3.0, 3 + 3.0])
+    oracle, _, _ = map_particles(x, lw, np.zeros((1, 4)), r, eta=2.0, n_big=1, centre=np.array([[10.0]]))
+    np.testing.assert_allclose(oracle[0, :, 0], 13.0)
+
+
+def test_cms_step_keeps_n_best_and_normalised_weights():
+    m = UNGM.ning2011(1.0)
+    f = CMSParticleFilter(m, 30, carrier="chebyshev")
+    rng = np.random.default_rng(0)
+    x = f.initial_particles(4, rng)
+    logw = np.full((4, 30), -np.log(30))
+    r = f.carrier.generate(1, (4, 30, 1), rng)[0]
+    st = f.step(x, logw, np.array([[2.0]] * 4), 1, r, rng)
+    assert st.x.shape == (4, 30, 1)
+    np.testing.assert_allclose(np.exp(st.logw).sum(axis=1), 1.0)
+    pooled = np.concatenate([st.ll_pred, st.ll_map], axis=1)
+    for k in range(4):
+        kept = pooled[k, st.selected[k]]
+        assert len(set(st.selected[k])) == 30
+        assert kept.min() >= np.sort(pooled[k])[::-1][29] - 1e-12
+
+
+def test_cms_filter_batched_shapes_and_determinism():
+    m = UNGM.ning2011(1.0)
+    sim = m.simulate(15, 5, np.random.default_rng(1))
+    f = CMSParticleFilter(m, 40)
+    a = f.filter(sim.y, np.random.default_rng(2))
+    b = f.filter(sim.y, np.random.default_rng(2))
+    assert a.x.shape == (5, 15, 1) and a.P.shape == (5, 15, 1, 1)
+    np.testing.assert_array_equal(a.x, b.x)
+    assert np.all(np.isfinite(a.x))
+    assert a.diagnostics["likelihood_evaluations"] == 2 * 40 * 15
+    never = CMSParticleFilter(m, 40, n_th=0.0).filter(sim.y, np.random.default_rng(2))
+    assert not never.diagnostics["resampled"].any()
+
+
+def test_cms_and_oracle_validation():
+    m = UNGM.ning2011(1.0)
+    for kw in (dict(n_particles=0), dict(n_particles=1), dict(n_particles=10, eta=0.0),
+               dict(n_particles=10, eta=np.nan), dict(n_particles=10, n_th=1.5),
+               dict(n_particles=10, big_fraction=-0.1), dict(n_particles=10, carrier="x"),
+               dict(n_particles=10, resampling="bogus")):
+        with pytest.raises((ValueError, TypeError)):
+            CMSParticleFilter(m, **kw)
+    f = CMSParticleFilter(m, 10)
+    with pytest.raises(ValueError):
+        f.filter(np.array([1.0, np.nan, 2.0]), np.random.default_rng(0))
+    with pytest.raises(TypeError):
+        f.filter(np.ones(5), rng=None)
+    with pytest.raises(ValueError):
+        f.filter(np.ones((2, 5, 1)), np.random.default_rng(0), r=np.zeros((5, 2, 9, 1)))
+    sim = m.simulate(5, 2, np.random.default_rng(0))
+    o = OracleCMSParticleFilter(m, 10)
+    with pytest.raises(TypeError, match="TRUE state"):
+        o.filter(sim.y, np.random.default_rng(0))              # no accidental use
+    with pytest.raises(TypeError):                              # the Monte Carlo runner cannot run it either
+        run_monte_carlo(m, {"oracle": o}, 5, 2, seed=0)
+    with pytest.raises(ValueError):
+        o.filter(sim.y, np.random.default_rng(0), x_true=sim.x[:, 1:])
+    res = o.filter(sim.y, np.random.default_rng(0), x_true=sim.x)
+    assert res.x.shape == (2, 5, 1)
+
+
+# -- ESPF reconstruction ---------------------------------------------------------------------------
+def test_sbx_children_preserve_mean_and_validate():
+    rng = np.random.default_rng(0)
+    p1, p2 = rng.normal(size=100), rng.normal(size=100)
+    u = rng.uniform(0.01, 0.99, 100)
+    c1, c2 = sbx_children(p1, p2, u, 2.0)
+    np.testing.assert_allclose(c1 + c2, p1 + p2)
+    c1, c2 = sbx_children(p1, p2, np.full(100, 0.5), 2.0)       # b = 1: children = parents
+    np.testing.assert_allclose(c1, p1)
+    with pytest.raises(ValueError):
+        sbx_children(p1, p2, np.zeros(100), 2.0)
+    with pytest.raises(ValueError):
+        sbx_children(p1, p2, u, -1.0)
+
+
+def test_espf_runs_and_validates():
+    m = UNGM.ning2011(1.0)
+    sim = m.simulate(10, 3, np.random.default_rng(0))
+    res = EvolutionSamplingParticleFilter(m, 31).filter(sim.y, np.random.default_rng(1))
+    assert res.x.shape == (3, 10, 1) and np.all(np.isfinite(res.x))
+    np.testing.assert_allclose(res.diagnostics["origin_share"].sum(axis=2), 1.0)
+    for kw in (dict(n_particles=1), dict(n_particles=10, mcmc_scale=0.0), dict(n_particles=10, sbx_eta=-2)):
+        with pytest.raises(ValueError):
+            EvolutionSamplingParticleFilter(m, **kw)
+
+
+def test_cms_tracks_reasonably():
+    """Sanity: CMS-PF is far better than a filter that ignores the data, and finite."""
+    m = UNGM.ning2011(1.0)
+    sim = m.simulate(50, 20, np.random.default_rng(4))
+    e = CMSParticleFilter(m, 100).filter(sim.y, np.random.default_rng(5)).x
+    p = BootstrapParticleFilter(m, 100).filter(sim.y, np.random.default_rng(5)).x
+    rm = lambda z: np.sqrt(np.mean((z - sim.x[:, 1:]) ** 2))
+    assert rm(e) < 2.5 * rm(p)
+    assert rm(e) < np.sqrt(np.mean(sim.x[:, 1:] ** 2))
+
+
+# -- published data ------------------------------------------------------------------------------
+def test_published_tables_complete_and_consistent():
+    t1 = published.table("cmspf_ning2011", "Table 1")
+    t3 = published.table("cmspf_ning2011", "Table 3")
+    t2 = published.table("cmspf_ning2011", "Table 2")
+    assert t1.shape == (22, 10) and t3.shape == (22, 8) and t2.shape == (2, 5)
+    runs = t1.loc[[str(i) for i in range(1, 21)]]
+    np.testing.assert_allclose(runs.mean().values, t1.loc["21"].values, atol=6e-4)
+    np.testing.assert_allclose(runs.var(ddof=1).values, t1.loc["22"].values, atol=6e-4)
+    assert published.value("cmspf_ning2011", "Table 2", "RMSE", "CMS-PF") == pytest.approx(5.2070)
+    assert published.value("cmspf_ning2011", "Table 3", "1", "EKF") == pytest.approx(30.0065)
