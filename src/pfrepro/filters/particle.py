@@ -100,7 +100,9 @@ class BootstrapParticleFilter(Filter):
             w, log_sum, coll = normalize_log_weights(logw)
             log_evidence += log_sum
             collapsed[:, k - 1] = coll
-            xs[:, k - 1] = (w[:, None, :] @ x)[:, 0]
+            # einsum, not w @ x: a single-run (1, 1, N) @ (1, N, n) matmul goes to a threaded
+            # OpenBLAS call that stalls for milliseconds when the cores are busy
+            xs[:, k - 1] = np.einsum("rn,rni->ri", w, x)
             if Ps is not None:
                 d = x - xs[:, k - 1, None, :]
                 Ps[:, k - 1] = np.einsum("rn,rni,rnj->rij", w, d, d)

@@ -1,0 +1,425 @@
+"""Experiments of Li, Li, Fang, Bai (2012), "EKF and PF algorithms and their applications
+to target tracking", Technical Acoustics 31(3): 296-299 (paper key ``ekf_pf_li2012``).
+
+What the paper runs (sec 2): two scalar models with Q = 10, R = 1, x_0 = 0.1, T = 60 steps,
+N = 1000 particles;
+
+* model 1: x_k = x_{k-1}/2 + 25 x_{k-1}/(1 + x_{k-1}^2) + 8 cos(1.2(k-1)) + w_{k-1},
+* model 2: x_k = x_{k-1}/2 + 18 cos(1.2(k-1)) + w_{k-1},
+* both: y_k = x_k^2/20 + v_k;
+
+Figs. 1-4 show one run and the per-time RMSE over 50 Monte Carlo runs, Table 1 the RMSE
+(formula at the end of sec 2) over 100 independent runs. The EKF is eqs (8)-(11), the
+bootstrap PF eqs (15)-(16) with the five-step algorithm of sec 1.3.2.
+
+Assumptions (the paper does not state them; see the chapter): the filters start from
+N(x_0, P0) with P0 = 2 and the PF resamples every step with multinomial resampling --
+both as in the widely circulated MATLAB code of this benchmark (D. Simon, *Optimal State
+Estimation*, 2006, ch. 15), which matches the paper's x_0 = 0.1 and cos(1.2(k-1)).
+
+Everything here is a thin layer over the package: models from
+:class:`pfrepro.models.UNGM`, filters from :mod:`pfrepro.filters`, Monte Carlo from
+:func:`pfrepro.montecarlo.run_monte_carlo`. The chapter ``book/30_ekf_pf.md`` calls
+these functions and adds prose, tables and plots.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from .. import published
+from ..claims import verdict
+from ..filters import BootstrapParticleFilter, ExtendedKalmanFilter, GridFilter, UnscentedKalmanFilter
+from ..filters.ekf_variants import PreviousEstimateJacobianEKF
+from ..metrics import mc_summary, rmse, rmse_over_time
+from ..models import UNGM
+from ..models.base import Simulation
+from ..montecarlo import MonteCarloResult, run_monte_carlo, time_single_run, truth_rng
+from ..validation import check_positive_int
+
+__all__ = [
+    "PAPER", "T", "N_PARTICLES", "RUNS_TABLE", "RUNS_FIGURES", "SEED_TABLE", "SEED_FIGURES",
+    "P0_DEFAULT", "RESAMPLING_DEFAULT", "RATIO_STRONG_MIN", "RATIO_WEAK_MAX", "GRID_BOUNDS", "GRID_N", "P0_SWEEP", "RESAMPLING_SWEEP",
+    "N_SWEEP", "FILTER_LABELS", "MODEL_LABELS", "make_model", "make_filters", "simulate", "run",
+    "table1", "ratio_of_means", "gap_to", "per_time_rmse", "statistic_readings", "sensitivity",
+    "rmse_and_cost_vs_n", "cost_ratios", "jacobian_check", "literal_eq11_ekf",
+    "eq9_linearisation_check", "resampling_after_estimate_effect", "published_table1",
+]
+
+PAPER = "ekf_pf_li2012"
+#: horizon (60 s at 1 s sampling), particles, Monte Carlo counts (sec 2, Table 1)
+T = 60
+N_PARTICLES = 1000
+RUNS_TABLE = 100
+RUNS_FIGURES = 50
+#: seeds fixed before any result was seen; never changed
+SEED_TABLE = 2012
+SEED_FIGURES = 2013
+#: assumptions (not in the paper): filters' prior N(x0, P0) and resampling scheme
+P0_DEFAULT = 2.0
+RESAMPLING_DEFAULT = "multinomial"
+#: exact-posterior grid: dx = 0.05 (sqrt(Q) / 63); bounds hold every trajectory with a wide margin
+GRID_BOUNDS = (-70.0, 70.0)
+GRID_N = 2801
+#: sensitivity sweeps
+P0_SWEEP = (0.1, 1.0, 2.0, 5.0, 10.0)
+RESAMPLING_SWEEP = ("multinomial", "systematic", "stratified", "residual")
+N_SWEEP = (50, 100, 200, 500, 1000, 2000, 5000)
+#: mass allowed to leave the grid before the grid reference is refused
+MAX_LOST_MASS = 1e-6
+#: qualitative tests of the two ratio claims, fixed before running: "PF far better" under
+#: strong nonlinearity means EKF/PF >= 2; "about the same" under weak nonlinearity means < 1.2
+RATIO_STRONG_MIN = 2.0
+RATIO_WEAK_MAX = 1.2
+
+FILTER_LABELS = {
+    "EKF": "EKF (eqs 8-11)",
+    "EKF-prev": "EKF, B at x_{k-1|k-1} (circulating code)",
+    "UKF": "UKF",
+    "PF": "bootstrap PF (eqs 15-16)",
+    "Exact": "exact posterior mean (grid)",
+}
+MODEL_LABELS = {1: "Model 1", 2: "Model 2"}
+
+
+# --------------------------------------------------------------------------------------
+# model and filters
+# --------------------------------------------------------------------------------------
+def _check_which(which) -> int:
+    if which not in (1, 2) or isinstance(which, bool):
+        raise ValueError(f"Li et al. (2012) have models 1 and 2; got which={which!r}")
+    return int(which)
+
+
+def make_model(which: int, P0: float = P0_DEFAULT) -> UNGM:
+    """Model 1 or 2 of Li et al. (2012, sec 2), with the filters' prior N(0.1, P0).
+
+    Q = 10, R = 1, truth starts at x_0 = 0.1; the transition from x_{k-1} to x_k uses
+    cos(1.2(k-1)) (``time_offset=1``).
+    """
+    which = _check_which(which)
+    P0 = float(P0)
+    if not (math.isfinite(P0) and P0 > 0):
+        raise ValueError(f"P0 must be a positive finite variance, got {P0}")
+    return UNGM.li2012_model1(P0=P0) if which == 1 else UNGM.li2012_model2(P0=P0)
+
+
+def make_filters(model, include=("EKF", "PF", "Exact"), *, n_particles: int = N_PARTICLES,
+                 resampling: str = RESAMPLING_DEFAULT) -> dict:
+    """The filters of the experiment, by name (see :data:`FILTER_LABELS`).
+
+    ``EKF`` is eqs (8)-(11); ``EKF-prev`` linearises h at x_{k-1|k-1} as the circulating
+    MATLAB code does; ``PF`` is the bootstrap filter of eqs (15)-(16), resampling every
+    step; ``Exact`` is the point-mass grid filter (the exact posterior mean up to grid
+    error, the accuracy reference); ``UKF`` is the unscented filter (alpha=1, beta=2,
+    kappa=0).
+    """
+    builders = {
+        "EKF": lambda: ExtendedKalmanFilter(model),
+        "EKF-prev": lambda: PreviousEstimateJacobianEKF(model),
+        "UKF": lambda: UnscentedKalmanFilter(model),
+        "PF": lambda: BootstrapParticleFilter(model, n_particles, resampling=resampling, ess_threshold=None),
+        "Exact": lambda: GridFilter(model, bounds=GRID_BOUNDS, n_grid=GRID_N),
+    }
+    if isinstance(include, str):
+        include = (include,)
+    unknown = [n for n in include if n not in builders]
+    if unknown:
+        raise ValueError(f"unknown filter(s) {unknown}; choose from {sorted(builders)}")
+    return {name: builders[name]() for name in include}
+
+
+def simulate(which: int, runs: int, seed: int) -> Simulation:
+    """Truth and measurements for ``runs`` runs of model ``which`` (independent of P0)."""
+    return make_model(which).simulate(T, check_positive_int(runs, "runs"), truth_rng(seed))
+
+
+def run(which: int, runs: int, seed: int, include=("EKF", "PF", "Exact"), *, P0: float = P0_DEFAULT,
+        n_particles: int = N_PARTICLES, resampling: str = RESAMPLING_DEFAULT,
+        sim: Simulation | None = None, time_per_run: bool = False) -> MonteCarloResult:
+    """Run the filters ``include`` on ``runs`` runs of model ``which`` (all on the same data).
+
+    Random streams: truth from ``truth_rng(seed)``, each filter from ``filter_rng(seed, name)``.
+    If the exact grid filter is included, its lost probability mass is checked.
+    """
+    model = make_model(which, P0)
+    filters = make_filters(model, include, n_particles=n_particles, resampling=resampling)
+    res = run_monte_carlo(model, filters, T, runs, seed, sim=sim, time_per_run=time_per_run)
+    if "Exact" in res.results:
+        lost = float(np.max(np.abs(res.results["Exact"].diagnostics["lost_mass"])))
+        if lost > MAX_LOST_MASS:
+            raise RuntimeError(f"grid lost probability mass {lost:.3g} > {MAX_LOST_MASS}: widen GRID_BOUNDS")
+    return res
+
+
+# --------------------------------------------------------------------------------------
+# statistics
+# --------------------------------------------------------------------------------------
+def ratio_of_means(a, b) -> tuple[float, float]:
+    """mean(a) / mean(b) for paired per-run values, with its delta-method standard error."""
+    a = np.asarray(a, float).ravel()
+    b = np.asarray(b, float).ravel()
+    if a.shape != b.shape or a.size < 2:
+        raise ValueError("ratio_of_means needs two paired samples of equal length >= 2")
+    ma, mb = a.mean(), b.mean()
+    if mb == 0:
+        raise ZeroDivisionError("mean of the denominator sample is zero")
+    r = ma / mb
+    c = np.cov(a, b, ddof=1)
+    var = (c[0, 0] - 2 * r * c[0, 1] + r * r * c[1, 1]) / (mb * mb * a.size)
+    return float(r), float(np.sqrt(max(var, 0.0)))
+
+
+def gap_to(res: MonteCarloResult, name: str, ref: str = "Exact") -> dict:
+    """Mean per-run RMSE gap of filter ``name`` above ``ref`` (paired), with its SE."""
+    d = res.rmse(name) - res.rmse(ref)
+    s = mc_summary(d)
+    base = float(res.rmse(ref).mean())
+    return {"gap": s.mean, "se": s.se, "relative": s.mean / base}
+
+
+def published_table1() -> pd.DataFrame:
+    """Table 1 of the paper (RMSE over 100 runs), rows EKF/PF, columns Model 1/Model 2."""
+    return published.table(PAPER, "Table 1")
+
+
+def table1(results: dict, names=("EKF", "PF")) -> pd.DataFrame:
+    """Table 1 regenerated: one row per (model, filter), beside the published value.
+
+    ``results`` maps model number -> :class:`MonteCarloResult` (with the exact grid run).
+    Columns: our mean per-run RMSE and its standard error, the published value, z (in our
+    SE), the verdict of the claims rule for this cell, and the exact-posterior RMSE on the
+    same data.
+    """
+    pub = published_table1()
+    rows = []
+    for which, res in results.items():
+        exact = mc_summary(res.rmse("Exact")) if "Exact" in res.results else None
+        for name in names:
+            s = mc_summary(res.rmse(name))
+            p = float(pub.loc[name, MODEL_LABELS[which]]) if name in pub.index else float("nan")
+            rows.append({
+                "model": MODEL_LABELS[which], "filter": name, "published": p, "ours": s.mean, "se": s.se,
+                "z": (s.mean - p) / s.se if s.se > 0 else float("nan"),
+                "verdict": verdict(published=p, reproduced=s.mean, se=s.se) if math.isfinite(p) else "",
+                "exact": exact.mean if exact else float("nan"),
+                "exact_se": exact.se if exact else float("nan"),
+                "published_minus_exact_in_se": (p - exact.mean) / exact.se if exact else float("nan"),
+            })
+    return pd.DataFrame(rows)
+
+
+def per_time_rmse(res: MonteCarloResult, names) -> pd.DataFrame:
+    """Per-time RMSE across runs (Figs. 2 and 4), index k = 1..T, one column per filter."""
+    data = {n: rmse_over_time(res.x_true, res.results[n].x) for n in names}
+    return pd.DataFrame(data, index=pd.RangeIndex(1, res.sim.T + 1, name="k"))
+
+
+def statistic_readings(res: MonteCarloResult, names) -> pd.DataFrame:
+    """Three readings of "RMSE over 100 runs" for each filter.
+
+    * ``mean_run_rmse``: mean over runs of the per-run RMSE (the paper's formula, sec 2);
+    * ``pooled``: sqrt of the MSE pooled over runs and times;
+    * ``mean_time_rmse``: time average of the per-time RMSE across runs (the curves of Figs. 2, 4).
+    """
+    rows = {}
+    for n in names:
+        e2 = (res.results[n].x - res.x_true) ** 2
+        rows[n] = {"mean_run_rmse": float(rmse(res.x_true, res.results[n].x).mean()),
+                   "pooled": float(np.sqrt(e2.mean())),
+                   "mean_time_rmse": float(rmse_over_time(res.x_true, res.results[n].x).mean())}
+    return pd.DataFrame(rows).T
+
+
+# --------------------------------------------------------------------------------------
+# sensitivity to the unstated choices
+# --------------------------------------------------------------------------------------
+def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING_SWEEP,
+                ekf_variants=("EKF", "EKF-prev")) -> pd.DataFrame:
+    """Table 1 cells and verdicts under every reasonable choice the paper leaves open.
+
+    ``sims`` maps model number -> the Table 1 simulation (every setting sees the same data,
+    so differences come from the setting alone). One row per (setting, model): the EKF and
+    PF mean per-run RMSE with SE, the exact-posterior RMSE, the EKF/PF ratio, and the
+    verdicts the claims rule gives for the two cells and for the model's ratio claim
+    ("more than 7x" on model 1, "about the same" on model 2; tests
+    :data:`RATIO_STRONG_MIN`, :data:`RATIO_WEAK_MAX`). The baseline (P0 = 2, multinomial,
+    eq-10 EKF) appears in each block.
+    """
+    pub = published_table1()
+    rows = []
+
+    def add(kind, value, which, res, ekf_name="EKF"):
+        e, p = mc_summary(res.rmse(ekf_name)), mc_summary(res.rmse("PF"))
+        r, r_se = ratio_of_means(res.rmse(ekf_name), res.rmse("PF"))
+        col = MODEL_LABELS[which]
+        pe, pp = float(pub.loc["EKF", col]), float(pub.loc["PF", col])
+        qual = r >= RATIO_STRONG_MIN if which == 1 else r < RATIO_WEAK_MAX
+        rows.append({"setting": kind, "value": value, "model": col,
+                     "EKF": e.mean, "EKF_se": e.se, "PF": p.mean, "PF_se": p.se,
+                     "exact": float(res.rmse("Exact").mean()) if "Exact" in res.results else float("nan"),
+                     "EKF/PF": r, "EKF/PF_se": r_se,
+                     "verdict_EKF": verdict(pe, e.mean, e.se), "verdict_PF": verdict(pp, p.mean, p.se),
+                     "verdict_ratio": verdict(pe / pp, r, r_se, qualitative=bool(qual))})
+
+    for which, sim in sims.items():
+        runs = sim.runs
+        for P0 in P0_values:
+            add("P0", P0, which, run(which, runs, seed, ("EKF", "PF", "Exact"), P0=P0, sim=sim))
+        for scheme in schemes:
+            add("resampling", scheme, which, run(which, runs, seed, ("EKF", "PF"), resampling=scheme, sim=sim))
+        res = run(which, runs, seed, tuple(ekf_variants) + ("PF",), sim=sim)
+        for ek in ekf_variants:
+            add("EKF linearisation", FILTER_LABELS[ek], which, res, ekf_name=ek)
+    return pd.DataFrame(rows)
+
+
+# --------------------------------------------------------------------------------------
+# beyond the paper: RMSE and cost against N, cost ratios
+# --------------------------------------------------------------------------------------
+def _interleaved_times(filters: dict, y_one, repeats: int, seed: int) -> dict:
+    """Median single-run wall time of each filter, repeats interleaved across filters."""
+    times = {n: [] for n in filters}
+    for r in range(repeats):
+        for n, f in filters.items():
+            times[n].append(time_single_run(f, y_one, rng_seed=seed + r, repeats=1))
+    return {n: float(np.median(v)) for n, v in times.items()}
+
+
+def _batch_seconds(filt, y, seed: int, min_total: float = 0.5, max_repeats: int = 15) -> float:
+    """Median wall time of one batched call ``filt.filter(y)`` on all runs; a fast filter is
+    repeated until ``min_total`` seconds have been spent (at most ``max_repeats`` calls), so a
+    5-ms call is not one noisy sample."""
+    times, total = [], 0.0
+    while len(times) < max_repeats and (not times or total < min_total):
+        t = time_single_run(filt, y, rng_seed=seed + len(times), repeats=1)
+        times.append(t)
+        total += t
+    return float(np.median(times))
+
+
+def cost_ratios(which: int, sim: Simulation, *, include=("EKF", "UKF", "PF", "Exact"), repeats: int = 7,
+                seed: int = SEED_TABLE) -> pd.DataFrame:
+    """Per-run wall time of each filter relative to the EKF, measured here in one session.
+
+    ``single_run``: median time on the first run alone (``time_single_run``), ``repeats``
+    interleaved across the filters so machine load affects all alike. ``amortised``: the
+    median time of the batched call on all ``sim.runs`` runs divided by the number of runs,
+    which removes the fixed per-step interpreter overhead that dominates a one-run EKF and
+    so measures the arithmetic.
+    """
+    check_positive_int(repeats, "repeats")
+    if "EKF" not in include:
+        raise ValueError("cost ratios are relative to the EKF: include must contain 'EKF'")
+    filters = make_filters(make_model(which), include)
+    t = _interleaved_times(filters, sim.y[:1], repeats, seed)
+    out = pd.DataFrame({"single_run_s": t})
+    out["single_run_ratio"] = out["single_run_s"] / out.loc["EKF", "single_run_s"]
+    out["amortised_s"] = pd.Series({n: _batch_seconds(f, sim.y, seed) / sim.runs for n, f in filters.items()})
+    out["amortised_ratio"] = out["amortised_s"] / out.loc["EKF", "amortised_s"]
+    return out
+
+
+def rmse_and_cost_vs_n(which: int, sim: Simulation, seed: int, n_values=N_SWEEP, *,
+                       exact: np.ndarray | None = None, repeats: int = 5) -> pd.DataFrame:
+    """PF mean per-run RMSE against N (same data, same seed family), its gap to the exact
+    posterior (if the exact per-run RMSEs are given), and its cost relative to the EKF,
+    measured in this session: single-run (median of interleaved repeats) and amortised
+    (time of the batched call over all runs, against the EKF's median batched time)."""
+    n_values = [check_positive_int(n, "N") for n in n_values]
+    check_positive_int(repeats, "repeats")
+    model = make_model(which)
+    ekf = ExtendedKalmanFilter(model)
+    rows = []
+    for N in n_values:
+        name = f"PF N={N}"
+        pf = BootstrapParticleFilter(model, N, resampling=RESAMPLING_DEFAULT)
+        res = run_monte_carlo(model, {name: pf}, T, sim.runs, seed, sim=sim)
+        t = _interleaved_times({"EKF": ekf, name: pf}, sim.y[:1], repeats, seed)
+        t_ekf_batch = _batch_seconds(ekf, sim.y, seed)
+        s = mc_summary(res.rmse(name))
+        row = {"N": N, "rmse": s.mean, "se": s.se,
+               "single_run_ratio": t[name] / t["EKF"],
+               "amortised_ratio": res.batch_seconds[name] / t_ekf_batch}
+        if exact is not None:
+            exact = np.asarray(exact, float)
+            if exact.shape != (sim.runs,):
+                raise ValueError(f"exact must hold one RMSE per run, shape ({sim.runs},), got {exact.shape}")
+            d = mc_summary(res.rmse(name) - exact)
+            row.update({"gap": d.mean, "gap_se": d.se})
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("N")
+
+
+# --------------------------------------------------------------------------------------
+# numerical checks of the paper's equations
+# --------------------------------------------------------------------------------------
+def jacobian_check(model, n_points: int = 1000, seed: int = 0, k: int = 3, step: float = 1e-6) -> dict:
+    """Max relative error between the model's Jacobians (A_{k-1}, B_k of eq 10) and central
+    finite differences of f and h at random points in [-30, 30]."""
+    rng = np.random.default_rng(seed)
+    x = rng.uniform(-30, 30, size=(check_positive_int(n_points, "n_points"), 1))
+    fd_f = (model.f(x + step, k) - model.f(x - step, k)) / (2 * step)
+    fd_h = (model.h(x + step) - model.h(x - step)) / (2 * step)
+    A = model.jacobian_f(x, k)[..., 0]
+    B = model.jacobian_h(x)[..., 0]
+    rel = lambda a, b: float(np.max(np.abs(a - b) / np.maximum(1.0, np.abs(b))))
+    return {"A (df/dx)": rel(A, fd_f), "B (dh/dx)": rel(B, fd_h)}
+
+
+def literal_eq11_ekf(model, y, m0: float | None = None, P0: float | None = None) -> np.ndarray:
+    """Eq (11) written out literally for a scalar model, batched over runs: returns x_{k|k}
+    ``(runs, T, 1)``. Used to check that :class:`ExtendedKalmanFilter` (Joseph form) is the
+    paper's EKF: x- = f(x), P- = A P A + Q, K = P- B / (B P- B + R), x = x- + K (y - h(x-)),
+    P = P- - K B P-."""
+    y = np.asarray(y, float)
+    if y.ndim != 3 or y.shape[2] != 1 or model.dim_x != 1:
+        raise ValueError("literal_eq11_ekf is for scalar models and y of shape (runs, T, 1)")
+    runs, Tn, _ = y.shape
+    x = np.full(runs, float(model.m0[0] if m0 is None else m0))
+    P = np.full(runs, float(model.P0[0, 0] if P0 is None else P0))
+    Q, R = float(model.Q[0, 0]), float(model.R[0, 0])
+    out = np.empty((runs, Tn, 1))
+    for k in range(1, Tn + 1):
+        A = model.jacobian_f(x[:, None], k)[:, 0, 0]
+        xp = model.f(x[:, None], k)[:, 0]
+        Pp = A * P * A + Q
+        B = model.jacobian_h(xp[:, None])[:, 0, 0]
+        K = Pp * B / (B * Pp * B + R)
+        x = xp + K * (y[:, k - 1, 0] - model.h(xp[:, None])[:, 0])
+        P = Pp - K * B * Pp
+        out[:, k - 1, 0] = x
+    return out
+
+
+def eq9_linearisation_check(model, deltas=(1.0, 0.1, 0.01, 0.001), seed: int = 0, n: int = 1000) -> pd.DataFrame:
+    """Eq (9) as printed, y_k ≈ B_k x_{k-1} + h(x_{k|k-1}) - B_k x_{k|k-1}, against the
+    corrected form with B_k x_k. At random (x_{k-1}, x_{k|k-1}) and x_k = x_{k|k-1} + delta,
+    the corrected form's error in h(x_k) shrinks like delta^2 (first-order Taylor), the
+    printed form's does not shrink at all."""
+    rng = np.random.default_rng(seed)
+    x_prev = rng.uniform(-20, 20, size=(n, 1))
+    x_pred = model.f(x_prev, 3)
+    B = model.jacobian_h(x_pred)[..., 0]
+    rows = []
+    for d in deltas:
+        xk = x_pred + d * rng.choice([-1.0, 1.0], size=x_pred.shape)
+        truth = model.h(xk)
+        corrected = model.h(x_pred) + B * (xk - x_pred)
+        printed = model.h(x_pred) + B * (x_prev - x_pred)
+        rows.append({"delta": d, "corrected_max_err": float(np.max(np.abs(truth - corrected))),
+                     "printed_max_err": float(np.max(np.abs(truth - printed)))})
+    return pd.DataFrame(rows).set_index("delta")
+
+
+def resampling_after_estimate_effect(res: MonteCarloResult, n_particles: int = N_PARTICLES) -> dict:
+    """Step (5) of the algorithm averages the particles *after* resampling (weights 1/N); we
+    average before. With exact multinomial resampling that adds Var(x_k | y_1:k)/N to the
+    squared error in expectation. Returns that added variance relative to the exact
+    posterior's MSE, per model run set (uses the grid's posterior variances)."""
+    ex = res.results["Exact"]
+    post_var = float(ex.P[..., 0, 0].mean())
+    mse_exact = float(((ex.x - res.x_true) ** 2).mean())
+    return {"added_var": post_var / n_particles, "relative_to_mse": post_var / n_particles / mse_exact}

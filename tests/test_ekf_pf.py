@@ -1,0 +1,163 @@
+"""Tests for the Li et al. (2012) EKF-vs-PF experiment code (pfrepro.experiments.ekf_pf_li2012)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pfrepro import claims
+from pfrepro.experiments import ekf_pf_li2012 as ex
+from pfrepro.filters import BootstrapParticleFilter, ExtendedKalmanFilter, GridFilter
+from pfrepro.filters.ekf_variants import PreviousEstimateJacobianEKF
+from pfrepro.montecarlo import truth_rng
+
+
+def _paper_f(which, x, k):
+    """Sec 2 of the paper, typed from the text."""
+    if which == 1:
+        return x / 2 + 25 * x / (1 + x**2) + 8 * np.cos(1.2 * (k - 1))
+    return x / 2 + 18 * np.cos(1.2 * (k - 1))
+
+
+@pytest.mark.parametrize("which", [1, 2])
+def test_models_match_paper(which):
+    m = ex.make_model(which)
+    x = np.linspace(-25, 25, 11)[:, None]
+    for k in (1, 2, 7, 60):
+        np.testing.assert_allclose(m.f(x, k), _paper_f(which, x, k), rtol=1e-13, atol=1e-12)
+    np.testing.assert_allclose(m.h(x), x**2 / 20)
+    assert m.Q[0, 0] == 10.0 and m.R[0, 0] == 1.0 and m.x0[0] == 0.1
+    assert m.m0[0] == 0.1 and m.P0[0, 0] == ex.P0_DEFAULT
+    sim = ex.simulate(which, 3, 1)
+    assert sim.x.shape == (3, ex.T + 1, 1) and sim.y.shape == (3, ex.T, 1)
+    assert np.all(sim.x[:, 0, 0] == 0.1)
+
+
+@pytest.mark.parametrize("which", [1, 2])
+def test_jacobians_match_finite_differences(which):
+    err = ex.jacobian_check(ex.make_model(which))
+    assert max(err.values()) < 1e-6
+
+
+@pytest.mark.parametrize("which", [1, 2])
+def test_ekf_is_the_papers_eq11(which):
+    m = ex.make_model(which)
+    sim = m.simulate(ex.T, 5, truth_rng(3))
+    ours = ExtendedKalmanFilter(m).filter(sim.y).x
+    literal = ex.literal_eq11_ekf(m, sim.y)
+    np.testing.assert_allclose(ours, literal, rtol=1e-8, atol=1e-8)
+
+
+def test_previous_estimate_ekf_matches_circulating_code():
+    m = ex.make_model(1)
+    sim = m.simulate(30, 3, truth_rng(4))
+    got = PreviousEstimateJacobianEKF(m).filter(sim.y).x[..., 0]
+    for r in range(3):  # the scalar loop of the widely copied MATLAB demo
+        xhat, P = 0.1, ex.P0_DEFAULT
+        for k in range(1, 31):
+            F = 0.5 + 25 * (1 - xhat**2) / (1 + xhat**2) ** 2
+            P = F * P * F + 10.0
+            H = xhat / 10
+            K = P * H / (H * P * H + 1.0)
+            xhat = 0.5 * xhat + 25 * xhat / (1 + xhat**2) + 8 * np.cos(1.2 * (k - 1))
+            xhat = xhat + K * (sim.y[r, k - 1, 0] - xhat**2 / 20)
+            P = (1 - K * H) * P
+            assert got[r, k - 1] == pytest.approx(xhat, rel=1e-9, abs=1e-9)
+    assert not np.allclose(got, ExtendedKalmanFilter(m).filter(sim.y).x[..., 0])
+
+
+@pytest.mark.parametrize("which", [1, 2])
+def test_grid_agrees_with_large_n_particle_filter(which):
+    """The exact reference and a 200 000-particle PF agree within the PF's Monte Carlo error."""
+    m = ex.make_model(which)
+    sim = m.simulate(10, 3, truth_rng(10 + which))
+    grid = GridFilter(m, bounds=ex.GRID_BOUNDS, n_grid=ex.GRID_N).filter(sim.y)
+    assert np.max(np.abs(grid.diagnostics["lost_mass"])) < 1e-9
+    pf = BootstrapParticleFilter(m, 200_000, resampling="systematic").filter(sim.y, rng=np.random.default_rng(5))
+    var = grid.P[..., 0, 0]
+    mc_sd = np.sqrt(var / pf.diagnostics["ess"])
+    diff = np.abs(pf.x[..., 0] - grid.x[..., 0])
+    assert np.all(diff <= 6 * mc_sd + 1e-3), float(np.max(diff / (mc_sd + 1e-12)))
+
+
+def test_run_checks_grid_mass_and_shapes():
+    res = ex.run(1, 4, 7, ("EKF", "UKF", "PF", "Exact"), n_particles=200)
+    for name in ("EKF", "UKF", "PF", "Exact"):
+        assert res.results[name].x.shape == (4, ex.T, 1)
+    # the exact posterior mean has the lowest MSE in expectation; on 4 runs check it beats the EKF
+    assert res.rmse("Exact").mean() < res.rmse("EKF").mean()
+
+
+def test_bad_inputs_raise():
+    with pytest.raises(ValueError, match="models 1 and 2"):
+        ex.make_model(3)
+    with pytest.raises(ValueError, match="P0"):
+        ex.make_model(1, P0=-1.0)
+    with pytest.raises(ValueError, match="unknown filter"):
+        ex.make_filters(ex.make_model(1), ("EKF", "KF"))
+    with pytest.raises(ValueError, match="unknown resampling"):
+        ex.make_filters(ex.make_model(1), ("PF",), resampling="bogus")
+    with pytest.raises(ValueError):
+        ex.ratio_of_means([1.0, 2.0], [1.0, 2.0, 3.0])
+    with pytest.raises(ValueError):
+        ex.literal_eq11_ekf(ex.make_model(1), np.zeros((3, 4)))
+    with pytest.raises(ValueError):
+        ex.run(1, 0, 1)
+    with pytest.raises(RuntimeError, match="follow predict"):
+        PreviousEstimateJacobianEKF(ex.make_model(1)).update(np.zeros((1, 1)), np.eye(1)[None], np.zeros((1, 1)))
+
+
+def test_published_table1_is_data():
+    t = ex.published_table1()
+    assert list(t.index) == ["EKF", "PF"] and list(t.columns) == ["Model 1", "Model 2"]
+    assert t.loc["EKF", "Model 1"] == pytest.approx(30.1709)
+    assert t.loc["PF", "Model 2"] == pytest.approx(1.0479)
+
+
+def test_table1_and_statistics_small():
+    res = {w: ex.run(w, 6, 11, ("EKF", "PF", "Exact"), n_particles=200) for w in (1, 2)}
+    t1 = ex.table1(res)
+    assert len(t1) == 4 and set(t1["verdict"]) <= set(claims.VERDICTS)
+    st = ex.statistic_readings(res[1], ["EKF", "PF"])
+    assert np.all(st.values > 0)
+    pt = ex.per_time_rmse(res[2], ["EKF", "PF"])
+    assert pt.shape == (ex.T, 2) and pt.index[0] == 1
+    g = ex.gap_to(res[1], "PF")
+    assert set(g) == {"gap", "se", "relative"}
+    eff = ex.resampling_after_estimate_effect(res[1])
+    assert 0 < eff["relative_to_mse"] < 0.05
+
+
+def test_ratio_of_means():
+    b = np.array([1.0, 2.0, 3.0, 4.0])
+    r, se = ex.ratio_of_means(2 * b, b)
+    assert r == pytest.approx(2.0) and se == pytest.approx(0.0, abs=1e-12)
+    rng = np.random.default_rng(0)
+    a, b = rng.gamma(5, size=4000), rng.gamma(5, size=4000)
+    r, se = ex.ratio_of_means(a, b)
+    assert abs(r - 1.0) < 4 * se and 0.005 < se < 0.05
+
+
+def test_eq9_printed_form_is_a_misprint():
+    chk = ex.eq9_linearisation_check(ex.make_model(1))
+    c = chk["corrected_max_err"].to_numpy()
+    assert np.allclose(c[1:] / c[:-1], 0.01, rtol=1e-6)  # error ~ delta^2 (h is quadratic)
+    assert chk["printed_max_err"].min() > 1.0
+
+
+def test_sensitivity_and_cost_small():
+    sims = {w: ex.simulate(w, 4, 21) for w in (1, 2)}
+    sens = ex.sensitivity(sims, 21, P0_values=(1.0, 2.0), schemes=("multinomial", "systematic"))
+    assert len(sens) == 2 * (2 + 2 + 2)
+    assert set(sens["verdict_EKF"]) <= set(claims.VERDICTS)
+    nn = ex.rmse_and_cost_vs_n(1, sims[1], 21, n_values=(20, 40), repeats=1)
+    assert list(nn.index) == [20, 40] and np.all(nn["rmse"] > 0)
+    cr = ex.cost_ratios(2, sims[2], include=("EKF", "PF"), repeats=1)
+    assert cr.loc["EKF", "single_run_ratio"] == 1.0
+
+
+def test_cost_ratios_need_the_ekf():
+    sim = ex.simulate(1, 2, 5)
+    with pytest.raises(ValueError, match="EKF"):
+        ex.cost_ratios(1, sim, include=("PF",), repeats=1)
+    with pytest.raises(ValueError, match="exact"):
+        ex.rmse_and_cost_vs_n(1, sim, 5, n_values=(10,), exact=np.ones(3), repeats=1)
