@@ -2,6 +2,7 @@
 from .base import Filter, FilterDivergenceError, FilterResult, GaussianFilter
 from .cmspf import CMSParticleFilter, OracleCMSParticleFilter
 from .espf import EvolutionSamplingParticleFilter
+from .gpff import GaussianParticleFlowFilter
 from .grid import GridFilter
 from .kalman import ExtendedKalmanFilter, KalmanFilter, kalman_update
 from .particle import BootstrapParticleFilter, normalize_log_weights
@@ -13,7 +14,7 @@ from .ukf import UnscentedKalmanFilter
 
 __all__ = ["Filter", "FilterResult", "GaussianFilter", "FilterDivergenceError", "KalmanFilter",
            "ExtendedKalmanFilter", "kalman_update", "UnscentedKalmanFilter", "ScaledSigmaPoints",
-           "unscented_transform", "BootstrapParticleFilter", "normalize_log_weights", "GridFilter",
+           "unscented_transform", "BootstrapParticleFilter", "normalize_log_weights", "GridFilter", "GaussianParticleFlowFilter",
            "resample", "multinomial_resample", "stratified_resample", "systematic_resample",
            "residual_resample", "offspring_counts", "effective_sample_size", "RESAMPLING_SCHEMES",
            "CMSParticleFilter", "OracleCMSParticleFilter", "EvolutionSamplingParticleFilter"]

@@ -1,0 +1,284 @@
+"""Particle-flow mathematics of the Gaussian particle flow filter (Zhang, Zhou & Feng 2016).
+
+Notation (the paper's, with the prior of step k written m, P):
+
+* homotopy q(x, lambda) ∝ g(x) h(x)^lambda, lambda in [0, 1]            (eq 4)
+* flow dx/dlambda = f(x, lambda)                                         (eq 5)
+* linear-Gaussian case, g = N(m, P), h(x) = N(y; H x, R): q(., lambda) is the
+  Kalman posterior with measurement covariance R / lambda, with mean x_lambda and
+  covariance P_lambda (eqs 12, 25, 26), and the flow is affine,
+  f = A(lambda) x + b(lambda) (eqs 13, 22, 24, 27) with, written with the prior
+  covariance only (the reading under which eqs 24-27 hold; see the chapter),
+
+      A(lambda) = -1/2 P H^T (lambda H P H^T + R)^{-1} H                      (24)
+      b(lambda) = (I + 2 lambda A) [(I + lambda A) P H^T R^{-1} y + A m]      (27)
+
+* nonlinear case (sec 4): P H^T -> Pxy, H P H^T -> Pyy, H m -> y_hat, H x -> h(x),
+  which gives (our corrected eq 46, with C = (lambda Pyy + R)^{-1})
+
+      f(x, lambda) = 1/2 Pxy C [ (y - h(x)) + R C (y - y_hat) ].
+
+Every function is batched over leading axes: means ``(..., d)``, covariances
+``(..., d, d)``, particle clouds ``(runs, N, d)`` with per-run matrices ``(runs, ...)``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["lambda_schedule", "homotopy_moments", "affine_flow_coefficients", "affine_flow_field",
+           "flow_moment_rhs", "kalman_bucy_rhs", "exact_affine_map", "gaussian_flow_field",
+           "nonlinear_coefficients", "integrate_flow", "INTEGRATORS", "SCHEDULES"]
+
+#: integrators of the flow ODE in lambda and their orders
+INTEGRATORS = {"euler": 1, "midpoint": 2, "rk4": 4}
+#: lambda schedules
+SCHEDULES = ("uniform", "exponential")
+
+
+# ----------------------------------------------------------------------------- checks
+def _finite(a, name):
+    a = np.asarray(a, dtype=float)
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains NaN or infinite entries")
+    return a
+
+
+def _check_cov(P, name):
+    P = _finite(P, name)
+    if P.ndim < 2 or P.shape[-1] != P.shape[-2]:
+        raise ValueError(f"{name} must be (..., n, n), got shape {P.shape}")
+    scale = np.maximum(np.max(np.abs(P), axis=(-2, -1)), np.finfo(float).tiny)
+    if np.any(np.max(np.abs(P - np.swapaxes(P, -1, -2)), axis=(-2, -1)) > 1e-9 * scale):
+        raise ValueError(f"{name} is not symmetric")
+    try:
+        np.linalg.cholesky(0.5 * (P + np.swapaxes(P, -1, -2)))
+    except np.linalg.LinAlgError:
+        raise ValueError(f"{name} is not positive definite") from None
+    return 0.5 * (P + np.swapaxes(P, -1, -2))
+
+
+def _check_linear(m, P, H, R, y):
+    m = _finite(m, "m")
+    P = _check_cov(P, "P")
+    R = _check_cov(R, "R")
+    H = _finite(H, "H")
+    y = _finite(y, "y")
+    d, mdim = P.shape[-1], R.shape[-1]
+    if m.shape[-1] != d:
+        raise ValueError(f"m has length {m.shape[-1]} but P is {d}x{d}")
+    if H.shape[-2:] != (mdim, d):
+        raise ValueError(f"H must be ({mdim}, {d}), got {H.shape[-2:]}")
+    if y.shape[-1] != mdim:
+        raise ValueError(f"y has length {y.shape[-1]} but R is {mdim}x{mdim}")
+    return m, P, H, R, y
+
+
+def _check_lam(lam):
+    lam = float(lam)
+    if not (0.0 <= lam <= 1.0) or not np.isfinite(lam):
+        raise ValueError(f"lambda must lie in [0, 1], got {lam}")
+    return lam
+
+
+def _T(a):
+    return np.swapaxes(a, -1, -2)
+
+
+def _mv(A, v):
+    return np.einsum("...ij,...j->...i", A, v)
+
+
+# ----------------------------------------------------------------------------- schedules
+def lambda_schedule(n_steps: int = 20, kind: str = "uniform", ratio: float = 1.2) -> np.ndarray:
+    """Pseudo-time grid 0 = lambda_0 < lambda_1 < ... < lambda_n = 1 for the flow.
+
+    ``kind="uniform"``: Delta lambda = 1/n (the paper, sec 5: Delta lambda = 0.05, n = 20).
+    ``kind="exponential"``: Delta lambda_j = Delta lambda_1 ratio^(j-1) with
+    Delta lambda_1 = (ratio - 1)/(ratio^n - 1) (small steps first, where the field changes
+    fastest; the EDH literature, e.g. Li & Coates 2017, uses ratio 1.2).
+    The returned grid starts at exactly 0 and ends at exactly 1, so the steps
+    ``np.diff(grid)`` sum to 1 (up to the rounding of the differences).
+    """
+    if isinstance(n_steps, bool) or int(n_steps) != n_steps or n_steps < 1:
+        raise ValueError(f"n_steps must be an integer >= 1, got {n_steps!r}")
+    n = int(n_steps)
+    if kind == "uniform":
+        grid = np.arange(n + 1) / n
+    elif kind == "exponential":
+        ratio = float(ratio)
+        if not np.isfinite(ratio) or ratio <= 0:
+            raise ValueError(f"ratio must be positive, got {ratio}")
+        if ratio == 1.0:
+            grid = np.arange(n + 1) / n
+        else:
+            steps = ratio ** np.arange(n)
+            grid = np.concatenate([[0.0], np.cumsum(steps)]) / steps.sum()
+    else:
+        raise ValueError(f"unknown schedule {kind!r}; choose from {SCHEDULES}")
+    grid[0], grid[-1] = 0.0, 1.0
+    return grid
+
+
+# ----------------------------------------------------------------------------- linear case
+def homotopy_moments(m, P, H, R, y, lam):
+    """Mean and covariance of q(x, lambda) for the linear-Gaussian homotopy (eqs 12, 25, 26).
+
+    q(., lambda) is the Kalman posterior of the prior N(m, P) given y with
+    measurement covariance R / lambda:
+    P_lambda = P - lambda P H^T (lambda H P H^T + R)^{-1} H P   (= P + 2 lambda A P, eq 26),
+    x_lambda = m + lambda P H^T (lambda H P H^T + R)^{-1} (y - H m)   (eq 25, corrected).
+    """
+    m, P, H, R, y = _check_linear(m, P, H, R, y)
+    lam = _check_lam(lam)
+    PHt = P @ _T(H)
+    S = lam * H @ PHt + R
+    G = _T(np.linalg.solve(S, _T(PHt)))  # P H^T (lam M + R)^{-1}
+    x_lam = m + lam * _mv(G, y - _mv(H, m))
+    P_lam = P - lam * G @ _T(PHt)
+    return x_lam, 0.5 * (P_lam + _T(P_lam))
+
+
+def affine_flow_coefficients(m, P, H, R, y, lam):
+    """A(lambda), b(lambda) of the linear-Gaussian flow f = A x + b (eqs 24, 27), prior-only form.
+
+    ``m``, ``P`` are the *prior* mean and covariance (x_{k|k-1}, P_{k|k-1}); see the
+    chapter's errata for the printed P^lambda_{k|k} in eqs (23)-(25), (27).
+    """
+    m, P, H, R, y = _check_linear(m, P, H, R, y)
+    lam = _check_lam(lam)
+    PHt = P @ _T(H)
+    S = lam * H @ PHt + R
+    A = -0.5 * _T(np.linalg.solve(S, _T(PHt))) @ H
+    I = np.eye(P.shape[-1])
+    g = _mv(PHt, np.linalg.solve(R, y[..., None])[..., 0])  # P H^T R^{-1} y
+    b = _mv(I + 2 * lam * A, _mv(I + lam * A, g) + _mv(A, m))
+    return A, b
+
+
+def affine_flow_field(x, lam, m, P, H, R, y):
+    """f(x, lambda) = A(lambda) x + b(lambda) for states/particles ``x`` (..., N, d) or (..., d).
+
+    Matrices carry the leading (runs) axes of ``x`` minus its particle axis.
+    """
+    A, b = affine_flow_coefficients(m, P, H, R, y, lam)
+    x = np.asarray(x, float)
+    if x.ndim == A.ndim:  # (..., N, d) with A (..., d, d)
+        return x @ _T(A) + b[..., None, :]
+    return _mv(A, x) + b
+
+
+def flow_moment_rhs(mean, cov, lam, m, P, H, R, y):
+    """d/dlambda of the mean and covariance of a cloud moved by the affine flow.
+
+    For f = A x + b: d mean/dlambda = A mean + b, d cov/dlambda = A cov + cov A^T.
+    Integrated from (m, P) at lambda = 0, these land on the Kalman posterior at lambda = 1.
+    """
+    A, b = affine_flow_coefficients(m, P, H, R, y, lam)
+    return _mv(A, mean) + b, A @ cov + cov @ _T(A)
+
+
+def kalman_bucy_rhs(mean, cov, H, R, y):
+    """Kalman-Bucy filter in pseudo-time lambda with zero drift and zero process noise (eqs 39, 40).
+
+    K = cov H^T R^{-1}; d mean/dlambda = K (y - H mean); d cov/dlambda = -K R K^T.
+    """
+    K = _T(np.linalg.solve(R, H @ cov))  # cov H^T R^{-1} (cov, R symmetric)
+    return _mv(K, y - _mv(H, mean)), -K @ R @ _T(K)
+
+
+def exact_affine_map(m, P, H, R, y, lam=1.0):
+    """Exact solution of the affine flow from 0 to ``lam``: x(lam) = x_lam + Phi (x(0) - m).
+
+    The A(lambda) of eq (24) commute for all lambda, so Phi = expm(int_0^lam A); in
+    whitened coordinates (L_P, L_R Cholesky factors of P, R; Ht = L_R^{-1} H L_P)
+    it is the symmetric square root Phi = L_P (I + lam Ht^T Ht)^{-1/2} L_P^{-1},
+    hence Phi P Phi^T = P_lam. Returns ``(x_lam, Phi)``.
+    """
+    m, P, H, R, y = _check_linear(m, P, H, R, y)
+    lam = _check_lam(lam)
+    Lp = np.linalg.cholesky(P)
+    Lr = np.linalg.cholesky(R)
+    Ht = np.linalg.solve(Lr, H @ Lp)
+    s, V = np.linalg.eigh(_T(Ht) @ Ht)
+    D = (1.0 + lam * np.clip(s, 0.0, None)) ** -0.5
+    core = (V * D[..., None, :]) @ _T(V)
+    Phi = Lp @ core @ np.linalg.inv(Lp)
+    x_lam, _ = homotopy_moments(m, P, H, R, y, lam)
+    return x_lam, Phi
+
+
+# ----------------------------------------------------------------------------- nonlinear case
+def _solve_sym(S, B):
+    return np.linalg.solve(S, B)
+
+
+def gaussian_flow_field(x, lam, h_x, y, y_hat, Pxy, Pyy, R, residual=None):
+    """The GPFF field for nonlinear h (sec 4, eqs 41-46, corrected), at particles ``x``.
+
+    f(x, lambda) = B(lambda) h(x) + u(lambda)
+                 = 1/2 Pxy C [ r(y, h(x)) + R C r(y, y_hat) ],   C = (lambda Pyy + R)^{-1},
+
+    where r(a, b) = a - b (or ``residual(a, b)`` for wrapped measurements such as
+    angles). Shapes: ``h_x`` (runs, N, m) = h at the particles; ``y``, ``y_hat`` (runs, m);
+    ``Pxy`` (runs, d, m); ``Pyy`` (runs, m, m); ``R`` (m, m). Returns (runs, N, d).
+    With linear h (Pxy = P H^T, Pyy = H P H^T, y_hat = H m) this is eq (27)'s
+    A x + b exactly. ``x`` is unused (the field depends on x only through h(x)).
+    """
+    r = (lambda a, b: a - b) if residual is None else residual
+    S = lam * Pyy + R
+    G = _T(_solve_sym(S, _T(Pxy)))                      # Pxy C        (runs, d, m)
+    c = _mv(R, _solve_sym(S, r(y, y_hat)[..., None])[..., 0])  # R C r(y, y_hat) (runs, m)
+    inner = r(y[..., None, :], h_x) + c[..., None, :]   # (runs, N, m)
+    return 0.5 * inner @ _T(G)
+
+
+def nonlinear_coefficients(lam, y, y_hat, Pxy, Pyy, R, form="corrected"):
+    """B(lambda) and u(lambda) of eq (46), as printed or corrected (for the chapter's checks).
+
+    Printed (sec 4):  B = -1/2 Pyy C,  u = U/2 y + V/2 y_hat,
+        U = lam^2 S Pyy + 2 Pxy + 6 lam B Pyy,  V = 2 B + lam S,
+        S = Pxy C Pyy C,  C = (lam Pyy + R)^{-1}.
+    Corrected:        B = -1/2 Pxy C,  u = U/2 R^{-1} y + V/2 y_hat (same U, V, S, C).
+    The printed B is m x m where a d x m matrix is needed, so with d != m the
+    printed products fail (numpy raises ``ValueError``); with d == m they run but
+    give the wrong field. Returns ``(B, u)``; f(x) = B h(x) + u.
+    """
+    if form not in ("printed", "corrected"):
+        raise ValueError("form must be 'printed' or 'corrected'")
+    C = np.linalg.inv(lam * Pyy + R)
+    S = Pxy @ C @ Pyy @ C
+    B = -0.5 * (Pyy if form == "printed" else Pxy) @ C
+    U = lam**2 * S @ Pyy + 2 * Pxy + 6 * lam * B @ Pyy
+    V = 2 * B + lam * S
+    yy = y if form == "printed" else _mv(np.linalg.inv(R), y)
+    u = 0.5 * _mv(U, yy) + 0.5 * _mv(V, y_hat)
+    return B, u
+
+
+# ----------------------------------------------------------------------------- integration
+def integrate_flow(x, field, grid, method: str = "euler"):
+    """Move particles ``x`` (..., d) along dx/dlambda = field(x, lambda) over ``grid``.
+
+    ``grid`` is a lambda grid from :func:`lambda_schedule` (0 ... 1); ``method`` is
+    "euler" (the paper), "midpoint" (RK2) or "rk4". Vectorised over every leading axis.
+    """
+    if method not in INTEGRATORS:
+        raise ValueError(f"unknown integrator {method!r}; choose from {sorted(INTEGRATORS)}")
+    grid = np.asarray(grid, float)
+    if grid.ndim != 1 or grid.size < 2 or np.any(np.diff(grid) <= 0):
+        raise ValueError("grid must be an increasing 1-D array of at least two lambdas")
+    x = np.array(x, dtype=float)
+    for l0, l1 in zip(grid[:-1], grid[1:]):
+        h = l1 - l0
+        if method == "euler":
+            x += h * field(x, l0)
+        elif method == "midpoint":
+            k1 = field(x, l0)
+            x += h * field(x + 0.5 * h * k1, l0 + 0.5 * h)
+        else:
+            k1 = field(x, l0)
+            k2 = field(x + 0.5 * h * k1, l0 + 0.5 * h)
+            k3 = field(x + 0.5 * h * k2, l0 + 0.5 * h)
+            k4 = field(x + h * k3, l1)
+            x += (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
+    return x
