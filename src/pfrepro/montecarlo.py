@@ -6,6 +6,7 @@ so adding a filter to an experiment never changes the numbers of the others.
 """
 from __future__ import annotations
 
+import gc
 import time
 import zlib
 from dataclasses import dataclass, field
@@ -17,7 +18,7 @@ from .metrics import mse, rmse
 from .models.base import Simulation
 from .validation import check_positive_int
 
-__all__ = ["MonteCarloResult", "run_monte_carlo", "filter_rng", "truth_rng", "time_single_run"]
+__all__ = ["MonteCarloResult", "run_monte_carlo", "filter_rng", "truth_rng", "time_single_run", "time_filters"]
 
 
 def truth_rng(seed: int) -> np.random.Generator:
@@ -30,15 +31,42 @@ def filter_rng(seed: int, name: str) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence([int(seed), 1, zlib.crc32(name.encode())]))
 
 
+def _timed_call(filt, y, rng_seed: int) -> float:
+    """Wall time of one ``filt.filter(y)`` call with the garbage collector paused.
+
+    As in ``timeit``: a collection triggered by earlier allocations of the
+    notebook would otherwise land inside a few-millisecond run at random.
+    """
+    rng = np.random.default_rng(rng_seed)
+    gc_was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        t0 = time.perf_counter()
+        filt.filter(y, rng=rng)
+        return time.perf_counter() - t0
+    finally:
+        if gc_was_enabled:
+            gc.enable()
+
+
 def time_single_run(filt, y_one_run, rng_seed: int = 0, repeats: int = 3) -> float:
     """Median wall time (s) of ``filt`` on one run (the papers' 'time per run')."""
-    times = []
+    return time_filters({"f": filt}, y_one_run, rng_seed, repeats)["f"]
+
+
+def time_filters(filters: dict, y_one_run, rng_seed: int = 0, repeats: int = 7) -> dict[str, float]:
+    """Median single-run wall time of each filter, with the repeats interleaved across filters.
+
+    Interleaving (filter A, B, C, A, B, C, ...) exposes every filter to the same
+    drifts of machine load, so the *ratios* the chapters report are steadier than
+    timing each filter in its own block. Repeat r uses the seed ``rng_seed + r``.
+    """
+    repeats = check_positive_int(repeats, "repeats")
+    times = {name: [] for name in filters}
     for r in range(repeats):
-        rng = np.random.default_rng(rng_seed + r)
-        t0 = time.perf_counter()
-        filt.filter(y_one_run, rng=rng)
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
+        for name, filt in filters.items():
+            times[name].append(_timed_call(filt, y_one_run, rng_seed + r))
+    return {name: float(np.median(v)) for name, v in times.items()}
 
 
 @dataclass
@@ -73,7 +101,8 @@ def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, time_
     ----------
     filters : mapping name -> filter object (anything with ``filter(y, rng)``).
     time_per_run : also measure each filter's wall time on a single run
-        (median of ``timing_repeats``), the figure the papers' timing tables report.
+        (median of ``timing_repeats``, interleaved across the filters: :func:`time_filters`),
+        the figure the papers' timing tables report.
     sim : reuse an existing simulation instead of simulating (``T``/``runs`` must match).
     """
     T = check_positive_int(T, "T")
@@ -82,11 +111,10 @@ def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, time_
         sim = model.simulate(T, runs, truth_rng(seed))
     elif sim.y.shape[:2] != (runs, T):
         raise ValueError(f"sim has shape {sim.y.shape[:2]}, expected (runs, T) = {(runs, T)}")
-    results, batch, per_run = {}, {}, {}
+    results, batch = {}, {}
     for name, filt in filters.items():
         t0 = time.perf_counter()
         results[name] = filt.filter(sim.y, rng=filter_rng(seed, name))
         batch[name] = time.perf_counter() - t0
-        if time_per_run:
-            per_run[name] = time_single_run(filt, sim.y[:1], rng_seed=seed, repeats=timing_repeats)
+    per_run = time_filters(filters, sim.y[:1], seed, timing_repeats) if time_per_run else {}
     return MonteCarloResult(sim=sim, results=results, batch_seconds=batch, seconds_per_run=per_run, seed=seed)

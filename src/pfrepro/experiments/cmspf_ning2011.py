@@ -19,7 +19,7 @@ from ..filters import (BootstrapParticleFilter, CMSParticleFilter, EvolutionSamp
                        ExtendedKalmanFilter, GridFilter, OracleCMSParticleFilter, UnscentedKalmanFilter)
 from ..metrics import mc_summary, rmse
 from ..models import UNGM
-from ..montecarlo import filter_rng, run_monte_carlo, time_single_run, truth_rng
+from ..montecarlo import filter_rng, run_monte_carlo, time_filters, truth_rng
 
 __all__ = ["PAPER", "T", "SEEDS", "ASSUMPTIONS", "model", "cms", "pf", "grid", "ekf", "ukf", "espf",
            "table1", "table2", "fig2_run", "fig3", "table3", "one_step", "fig6", "sensitivity",
@@ -121,11 +121,8 @@ class _OfflineCarrierCMS:
 
 
 def _time_ratios(filters: dict, y_one, seed: int, repeats: int = 7) -> dict:
-    """Median seconds per single 50-step run, all filters timed in one session."""
-    out = {}
-    for name, f in filters.items():
-        out[name] = time_single_run(f, y_one, rng_seed=seed, repeats=repeats)
-    return out
+    """Median seconds per single 50-step run, all filters timed in one session (interleaved)."""
+    return time_filters(filters, y_one, rng_seed=seed, repeats=repeats)
 
 
 # -- Table 1 -------------------------------------------------------------------------------
@@ -201,8 +198,9 @@ def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["
     for N in Ns:
         fs = {"CMS-PF": cms(m, N), "PF": pf(m, N)}
         res = run_monte_carlo(m, fs, T, runs, seed, sim=sim)
-        tc = time_single_run(_OfflineCarrierCMS(fs["CMS-PF"], T, seed), sim.y[:1], seed, timing_repeats)
-        tp = time_single_run(fs["PF"], sim.y[:1], seed, timing_repeats)
+        tt = time_filters({"CMS-PF": _OfflineCarrierCMS(fs["CMS-PF"], T, seed), "PF": fs["PF"]},
+                          sim.y[:1], seed, timing_repeats)
+        tc, tp = tt["CMS-PF"], tt["PF"]
         c, p = summarise(res.rmse("CMS-PF")), summarise(res.rmse("PF"))
         out.append({"N": N, "CMS-PF RMSE": c["mean"], "CMS-PF se": c["se"], "PF RMSE": p["mean"],
                     "PF se": p["se"], "CMS-PF time [s]": tc, "PF time [s]": tp})

@@ -36,7 +36,7 @@ from ..filters.ekf_variants import PreviousEstimateJacobianEKF
 from ..metrics import mc_summary, rmse, rmse_over_time
 from ..models import UNGM
 from ..models.base import Simulation
-from ..montecarlo import MonteCarloResult, run_monte_carlo, time_single_run, truth_rng
+from ..montecarlo import MonteCarloResult, run_monte_carlo, time_filters, time_single_run, truth_rng
 from ..validation import check_positive_int
 
 __all__ = [
@@ -281,11 +281,7 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
 # --------------------------------------------------------------------------------------
 def _interleaved_times(filters: dict, y_one, repeats: int, seed: int) -> dict:
     """Median single-run wall time of each filter, repeats interleaved across filters."""
-    times = {n: [] for n in filters}
-    for r in range(repeats):
-        for n, f in filters.items():
-            times[n].append(time_single_run(f, y_one, rng_seed=seed + r, repeats=1))
-    return {n: float(np.median(v)) for n, v in times.items()}
+    return time_filters(filters, y_one, rng_seed=seed, repeats=repeats)
 
 
 def _batch_seconds(filt, y, seed: int, min_total: float = 0.5, max_repeats: int = 15) -> float:

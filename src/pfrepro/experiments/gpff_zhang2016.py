@@ -30,7 +30,7 @@ from ..filters import (BootstrapParticleFilter, ExtendedKalmanFilter, GaussianPa
 from ..filters.gpff import particle_moments
 from ..metrics import mc_summary, mse, mse_per_component
 from ..models import CWPA, UNGM, BearingsOnly
-from ..montecarlo import MonteCarloResult, run_monte_carlo, time_single_run, truth_rng
+from ..montecarlo import MonteCarloResult, run_monte_carlo, truth_rng
 
 __all__ = ["PAPER", "RUNS", "SEEDS", "UT", "N_LAMBDA", "TIMING_REPEATS", "random_linear_problem", "equivalence_table",
            "interior_checks", "fokker_planck_check", "printed_vs_corrected_linear",
