@@ -20,14 +20,17 @@ def normalize_log_weights(logw):
     Returns ``(w, log_sum, collapsed)``; a run whose log-weights are all -inf
     or NaN (weight collapse) gets uniform weights and ``collapsed = True``.
     """
-    logw = np.where(np.isnan(logw), -np.inf, logw)
     m = logw.max(axis=1, keepdims=True)
+    if np.isnan(m).any():  # max propagates NaN: only then pay for a pass that removes them
+        logw = np.where(np.isnan(logw), -np.inf, logw)
+        m = logw.max(axis=1, keepdims=True)
     collapsed = ~np.isfinite(m[:, 0])
     if collapsed.any():
         logw = logw.copy()
         logw[collapsed] = 0.0
         m = np.where(collapsed[:, None], 0.0, m)
-    w = np.exp(logw - m)
+    w = logw - m
+    np.exp(w, out=w)
     s = w.sum(axis=1, keepdims=True)
     w /= s
     log_sum = (m + np.log(s))[:, 0]
