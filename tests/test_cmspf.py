@@ -107,7 +107,7 @@ def test_cms_step_keeps_n_best_and_normalised_weights():
     m = UNGM.ning2011(1.0)
     f = CMSParticleFilter(m, 30, carrier="chebyshev")
     rng = np.random.default_rng(0)
-    x = f.initial_particles(4, rng)
+    x = f.sample_prior(rng, (4, 30))
     logw = np.full((4, 30), -np.log(30))
     r = f.carrier.generate(1, (4, 30, 1), rng)[0]
     st = f.step(x, logw, np.array([[2.0]] * 4), 1, r, rng)

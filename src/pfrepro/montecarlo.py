@@ -49,12 +49,13 @@ def _timed_call(filt, y, rng_seed: int) -> float:
             gc.enable()
 
 
-def time_single_run(filt, y_one_run, rng_seed: int = 0, repeats: int = 3) -> float:
+def time_single_run(filt, y_one_run, rng_seed: int = 0, repeats: int = 3, warmup: bool = True) -> float:
     """Median wall time (s) of ``filt`` on one run (the papers' 'time per run')."""
-    return time_filters({"f": filt}, y_one_run, rng_seed, repeats)["f"]
+    return time_filters({"f": filt}, y_one_run, rng_seed, repeats, warmup=warmup)["f"]
 
 
-def time_filters(filters: dict, y_one_run, rng_seed: int = 0, repeats: int = 7) -> dict[str, float]:
+def time_filters(filters: dict, y_one_run, rng_seed: int = 0, repeats: int = 7, *,
+                 warmup: bool = True) -> dict:
     """Median single-run wall time of each filter, with the repeats interleaved across filters.
 
     Interleaving (filter A, B, C, A, B, C, ...) exposes every filter to the same
@@ -62,10 +63,11 @@ def time_filters(filters: dict, y_one_run, rng_seed: int = 0, repeats: int = 7) 
     timing each filter in its own block. One untimed warm-up call per filter comes
     first: the first one-run call of a filter pays one-off costs (allocator, caches)
     that would otherwise inflate whichever configuration happens to be timed first.
-    Repeat r uses the seed ``rng_seed + r``.
+    Repeat r uses the seed ``rng_seed + r``; ``warmup=False`` skips the warm-up
+    (for a caller that has just warmed the filters up itself).
     """
     repeats = check_positive_int(repeats, "repeats")
-    for filt in filters.values():
+    for filt in filters.values() if warmup else ():
         _timed_call(filt, y_one_run, rng_seed)
     times = {name: [] for name in filters}
     for r in range(repeats):

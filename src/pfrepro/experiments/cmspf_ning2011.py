@@ -120,11 +120,6 @@ class _OfflineCarrierCMS:
         return self.filt.filter(y, rng=rng, r=self.r)
 
 
-def _time_ratios(filters: dict, y_one, seed: int, repeats: int = 7) -> dict:
-    """Median seconds per single 50-step run, all filters timed in one session (interleaved)."""
-    return time_filters(filters, y_one, rng_seed=seed, repeats=repeats)
-
-
 # -- Table 1 -------------------------------------------------------------------------------
 def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table1"]):
     """Per-run RMSE of PF and CMS-PF (20 runs, each N), plus PF(2N) and the grid reference.
@@ -170,7 +165,7 @@ def table2(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=
     timed = {"EKF": fs["EKF"], "UKF": fs["UKF"], "PF": fs["PF"], "ESPF": fs["ESPF"],
              "CMS-PF": _OfflineCarrierCMS(fs["CMS-PF"], T, seed), "CMS-PF (incl. carrier)": fs["CMS-PF"],
              "PF (2N)": fs["PF (2N)"]}
-    times = _time_ratios(timed, y1, seed, timing_repeats)
+    times = time_filters(timed, y1, seed, timing_repeats)
     df = pd.DataFrame(rows).T
     df = df.reindex(list(df.index) + ["CMS-PF (incl. carrier)"])
     df["time ratio to PF"] = pd.Series({k: v / times["PF"] for k, v in times.items()})
@@ -245,7 +240,7 @@ def one_step(carrier: str, k: int = 20, N: int = 200, sigma_v: float = 1.0, seed
     f = cms(m, N, carrier=carrier)
     rng = filter_rng(seed, f"figs45 {carrier}")
     r = f.carrier.generate(T, (1, N, 1), rng)
-    x = f.initial_particles(1, rng)
+    x = f.sample_prior(rng, (1, N))
     logw = np.full((1, N), -np.log(N))
     for j in range(1, k):
         st = f.step(x, logw, sim.y[:, j - 1], j, r[j - 1], rng)

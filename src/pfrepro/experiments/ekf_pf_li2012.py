@@ -279,18 +279,13 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
 # --------------------------------------------------------------------------------------
 # beyond the paper: RMSE and cost against N, cost ratios
 # --------------------------------------------------------------------------------------
-def _interleaved_times(filters: dict, y_one, repeats: int, seed: int) -> dict:
-    """Median single-run wall time of each filter, repeats interleaved across filters."""
-    return time_filters(filters, y_one, rng_seed=seed, repeats=repeats)
-
-
 def _batch_seconds(filt, y, seed: int, min_total: float = 0.5, max_repeats: int = 15) -> float:
     """Median wall time of one batched call ``filt.filter(y)`` on all runs; a fast filter is
     repeated until ``min_total`` seconds have been spent (at most ``max_repeats`` calls), so a
     5-ms call is not one noisy sample."""
     times, total = [], 0.0
     while len(times) < max_repeats and (not times or total < min_total):
-        t = time_single_run(filt, y, rng_seed=seed + len(times), repeats=1)
+        t = time_single_run(filt, y, rng_seed=seed + len(times), repeats=1, warmup=not times)
         times.append(t)
         total += t
     return float(np.median(times))
@@ -310,7 +305,7 @@ def cost_ratios(which: int, sim: Simulation, *, include=("EKF", "UKF", "PF", "Ex
     if "EKF" not in include:
         raise ValueError("cost ratios are relative to the EKF: include must contain 'EKF'")
     filters = make_filters(make_model(which), include)
-    t = _interleaved_times(filters, sim.y[:1], repeats, seed)
+    t = time_filters(filters, sim.y[:1], seed, repeats)
     out = pd.DataFrame({"single_run_s": t})
     out["single_run_ratio"] = out["single_run_s"] / out.loc["EKF", "single_run_s"]
     out["amortised_s"] = pd.Series({n: _batch_seconds(f, sim.y, seed) / sim.runs for n, f in filters.items()})
@@ -333,7 +328,7 @@ def rmse_and_cost_vs_n(which: int, sim: Simulation, seed: int, n_values=N_SWEEP,
         name = f"PF N={N}"
         pf = BootstrapParticleFilter(model, N, resampling=RESAMPLING_DEFAULT)
         res = run_monte_carlo(model, {name: pf}, T, sim.runs, seed, sim=sim)
-        t = _interleaved_times({"EKF": ekf, name: pf}, sim.y[:1], repeats, seed)
+        t = time_filters({"EKF": ekf, name: pf}, sim.y[:1], seed, repeats)
         t_ekf_batch = _batch_seconds(ekf, sim.y, seed)
         s = mc_summary(res.rmse(name))
         row = {"N": N, "rmse": s.mean, "se": s.se,

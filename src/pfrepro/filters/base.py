@@ -5,7 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..validation import as_measurements
+from ..validation import as_covariance, as_measurements, as_vector
 
 __all__ = ["FilterResult", "Filter", "GaussianFilter", "FilterDivergenceError"]
 
@@ -49,8 +49,16 @@ class Filter:
     name = "filter"
     needs_rng = False
 
-    def __init__(self, model):
+    def __init__(self, model, m0=None, P0=None):
         self.model = model
+        # the filter's initial distribution N(m0, P0); defaults to the model's
+        self.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)
+        self.P0 = model.P0 if P0 is None else as_covariance(P0, "P0", model.dim_x)
+
+    def sample_prior(self, rng: np.random.Generator, shape) -> np.ndarray:
+        """Draws from the filter's initial distribution N(m0, P0), shape ``(*shape, dim_x)``."""
+        z = rng.standard_normal(tuple(shape) + (self.model.dim_x,))
+        return self.m0 + z @ np.linalg.cholesky(self.P0).T
 
     def _prepare(self, y, rng):
         y = as_measurements(y, self.model.dim_y)
@@ -72,13 +80,6 @@ class GaussianFilter(Filter):
     ``x`` (runs, n) and ``P`` (runs, n, n); this class runs them over time and
     checks the result. ``m0``/``P0`` override the model's initial distribution.
     """
-
-    def __init__(self, model, m0=None, P0=None):
-        from ..validation import as_covariance, as_vector
-
-        super().__init__(model)
-        self.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)
-        self.P0 = model.P0 if P0 is None else as_covariance(P0, "P0", model.dim_x)
 
     def predict(self, x, P, k):
         raise NotImplementedError

@@ -41,10 +41,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..chaos import ChaosCarrier
-from ..validation import as_covariance, as_vector, check_positive_int, check_probability
+from ..validation import check_positive_int, check_probability
 from .base import Filter, FilterDivergenceError, FilterResult
 from .particle import normalize_log_weights
-from .resampling import RESAMPLING_SCHEMES, resample_counts
+from .resampling import check_scheme, resample_counts
 
 __all__ = ["CMSParticleFilter", "OracleCMSParticleFilter", "CMSStep", "map_particles",
            "select_top_likelihood"]
@@ -160,7 +160,7 @@ class CMSParticleFilter(Filter):
     def __init__(self, model, n_particles: int, carrier="logistic", eta: float = 0.5,
                  big_fraction: float = 0.1, n_th: float = 0.5, resampling: str = "systematic",
                  m0=None, P0=None):
-        super().__init__(model)
+        super().__init__(model, m0, P0)
         self.n_particles = check_positive_int(n_particles, "n_particles")
         if self.n_particles < 2:
             raise ValueError("CMSParticleFilter needs n_particles >= 2 (big and small particles)")
@@ -172,17 +172,9 @@ class CMSParticleFilter(Filter):
         self.big_fraction = check_probability(big_fraction, "big_fraction")
         self.n_big = int(min(max(1, round(self.big_fraction * self.n_particles)), self.n_particles // 2))
         self.n_th = check_probability(n_th, "n_th")
-        if resampling not in RESAMPLING_SCHEMES:
-            raise ValueError(f"unknown resampling scheme {resampling!r}; choose from {sorted(RESAMPLING_SCHEMES)}")
-        self.resampling = resampling
-        self.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)
-        self.P0 = model.P0 if P0 is None else as_covariance(P0, "P0", model.dim_x)
+        self.resampling = check_scheme(resampling)
 
     # -- pieces --------------------------------------------------------------------------
-    def initial_particles(self, runs: int, rng: np.random.Generator) -> np.ndarray:
-        z = rng.standard_normal((runs, self.n_particles, self.model.dim_x))
-        return self.m0 + z @ np.linalg.cholesky(self.P0).T
-
     def step(self, x_prev, logw_prev, y_k, k: int, r, rng, x_true_k=None, use_map: bool = True) -> CMSStep:
         """One step (2.1-2.5, 4) on a batch; ``r`` (runs, N, d) carrier values.
 
@@ -228,7 +220,7 @@ class CMSParticleFilter(Filter):
                                  f"{(T, runs, N, n)}, got {carrier.shape}")
             if not np.all(np.isfinite(carrier)):
                 raise ValueError("precomputed carrier r contains NaN or inf")
-        x = self.initial_particles(runs, rng)
+        x = self.sample_prior(rng, (runs, self.n_particles))
         logw = np.full((runs, N), -np.log(N))
         xs = np.empty((runs, T, n))
         Ps = np.empty((runs, T, n, n))

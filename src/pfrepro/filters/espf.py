@@ -31,11 +31,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..validation import as_covariance, as_vector, check_positive_int
+from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
 from .cmspf import select_top_likelihood
 from .particle import normalize_log_weights
-from .resampling import RESAMPLING_SCHEMES, resample
+from .resampling import check_scheme, resample
 
 __all__ = ["EvolutionSamplingParticleFilter", "sbx_children"]
 
@@ -82,7 +82,7 @@ class EvolutionSamplingParticleFilter(Filter):
 
     def __init__(self, model, n_particles: int, mcmc_scale: float = 1.0, sbx_eta: float = 2.0,
                  resampling: str = "systematic", m0=None, P0=None):
-        super().__init__(model)
+        super().__init__(model, m0, P0)
         self.n_particles = check_positive_int(n_particles, "n_particles")
         if self.n_particles < 2:
             raise ValueError("ESPF needs n_particles >= 2 (crossover pairs)")
@@ -92,11 +92,7 @@ class EvolutionSamplingParticleFilter(Filter):
         self.sbx_eta = float(sbx_eta)
         if not np.isfinite(self.sbx_eta) or self.sbx_eta < 0:
             raise ValueError(f"sbx_eta must be >= 0, got {sbx_eta}")
-        if resampling not in RESAMPLING_SCHEMES:
-            raise ValueError(f"unknown resampling scheme {resampling!r}; choose from {sorted(RESAMPLING_SCHEMES)}")
-        self.resampling = resampling
-        self.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)
-        self.P0 = model.P0 if P0 is None else as_covariance(P0, "P0", model.dim_x)
+        self.resampling = check_scheme(resampling)
         if not hasattr(model, "Q"):
             raise TypeError("ESPF needs a model with additive Gaussian process noise Q")
 
@@ -107,8 +103,7 @@ class EvolutionSamplingParticleFilter(Filter):
         Q = self.model.Q
         Qi = np.linalg.inv(Q)
         Lq = np.linalg.cholesky(Q)
-        z = rng.standard_normal((runs, N, n))
-        x = self.m0 + z @ np.linalg.cholesky(self.P0).T
+        x = self.sample_prior(rng, (runs, N))
         xs = np.empty((runs, T, n))
         acc_rate = np.empty((runs, T))
         origin = np.empty((runs, T, 3))

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import flow
-from ..validation import as_covariance, as_vector, check_positive_int
+from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
 from .sigma_points import ScaledSigmaPoints, unscented_transform
 
@@ -74,7 +74,7 @@ class GaussianParticleFlowFilter(Filter):
                  ratio: float = 1.2, integrator: str = "euler", alpha: float = 1.0, beta: float = 2.0,
                  kappa: float = 0.0, field: str = "eq41", on_divergence: str = "raise",
                  m0=None, P0=None, return_cov: bool = False):
-        super().__init__(model)
+        super().__init__(model, m0, P0)
         if field not in ("eq41", "eq43"):
             raise ValueError(f"field must be 'eq41' or 'eq43', got {field!r}")
         if on_divergence not in ("raise", "drop"):
@@ -94,13 +94,7 @@ class GaussianParticleFlowFilter(Filter):
         self.n_steps = check_positive_int(n_steps, "n_steps")
         self.grid = flow.lambda_schedule(self.n_steps, schedule, ratio)
         self.points = ScaledSigmaPoints(model.dim_x, alpha, beta, kappa)
-        self.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)
-        self.P0 = model.P0 if P0 is None else as_covariance(P0, "P0", model.dim_x)
         self.return_cov = bool(return_cov)
-
-    def initial_particles(self, runs: int, rng: np.random.Generator) -> np.ndarray:
-        z = rng.standard_normal((runs, self.n_particles, self.model.dim_x))
-        return self.m0 + z @ np.linalg.cholesky(self.P0).T
 
     def prior_statistics(self, x):
         """Eqs (47)-(52): particle mean/cov, then UT moments y_hat, Pyy, Pxy of h."""
@@ -152,7 +146,7 @@ class GaussianParticleFlowFilter(Filter):
         y = self._prepare(y, rng)
         runs, T, _ = y.shape
         n = self.model.dim_x
-        x = self.initial_particles(runs, rng)
+        x = self.sample_prior(rng, (runs, self.n_particles))
         xs = np.full((runs, T, n), np.nan)
         Ps = np.full((runs, T, n, n), np.nan) if self.return_cov else None
         alive = np.arange(runs)              # runs still being filtered

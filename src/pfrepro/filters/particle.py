@@ -9,7 +9,7 @@ import numpy as np
 
 from ..validation import check_positive_int, check_probability
 from .base import Filter, FilterResult
-from .resampling import RESAMPLING_SCHEMES, resample_counts
+from .resampling import check_scheme, resample_counts
 
 __all__ = ["BootstrapParticleFilter", "normalize_log_weights"]
 
@@ -64,27 +64,17 @@ class BootstrapParticleFilter(Filter):
 
     def __init__(self, model, n_particles: int, resampling: str = "systematic",
                  ess_threshold: float | None = None, return_cov: bool = False, m0=None, P0=None):
-        super().__init__(model)
+        super().__init__(model, m0, P0)
         self.n_particles = check_positive_int(n_particles, "n_particles")
-        if resampling not in RESAMPLING_SCHEMES:
-            raise ValueError(f"unknown resampling scheme {resampling!r}; choose from {sorted(RESAMPLING_SCHEMES)}")
-        self.resampling = resampling
+        self.resampling = check_scheme(resampling)
         self.ess_threshold = None if ess_threshold is None else check_probability(ess_threshold, "ess_threshold")
         self.return_cov = bool(return_cov)
-        from ..validation import as_covariance, as_vector
-
-        self.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)
-        self.P0 = model.P0 if P0 is None else as_covariance(P0, "P0", model.dim_x)
-
-    def initial_particles(self, runs: int, rng: np.random.Generator) -> np.ndarray:
-        z = rng.standard_normal((runs, self.n_particles, self.model.dim_x))
-        return self.m0 + z @ np.linalg.cholesky(self.P0).T
 
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
         y = self._prepare(y, rng)
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
-        x = self.initial_particles(runs, rng)
+        x = self.sample_prior(rng, (runs, N))
         logw = np.full((runs, N), -np.log(N))
         xs = np.empty((runs, T, n))
         Ps = np.empty((runs, T, n, n)) if self.return_cov else None

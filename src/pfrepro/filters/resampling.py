@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["resample", "resample_counts", "multinomial_resample", "stratified_resample",
+__all__ = ["resample", "resample_counts", "check_scheme", "multinomial_resample", "stratified_resample",
            "systematic_resample", "residual_resample", "offspring_counts", "effective_sample_size",
            "normalize_weights", "indices_from_counts", "RESAMPLING_SCHEMES"]
 
@@ -113,13 +113,16 @@ _COUNTS = {
 RESAMPLING_SCHEMES = tuple(sorted(_COUNTS))
 
 
+def check_scheme(scheme: str) -> str:
+    """Return ``scheme`` if it names a resampling scheme, else raise ``ValueError``."""
+    if scheme not in _COUNTS:
+        raise ValueError(f"unknown resampling scheme {scheme!r}; choose from {list(RESAMPLING_SCHEMES)}")
+    return scheme
+
+
 def resample_counts(weights, rng: np.random.Generator, scheme: str = "systematic") -> np.ndarray:
     """Offspring counts ``(runs, N)`` (each row sums to N) by the named scheme."""
-    try:
-        fn = _COUNTS[scheme]
-    except KeyError:
-        raise ValueError(f"unknown resampling scheme {scheme!r}; choose from {list(RESAMPLING_SCHEMES)}") from None
-    return fn(normalize_weights(weights), rng)
+    return _COUNTS[check_scheme(scheme)](normalize_weights(weights), rng)
 
 
 def indices_from_counts(counts) -> np.ndarray:
