@@ -120,7 +120,7 @@ def test_noise_constructor_errors():
 
 def test_simulate_errors():
     m = UNGM.zhang2016()
-    with pytest.raises(ValueError, match="explicit numpy.random.Generator"):
+    with pytest.raises(TypeError, match="rng must be a numpy.random.Generator"):
         m.simulate(10, runs=2)
     with pytest.raises(ValueError, match="T must be >= 1"):
         m.simulate(0, rng=np.random.default_rng(0))
@@ -173,9 +173,9 @@ def test_particle_filter_settings():
         BootstrapParticleFilter(m, 10, resampling="smart")
     with pytest.raises(ValueError, match=r"ess_threshold must lie in \[0, 1\]"):
         BootstrapParticleFilter(m, 10, ess_threshold=2.0)
-    with pytest.raises(TypeError, match="needs rng=numpy.random.Generator"):
+    with pytest.raises(TypeError, match="rng must be a numpy.random.Generator"):
         BootstrapParticleFilter(m, 10).filter(np.zeros(5))
-    with pytest.raises(TypeError, match="needs rng=numpy.random.Generator"):
+    with pytest.raises(TypeError, match="rng must be a numpy.random.Generator"):
         BootstrapParticleFilter(m, 10).filter(np.zeros(5), rng=42)
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.special import logsumexp
 
+from .rng import RunStreams
 from .validation import as_covariance, as_vector
 
 __all__ = ["GaussianNoise", "GaussianMixtureNoise"]
@@ -20,19 +21,43 @@ _LOG_2PI = np.log(2.0 * np.pi)
 
 
 class GaussianNoise:
-    """Zero-mean (or ``mean``) Gaussian noise ``N(mean, cov)``."""
+    """Zero-mean (or ``mean``) Gaussian noise ``N(mean, cov)``.
 
-    def __init__(self, cov, mean=None):
-        self.cov = as_covariance(cov, "cov")
+    ``allow_singular=True`` admits a positive *semi*-definite ``cov``, e.g. a
+    discrete white-noise-acceleration process noise Q = G Qc G^T of lower rank, or
+    Q = 0 (deterministic dynamics). Such noise can be sampled (through a symmetric
+    square root, so draws stay in the range of ``cov``; zero noise draws nothing)
+    but has no density: :meth:`logpdf` raises, so a filter that needs the
+    transition density (the grid filter) refuses it instead of returning NaN.
+    """
+
+    def __init__(self, cov, mean=None, *, allow_singular: bool = False):
+        self.cov = as_covariance(cov, "cov", allow_singular=allow_singular)
         self.dim = self.cov.shape[0]
         self.mean = np.zeros(self.dim) if mean is None else as_vector(mean, "mean", self.dim)
-        self._chol = np.linalg.cholesky(self.cov)
-        self._prec_chol = np.linalg.inv(self._chol)  # L^{-1}: whitening transform
-        self._log_norm = -0.5 * (self.dim * _LOG_2PI) - np.sum(np.log(np.diag(self._chol)))
         self._nonzero_mean = bool(np.any(self.mean != 0))
+        self.is_zero = not np.any(self.cov)
+        try:
+            self._chol = np.linalg.cholesky(self.cov)
+            self.is_singular = bool(np.min(np.diag(self._chol)) <= 1e-12 * np.sqrt(np.max(np.diag(self.cov))))
+        except np.linalg.LinAlgError:
+            self.is_singular = True
+        if self.is_singular:
+            if not allow_singular:  # as_covariance already refused it; keep the invariant explicit
+                raise ValueError("cov is singular; pass allow_singular=True for degenerate noise")
+            # symmetric square root V sqrt(lam) V^T: draws lie in the range of cov
+            lam, V = np.linalg.eigh(self.cov)
+            self._chol = (V * np.sqrt(np.clip(lam, 0.0, None))) @ V.T
+            self._prec_chol = None
+            self._log_norm = None
+        else:
+            self._prec_chol = np.linalg.inv(self._chol)  # L^{-1}: whitening transform
+            self._log_norm = -0.5 * (self.dim * _LOG_2PI) - np.sum(np.log(np.diag(self._chol)))
 
     def sample(self, rng: np.random.Generator, shape=()) -> np.ndarray:
         shape = tuple(np.atleast_1d(shape)) if shape != () else ()
+        if self.is_zero:  # deterministic: no draw at all (Q = 0)
+            return np.broadcast_to(self.mean, shape + (self.dim,)).copy()
         z = rng.standard_normal(shape + (self.dim,))
         # hot path of every particle filter: in place, and one 2-D GEMM rather
         # than a stack of tiny matmuls
@@ -45,6 +70,10 @@ class GaussianNoise:
         return z
 
     def logpdf(self, v) -> np.ndarray:
+        if self.is_singular:
+            raise ValueError(
+                "this Gaussian noise has a singular covariance and no density; a method that needs "
+                f"its logpdf cannot use it (smallest eigenvalue {np.linalg.eigvalsh(self.cov).min():.3g})")
         v = np.asarray(v, dtype=float)
         if self._nonzero_mean:
             v = v - self.mean
@@ -92,6 +121,8 @@ class GaussianMixtureNoise:
 
     def sample(self, rng: np.random.Generator, shape=()) -> np.ndarray:
         shape = tuple(np.atleast_1d(shape)) if shape != () else ()
+        if isinstance(rng, RunStreams):  # per-run streams: each run draws its own slice
+            return np.stack([self.sample(g, shape[1:]) for g in rng])
         which = rng.choice(len(self.weights), size=shape, p=self.weights)
         out = np.empty(shape + (self.dim,))
         for j, comp in enumerate(self.components):

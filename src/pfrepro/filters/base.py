@@ -5,9 +5,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..rng import check_rng
 from ..validation import as_covariance, as_measurements, as_vector
 
-__all__ = ["FilterResult", "Filter", "GaussianFilter", "FilterDivergenceError"]
+__all__ = ["FilterResult", "Filter", "GaussianFilter", "FilterDivergenceError", "gaussian_loglik"]
 
 
 class FilterDivergenceError(FloatingPointError):
@@ -62,8 +63,8 @@ class Filter:
 
     def _prepare(self, y, rng):
         y = as_measurements(y, self.model.dim_y)
-        if self.needs_rng and not isinstance(rng, np.random.Generator):
-            raise TypeError(f"{type(self).__name__}.filter needs rng=numpy.random.Generator, got {rng!r}")
+        if self.needs_rng:
+            check_rng(rng, f"{type(self).__name__}.filter's rng")
         return y
 
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
@@ -79,7 +80,19 @@ class GaussianFilter(Filter):
     Subclasses provide ``predict(x, P, k)`` and ``update(x, P, y)`` on batched
     ``x`` (runs, n) and ``P`` (runs, n, n); this class runs them over time and
     checks the result. ``m0``/``P0`` override the model's initial distribution.
+
+    An ``update`` stores its innovation ``nu`` (runs, m) and innovation covariance
+    ``S`` (runs, m, m) in ``self._last_innovation``; the recursion turns them into
+    the Gaussian approximation of the one-step predictive log-likelihood
+
+        log p(y_k | y_1:k-1) ≈ log N(nu_k; 0, S_k)
+
+    (exact for the KF on a linear-Gaussian model), returned in
+    ``diagnostics["log_likelihood"]`` (runs, T) and summed over k in
+    ``diagnostics["log_evidence"]`` (runs,). An IMM uses them as mode likelihoods.
     """
+
+    _last_innovation = None
 
     def predict(self, x, P, k):
         raise NotImplementedError
@@ -95,14 +108,25 @@ class GaussianFilter(Filter):
         P = np.broadcast_to(self.P0, (runs, n, n)).copy()
         xs = np.empty((runs, T, n))
         Ps = np.empty((runs, T, n, n))
+        loglik = np.empty((runs, T))
         with np.errstate(all="ignore"):
             for k in range(1, T + 1):
                 x, P = self.predict(x, P, k)
                 x, P = self.update(x, P, y[:, k - 1])
                 xs[:, k - 1], Ps[:, k - 1] = x, P
+                loglik[:, k - 1] = gaussian_loglik(*self._last_innovation)
         bad = ~np.all(np.isfinite(xs.reshape(runs, -1)), axis=1)
         if bad.any():
             raise FilterDivergenceError(
                 f"{self.name} produced non-finite estimates in runs {np.flatnonzero(bad)[:10].tolist()}"
                 f"{' ...' if bad.sum() > 10 else ''} ({bad.sum()} of {runs})")
-        return FilterResult(xs, Ps)
+        return FilterResult(xs, Ps, diagnostics={"log_likelihood": loglik, "log_evidence": loglik.sum(axis=1)})
+
+
+def gaussian_loglik(nu, S):
+    """log N(nu; 0, S) for batched innovations ``nu`` (runs, m) and covariances ``S`` (runs, m, m)."""
+    L = np.linalg.cholesky(S)
+    z = np.linalg.solve(L, nu[..., None])[..., 0]
+    m = nu.shape[-1]
+    return -0.5 * np.sum(z * z, axis=-1) - np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1) \
+        - 0.5 * m * np.log(2.0 * np.pi)

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..chaos import ChaosCarrier
+from ..rng import take_runs
 from ..validation import check_positive_int, check_probability
 from .base import Filter, FilterDivergenceError, FilterResult
 from .particle import normalize_log_weights
@@ -243,7 +244,7 @@ class CMSParticleFilter(Filter):
             do = neff < self.n_th * N
             if do.any():
                 sel = np.flatnonzero(do)
-                counts = resample_counts(w[sel], rng, self.resampling)
+                counts = resample_counts(w[sel], take_runs(rng, sel), self.resampling)
                 x = x.copy()
                 x[sel] = np.repeat(x[sel].reshape(-1, n), counts.ravel(), axis=0).reshape(len(sel), N, n)
                 logw = logw.copy()

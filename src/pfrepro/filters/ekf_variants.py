@@ -37,7 +37,8 @@ class PreviousEstimateJacobianEKF(ExtendedKalmanFilter):
             raise RuntimeError("PreviousEstimateJacobianEKF.update must follow predict (use .filter)")
         H = self.model.jacobian_h(self._x_prev)
         innov = self.model.residual_y(y, self.model.h(x))
-        x, P, _ = kalman_update(x, P, innov, H, self.model.R)
+        x, P, S = kalman_update(x, P, innov, H, self.model.R)
+        self._last_innovation = (innov, S)
         return x, P
 
     def filter(self, y, rng=None):

@@ -57,7 +57,9 @@ class KalmanFilter(GaussianFilter):
 
     def update(self, x, P, y):
         H = self.model.H
-        x, P, _ = kalman_update(x, P, y - x @ H.T, H, self.model.R)
+        nu = y - x @ H.T
+        x, P, S = kalman_update(x, P, nu, H, self.model.R)
+        self._last_innovation = (nu, S)
         return x, P
 
 
@@ -79,5 +81,6 @@ class ExtendedKalmanFilter(GaussianFilter):
     def update(self, x, P, y):
         H = self.model.jacobian_h(x)
         innov = self.model.residual_y(y, self.model.h(x))
-        x, P, _ = kalman_update(x, P, innov, H, self.model.R)
+        x, P, S = kalman_update(x, P, innov, H, self.model.R)
+        self._last_innovation = (innov, S)
         return x, P

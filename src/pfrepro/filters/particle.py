@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import check_positive_int, check_probability
+from ..rng import take_runs
 from .base import Filter, FilterResult
 from .resampling import check_scheme, resample_counts
 
@@ -109,7 +110,7 @@ class BootstrapParticleFilter(Filter):
                 logw = np.full((runs, N), -np.log(N))
             elif do.any():
                 sel = np.flatnonzero(do)
-                counts = resample_counts(w[sel], rng, self.resampling)
+                counts = resample_counts(w[sel], take_runs(rng, sel), self.resampling)
                 x[sel] = np.repeat(x[sel].reshape(-1, n), counts.ravel(), axis=0).reshape(len(sel), N, n)
                 with np.errstate(divide="ignore"):
                     logw = np.log(w)

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..rng import run_stream
+
 __all__ = ["resample", "resample_counts", "check_scheme", "multinomial_resample", "stratified_resample",
            "systematic_resample", "residual_resample", "offspring_counts", "effective_sample_size",
            "normalize_weights", "indices_from_counts", "RESAMPLING_SCHEMES"]
@@ -97,7 +99,7 @@ def _residual_counts(w, rng):
         c = np.cumsum(resid[r])
         c /= c[-1]
         c[-1] = 1.0
-        draws = np.minimum(np.searchsorted(c, rng.random(rest[r]), side="right"), N - 1)
+        draws = np.minimum(np.searchsorted(c, run_stream(rng, r).random(rest[r]), side="right"), N - 1)
         counts[r] += np.bincount(draws, minlength=N)
     return counts
 

@@ -48,6 +48,7 @@ class UnscentedKalmanFilter(GaussianFilter):
         Pxy = np.einsum("i,...ij,...ik->...jk", self.points.Wc, dx, dy)
         K = np.swapaxes(np.linalg.solve(Pyy, np.swapaxes(Pxy, -1, -2)), -1, -2)
         innov = self.model.residual_y(y, y_hat)
+        self._last_innovation = (innov, Pyy)
         x = x + np.einsum("...ij,...j->...i", K, innov)
         P = P - K @ Pyy @ np.swapaxes(K, -1, -2)
         return x, symmetrize(P)

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..noise import GaussianNoise
+from ..rng import check_rng
 from ..validation import as_covariance, as_vector, check_positive_int
 
 __all__ = ["StateSpaceModel", "Simulation"]
@@ -77,7 +78,9 @@ class StateSpaceModel:
     def __init__(self, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, truth_init="fixed"):
         self.dim_x = check_positive_int(dim_x, "dim_x")
         self.dim_y = check_positive_int(dim_y, "dim_y")
-        self.process_noise = GaussianNoise(as_covariance(Q, "Q", self.dim_x))
+        # Q may be singular (Q = G Qc G^T of lower rank) or zero (deterministic dynamics)
+        self.process_noise = GaussianNoise(as_covariance(Q, "Q", self.dim_x, allow_singular=True),
+                                           allow_singular=True)
         if not hasattr(measurement_noise, "logpdf"):
             measurement_noise = GaussianNoise(as_covariance(measurement_noise, "R", self.dim_y))
         if measurement_noise.dim != self.dim_y:
@@ -151,8 +154,7 @@ class StateSpaceModel:
         """
         T = check_positive_int(T, "T")
         runs = check_positive_int(runs, "runs")
-        if rng is None:
-            raise ValueError("simulate needs an explicit numpy.random.Generator (rng=...) for reproducibility")
+        check_rng(rng)
         x = np.empty((runs, T + 1, self.dim_x))
         y = np.empty((runs, T, self.dim_y))
         x[:, 0] = self.x0 if self.truth_init == "fixed" else self.sample_initial(rng, runs)

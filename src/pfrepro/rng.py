@@ -1,0 +1,196 @@
+"""Per-run random streams: run i's numbers do not depend on the batch it sits in.
+
+A Monte Carlo experiment runs all its runs in one vectorised call, so every draw
+is an array whose first axis is the run. With one ``numpy.random.Generator`` for
+the whole batch, run 0's draws change when the batch holds 1 run or 100, and an
+experiment cannot be grown from 100 to 200 runs, or split across processes,
+without changing its numbers.
+
+:class:`RunStreams` holds one generator per run and answers the same draw calls
+as a ``Generator`` (``standard_normal``, ``random``, ``uniform``, ``normal``,
+``beta``, ``choice``, ``integers``, ``permuted``), filling slice ``[i]`` of the
+result from run i's own generator. Filters and models therefore stay written
+against the ``Generator`` interface; the only rule they follow is
+
+    **every draw has the runs axis first** (``size=(runs, ...)``), and a draw
+    made for a subset of runs uses ``take_runs(rng, sel)``.
+
+Run i's generator is seeded by ``SeedSequence(entropy, spawn_key=(i,))``, which
+depends on i and on the experiment's entropy only (not on how many runs there
+are, nor on which process draws them), so growing an experiment keeps its first
+runs bit-identical and any split of runs over an executor gives the same numbers.
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ["RunStreams", "take_runs", "run_stream", "check_rng", "is_rng"]
+
+
+class RunStreams:
+    """One ``numpy.random.Generator`` per Monte Carlo run (see module docstring).
+
+    Parameters
+    ----------
+    generators : sequence of ``numpy.random.Generator``, one per run, in run order.
+
+    Use :meth:`from_entropy` to build the streams of runs ``start .. start + runs - 1``
+    of an experiment.
+    """
+
+    def __init__(self, generators: Sequence[np.random.Generator]):
+        gens = list(generators)
+        if not gens:
+            raise ValueError("RunStreams needs at least one generator (one per run)")
+        for g in gens:
+            if not isinstance(g, np.random.Generator):
+                raise TypeError(f"RunStreams holds numpy.random.Generator objects, got {g!r}")
+        self._gens = gens
+
+    @classmethod
+    def from_entropy(cls, entropy, runs: int, start: int = 0) -> "RunStreams":
+        """Streams of runs ``start, ..., start + runs - 1`` of the experiment keyed by ``entropy``.
+
+        ``entropy`` is an int or a sequence of ints (e.g. ``[seed, 1, crc32(name)]``).
+        Run i gets ``default_rng(SeedSequence(entropy, spawn_key=(i,)))``.
+        """
+        runs, start = int(runs), int(start)
+        if runs < 1 or start < 0:
+            raise ValueError(f"need runs >= 1 and start >= 0, got runs={runs}, start={start}")
+        return cls([np.random.default_rng(np.random.SeedSequence(entropy, spawn_key=(i,)))
+                    for i in range(start, start + runs)])
+
+    # -- container protocol ------------------------------------------------------
+    def __len__(self) -> int:
+        return len(self._gens)
+
+    def __iter__(self):
+        return iter(self._gens)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return RunStreams(self._gens[i])
+        return self._gens[i]
+
+    def subset(self, sel) -> "RunStreams":
+        """Streams of the runs selected by ``sel`` (boolean mask or integer indices)."""
+        sel = np.asarray(sel)
+        idx = np.flatnonzero(sel) if sel.dtype == bool else sel.ravel()
+        return RunStreams([self._gens[int(i)] for i in idx])
+
+    def __repr__(self) -> str:
+        return f"RunStreams(runs={len(self)})"
+
+    # -- draws -------------------------------------------------------------------
+    def _size(self, size, what: str) -> tuple:
+        if size is None:
+            raise ValueError(f"RunStreams.{what} needs size=(runs, ...) with the runs axis first")
+        size = tuple(int(s) for s in np.atleast_1d(size))
+        if not size or size[0] != len(self._gens):
+            raise ValueError(
+                f"RunStreams.{what}: size {size} must start with the number of runs ({len(self._gens)}); "
+                "every draw of a batched filter has the runs axis first")
+        return size
+
+    def _per_run(self, method: str, size, *params, dtype=float):
+        """Draw ``size`` by calling ``Generator.method(*params_i, size=size[1:])`` for each run i.
+
+        Array parameters broadcast against ``size``; run i gets slice ``[i]``.
+        """
+        size = self._size(size, method)
+        params = [p if np.ndim(p) == 0 else np.broadcast_to(p, size) for p in params]
+        out = np.empty(size, dtype=dtype)
+        for i, g in enumerate(self._gens):
+            out[i] = getattr(g, method)(*[p if np.ndim(p) == 0 else p[i] for p in params], size=size[1:])
+        return out
+
+    def standard_normal(self, size=None, dtype=np.float64):
+        size = self._size(size, "standard_normal")
+        out = np.empty(size, dtype=dtype)
+        for i, g in enumerate(self._gens):
+            g.standard_normal(dtype=dtype, out=out[i])
+        return out
+
+    def random(self, size=None, dtype=np.float64):
+        size = self._size(size, "random")
+        out = np.empty(size, dtype=dtype)
+        for i, g in enumerate(self._gens):
+            g.random(dtype=dtype, out=out[i])
+        return out
+
+    def normal(self, loc=0.0, scale=1.0, size=None):
+        return self._per_run("normal", size, loc, scale)
+
+    def uniform(self, low=0.0, high=1.0, size=None):
+        return self._per_run("uniform", size, low, high)
+
+    def beta(self, a, b, size=None):
+        return self._per_run("beta", size, a, b)
+
+    def gamma(self, shape, scale=1.0, size=None):
+        return self._per_run("gamma", size, shape, scale)
+
+    def exponential(self, scale=1.0, size=None):
+        return self._per_run("exponential", size, scale)
+
+    def integers(self, low, high=None, size=None, dtype=np.int64):
+        size = self._size(size, "integers")
+        out = np.empty(size, dtype=dtype)
+        for i, g in enumerate(self._gens):
+            out[i] = g.integers(low, high, size=size[1:], dtype=dtype)
+        return out
+
+    def choice(self, a, size=None, replace=True, p=None):
+        """``Generator.choice`` per run; ``a`` and ``p`` are shared by every run."""
+        size = self._size(size, "choice")
+        first = self._gens[0].choice(a, size=size[1:], replace=replace, p=p)
+        out = np.empty(size, dtype=np.asarray(first).dtype)
+        out[0] = first
+        for i, g in enumerate(self._gens[1:], start=1):
+            out[i] = g.choice(a, size=size[1:], replace=replace, p=p)
+        return out
+
+    def permuted(self, x, axis=None):
+        """Permute each run's slice ``x[i]`` independently along ``axis`` (>= 1)."""
+        x = np.asarray(x)
+        if axis is None or axis == 0 or x.shape[0] != len(self._gens):
+            raise ValueError("RunStreams.permuted needs x with the runs axis first and axis >= 1")
+        out = np.empty_like(x)
+        for i, g in enumerate(self._gens):
+            out[i] = g.permuted(x[i], axis=axis - 1 if axis > 0 else axis)
+        return out
+
+
+def is_rng(rng) -> bool:
+    """True for a ``numpy.random.Generator`` or a :class:`RunStreams`."""
+    return isinstance(rng, (np.random.Generator, RunStreams))
+
+
+def check_rng(rng, name: str = "rng"):
+    """Return ``rng`` if it is a ``Generator`` or ``RunStreams``, else raise ``TypeError``.
+
+    Integers, ``None`` and legacy ``RandomState`` objects are refused on purpose:
+    an implicit seed or the global state would make results irreproducible.
+    """
+    if not is_rng(rng):
+        raise TypeError(
+            f"{name} must be a numpy.random.Generator (e.g. numpy.random.default_rng(seed)) "
+            f"or a pfrepro.rng.RunStreams, got {type(rng).__name__}: {rng!r}")
+    return rng
+
+
+def take_runs(rng, sel):
+    """The random source for a subset ``sel`` of the runs (boolean mask or indices).
+
+    A ``Generator`` is shared by all runs and is returned as is; a ``RunStreams``
+    is narrowed to the selected runs' streams, so a run draws from its own stream
+    whether or not the other runs draw at this step.
+    """
+    return rng.subset(sel) if isinstance(rng, RunStreams) else rng
+
+
+def run_stream(rng, i: int) -> np.random.Generator:
+    """The generator that run ``i`` draws from (the shared one for a plain ``Generator``)."""
+    return rng[i] if isinstance(rng, RunStreams) else rng
