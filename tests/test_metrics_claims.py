@@ -193,3 +193,22 @@ def test_published_table_and_value(fake_paper):
         published.table(fake_paper, "Table 9")
     with pytest.raises(KeyError, match="no unique entry"):
         published.value(fake_paper, "Table 1", "EKF", "MSE")
+
+
+def test_ordering_claims_on_paired_differences():
+    from pfrepro.claims import ClaimsRegistry, ordering_holds, paired_difference, verdict
+
+    a = np.array([1.0, 2.0, 3.0, 4.0])
+    d, se = paired_difference(a + 1.0, a)  # constant difference: se 0
+    assert (d, se) == (1.0, 0.0)
+    assert ordering_holds(1.0, 0.4) is True and ordering_holds(-1.0, 0.4) is False
+    assert ordering_holds(0.5, 0.4) is None
+    assert verdict(diff=0.5, diff_se=0.4) == "inconclusive"
+    assert verdict(diff=1.0, diff_se=0.4) == "reproduced"
+    assert verdict(diff=-1.0, diff_se=0.4) == "not reproduced"
+    assert verdict(published=10.0, reproduced=20.0, se=1.0, diff=1.0, diff_se=0.1) == "qualitatively reproduced"
+    assert verdict(published=10.0, reproduced=20.0, se=1.0, diff=0.1, diff_se=0.1) == "inconclusive"
+    assert verdict(published=10.0, reproduced=10.5, se=1.0, diff=0.1, diff_se=0.1) == "reproduced"
+    reg = ClaimsRegistry("x")
+    with pytest.raises(ValueError, match="either qualitative or diff"):
+        reg.add("c", "t", qualitative=True, diff=1.0, diff_se=0.1)

@@ -17,6 +17,16 @@ typed). :func:`verdict` turns those numbers into one of four verdicts:
 ``not checkable``
     the paper gives nothing we can compare with (no number and no testable
     statement).
+``inconclusive``
+    an ordering claim whose paired difference lies within ``Z_CRIT`` standard
+    errors of zero: our runs cannot tell the two apart.
+
+Ordering claims ("A beats B") are decided on paired differences over common
+random numbers: the chapter passes ``diff``, the mean over runs of a per-run
+difference oriented so that the claim asserts ``diff > 0`` (e.g. RMSE of B minus
+RMSE of A, on the same truths), and its standard error ``diff_se``
+(:func:`paired_difference`). The claim holds if ``diff > Z_CRIT * diff_se``,
+is contradicted if ``diff < -Z_CRIT * diff_se``, and is undecided otherwise.
 
 Each chapter saves its claims to ``<claims dir>/<paper>.json``; the scorecard
 page gathers all of them. The claims directory is ``$PFREPRO_CLAIMS_DIR`` or
@@ -34,9 +44,9 @@ from pathlib import Path
 import pandas as pd
 
 __all__ = ["Claim", "ClaimsRegistry", "verdict", "VERDICTS", "claims_dir", "load_all_claims",
-           "DEFAULT_REL_TOL", "Z_CRIT"]
+           "DEFAULT_REL_TOL", "Z_CRIT", "paired_difference", "ordering_holds"]
 
-VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable")
+VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive")
 #: relative tolerance for numeric claims when none is stated
 DEFAULT_REL_TOL = 0.10
 #: a published value within Z_CRIT standard errors of ours counts as inside our uncertainty
@@ -48,8 +58,46 @@ def _isnum(v) -> bool:
     return isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, qualitative=None) -> str:
-    """The verdict rule (see module docstring). All inputs are numbers or None/bool."""
+def paired_difference(a, b):
+    """Mean and standard error of the per-run differences ``a - b`` (common random numbers).
+
+    ``a`` and ``b`` are per-run values of two methods on the *same* runs (same
+    truths). Returns ``(mean, se)`` with ``se = std(a - b, ddof=1) / sqrt(runs)``.
+    """
+    import numpy as np
+
+    d = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
+    d = d.ravel()
+    if d.size < 2 or not np.all(np.isfinite(d)):
+        raise ValueError(f"paired_difference needs >= 2 finite paired values, got {d.size}")
+    return float(d.mean()), float(d.std(ddof=1) / np.sqrt(d.size))
+
+
+def ordering_holds(diff, diff_se):
+    """True / False / None (undecided) for an ordering asserting ``diff > 0`` (see module docstring)."""
+    if not (_isnum(diff) and _isnum(diff_se)) or diff_se < 0:
+        raise ValueError(f"ordering needs finite diff and diff_se >= 0, got {diff!r}, {diff_se!r}")
+    if diff > Z_CRIT * diff_se:
+        return True
+    if diff < -Z_CRIT * diff_se:
+        return False
+    return None
+
+
+def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, qualitative=None,
+            diff=None, diff_se=None) -> str:
+    """The verdict rule (see module docstring). All inputs are numbers or None/bool.
+
+    ``diff``/``diff_se`` (an ordering decided on paired differences) take the place
+    of ``qualitative`` when given; an undecided ordering gives ``inconclusive``
+    unless the published number itself is matched.
+    """
+    undecided = False
+    if diff is not None or diff_se is not None:
+        if qualitative is not None:
+            raise ValueError("give either qualitative or diff/diff_se, not both")
+        qualitative = ordering_holds(diff, diff_se)
+        undecided = qualitative is None
     if _isnum(published) and _isnum(reproduced):
         diff = abs(reproduced - published)
         inside = _isnum(se) and se > 0 and diff <= Z_CRIT * se
@@ -58,7 +106,9 @@ def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, q
             return "reproduced"
         if qualitative is not None and bool(qualitative):  # also numpy.bool_(True)
             return "qualitatively reproduced"
-        return "not reproduced"
+        return "inconclusive" if undecided else "not reproduced"
+    if undecided:
+        return "inconclusive"
     if qualitative is None:
         return "not checkable"
     return "reproduced" if bool(qualitative) else "not reproduced"
@@ -78,10 +128,13 @@ class Claim:
     qualitative: bool | None = None
     source: str = ""   # where in the paper (table/figure/section)
     note: str = ""     # what was compared, in a few words
+    diff: float | None = None     # paired difference (claim asserts diff > 0), see paired_difference
+    diff_se: float | None = None  # its standard error
 
     @property
     def verdict(self) -> str:
-        return verdict(self.published, self.reproduced, self.se, self.rel_tol, self.qualitative)
+        return verdict(self.published, self.reproduced, self.se, self.rel_tol, self.qualitative,
+                       self.diff, self.diff_se)
 
     def as_row(self) -> dict:
         d = asdict(self)
@@ -116,13 +169,15 @@ class ClaimsRegistry:
         self.claims: list[Claim] = []
 
     def add(self, claim_id: str, text: str, *, published=None, reproduced=None, se=None,
-            rel_tol=DEFAULT_REL_TOL, qualitative=None, source="", note="") -> Claim:
+            rel_tol=DEFAULT_REL_TOL, qualitative=None, source="", note="", diff=None,
+            diff_se=None) -> Claim:
         if any(c.claim_id == claim_id for c in self.claims):
             raise ValueError(f"claim {claim_id!r} already recorded for {self.paper}")
         if qualitative is not None and not isinstance(qualitative, (bool,)):
             qualitative = bool(qualitative)
         c = Claim(self.paper, claim_id, text, _clean(published), _clean(reproduced), _clean(se),
-                  _clean(rel_tol), qualitative, source, note)
+                  _clean(rel_tol), qualitative, source, note, _clean(diff), _clean(diff_se))
+        c.verdict  # validate now (e.g. both qualitative and diff given), not at the scorecard
         self.claims.append(c)
         return c
 

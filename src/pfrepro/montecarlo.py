@@ -16,9 +16,11 @@ import numpy as np
 from .filters.base import FilterResult
 from .metrics import mse, rmse
 from .models.base import Simulation
+from .rng import RunStreams
 from .validation import check_positive_int
 
-__all__ = ["MonteCarloResult", "run_monte_carlo", "filter_rng", "truth_rng", "time_single_run", "time_filters"]
+__all__ = ["MonteCarloResult", "run_monte_carlo", "filter_rng", "truth_rng", "truth_streams", "filter_streams",
+           "time_single_run", "time_filters"]
 
 
 def truth_rng(seed: int) -> np.random.Generator:
@@ -29,6 +31,20 @@ def truth_rng(seed: int) -> np.random.Generator:
 def filter_rng(seed: int, name: str) -> np.random.Generator:
     """Generator for the filter called ``name`` in experiment ``seed``."""
     return np.random.default_rng(np.random.SeedSequence([int(seed), 1, zlib.crc32(name.encode())]))
+
+
+def truth_streams(seed: int, runs: int, start: int = 0) -> RunStreams:
+    """Per-run streams of the truth of runs ``start .. start + runs - 1`` of experiment ``seed``.
+
+    Run i's stream is ``SeedSequence([seed, 0], spawn_key=(i,))``: it does not depend on
+    how many runs the experiment has or how they are split (see :mod:`pfrepro.rng`).
+    """
+    return RunStreams.from_entropy([int(seed), 0], runs, start)
+
+
+def filter_streams(seed: int, name: str, runs: int, start: int = 0) -> RunStreams:
+    """Per-run streams of the filter called ``name`` (keyed by name: adding a filter changes no other)."""
+    return RunStreams.from_entropy([int(seed), 1, zlib.crc32(name.encode())], runs, start)
 
 
 def _timed_call(filt, y, rng_seed: int) -> float:
