@@ -115,6 +115,20 @@ class MonteCarloResult:
         """Per-run RMSE."""
         return rmse(self.x_true, self.results[name].x)
 
+    # -- exports (pfrepro.export) ----------------------------------------------------------
+    def to_frame(self, component_names=None, filters=None):
+        """Tidy :class:`pandas.DataFrame` of every filter: columns ``filter, run, k, component,
+        estimate, truth, error`` (see :func:`pfrepro.export.monte_carlo_frame`)."""
+        from .export import monte_carlo_frame
+
+        return monte_carlo_frame(self, component_names, filters)
+
+    def to_csv(self, path, component_names=None, filters=None):
+        """Write :meth:`to_frame` to ``path`` as CSV; returns the path."""
+        from .export import write_table
+
+        return write_table(self.to_frame(component_names, filters), path)
+
 
 def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, time_per_run: bool = False,
                     timing_repeats: int = 3, sim: Simulation | None = None) -> MonteCarloResult:

@@ -38,6 +38,20 @@ class FilterResult:
     def runs(self) -> int:
         return self.x.shape[0]
 
+    # -- exports (pfrepro.export) ----------------------------------------------------------
+    def to_frame(self, truth=None, component_names=None):
+        """Tidy :class:`pandas.DataFrame`: one row per (run, k, component); see
+        :func:`pfrepro.export.filter_result_frame`."""
+        from ..export import filter_result_frame
+
+        return filter_result_frame(self, truth, component_names)
+
+    def to_csv(self, path, truth=None, component_names=None):
+        """Write :meth:`to_frame` to ``path`` as CSV; returns the path."""
+        from ..export import write_table
+
+        return write_table(self.to_frame(truth, component_names), path)
+
 
 class Filter:
     """Base class: a filter is built from a model plus settings, then run on measurements.

@@ -1,0 +1,259 @@
+"""The ``pfrepro`` command line: list the papers, rerun one, print a scorecard.
+
+::
+
+    pfrepro list
+    pfrepro run <paper> [--runs R] [--seed S] [--jobs J] [--out DIR]
+    pfrepro scorecard [--format table|csv|json] [--dir DIR]
+
+``run`` calls the same experiment functions as the paper's chapter (through
+``pfrepro.figures.<paper>.reproduce``, see :mod:`pfrepro.papers`), writes every table as
+CSV and every figure as PNG into ``--out`` (default ``pfrepro-<paper>``), saves the claims
+of the table cells to ``<out>/claims/<paper>.json`` and prints the verdict summary.
+Bad arguments end with a one-line message on stderr and exit code 2.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["main", "build_parser", "UsageError"]
+
+EXIT_USAGE = 2
+
+
+class UsageError(Exception):
+    """A bad command-line argument (reported in one line, exit code 2)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # one line, exit 2 (argparse would print the usage too)
+        raise UsageError(message)
+
+
+def _positive_int(name):
+    def parse(text):
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be an integer >= 1, got {text!r}") from None
+        if v < 1:
+            raise argparse.ArgumentTypeError(f"{name} must be >= 1, got {v}")
+        return v
+    return parse
+
+
+def _seed(text):
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--seed must be a non-negative integer, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"--seed must be a non-negative integer, got {v}")
+    return v
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser (sub-commands ``list``, ``run``, ``scorecard``)."""
+    p = _Parser(prog="pfrepro", description="Rerun the particle-filtering papers reproduced in the book.")
+    sub = p.add_subparsers(dest="command", metavar="{list,run,scorecard}", parser_class=_Parser)
+    sub.required = True
+    sub.add_parser("list", help="papers, their tables and figures, and the claims of the last build")
+    r = sub.add_parser("run", help="regenerate a paper's tables (CSV) and figures (PNG)")
+    r.add_argument("paper", help="paper key or alias (see `pfrepro list`)")
+    r.add_argument("--runs", type=_positive_int("--runs"), default=None,
+                   help="Monte Carlo runs of every experiment (default: the paper's)")
+    r.add_argument("--seed", type=_seed, default=None, help="base seed (default: the book's fixed seeds)")
+    r.add_argument("--jobs", type=_positive_int("--jobs"), default=1,
+                   help="worker processes (default 1: one batched call per filter)")
+    r.add_argument("--out", default=None, help="output directory (default: ./pfrepro-<paper>)")
+    s = sub.add_parser("scorecard", help="the claims of a book build or of a run")
+    s.add_argument("--format", choices=("table", "csv", "json"), default="table")
+    s.add_argument("--dir", default=None,
+                   help="claims directory (default: $PFREPRO_CLAIMS_DIR, else book/_claims, else ./_claims)")
+    return p
+
+
+# -- helpers --------------------------------------------------------------------------------
+def _slug(label: str) -> str:
+    """'Table 1' -> 'table1', 'Fig. 2' -> 'fig2', 'Table 2 (std)' -> 'table2_std'."""
+    s = re.sub(r"[^a-z0-9]+", "_", label.lower()).strip("_")
+    return re.sub(r"^(table|fig)_(\d)", r"\1\2", s)
+
+
+def _default_claims_dir() -> Path:
+    env = os.environ.get("PFREPRO_CLAIMS_DIR")
+    if env:
+        return Path(env)
+    for cand in (Path("book/_claims"), Path("_claims")):
+        if cand.is_dir():
+            return cand
+    return Path("book/_claims")
+
+
+def _writable_dir(path: Path) -> Path:
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+        probe = path / ".pfrepro-write-test"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        raise UsageError(f"--out {str(path)!r} is not a writable directory ({exc.strerror or exc})") from None
+    return path
+
+
+class _Steps:
+    """Progress over a paper's experiments: a tqdm bar if tqdm is installed, else one line per step."""
+
+    def __init__(self, total_hint: int | None, desc: str):
+        self.t0 = time.perf_counter()
+        try:
+            from tqdm.auto import tqdm
+        except ImportError:  # pragma: no cover - tqdm is in requirements.txt
+            tqdm = None
+        self.bar = tqdm(total=total_hint, desc=desc, unit="exp", file=sys.stderr, leave=True) if tqdm else None
+        self.n = 0
+
+    def __call__(self, label: str):
+        if self.bar is not None:
+            if self.n:
+                self.bar.update(1)
+            self.bar.set_postfix_str(label)
+        else:
+            print(f"[{time.perf_counter() - self.t0:6.1f} s] {label}", file=sys.stderr, flush=True)
+        self.n += 1
+
+    def close(self):
+        if self.bar is not None:
+            self.bar.total = max(self.bar.total or 0, self.n)
+            self.bar.update(self.n - self.bar.n)
+            self.bar.refresh()
+            self.bar.close()
+
+
+# -- commands -------------------------------------------------------------------------------
+def cmd_list(args) -> int:
+    from .claims import load_all_claims
+    from .papers import PAPERS
+
+    d = _default_claims_dir()
+    claims = load_all_claims(d) if d.is_dir() else None
+    for p in PAPERS:
+        print(f"{p.key}  (aliases: {', '.join(p.aliases)})")
+        print(f"  {p.citation}; chapter {p.chapter}")
+        print(f"  tables:  {', '.join(p.tables)}")
+        print(f"  figures: {', '.join(p.figures)}")
+        if claims is not None:
+            sub = claims[claims["paper"] == p.key]
+            print(f"  claims ({len(sub)}, verdicts of the build in {d}):")
+            for _, c in sub.iterrows():
+                print(f"    [{c['verdict']}] {c['claim_id']}: {c['text']}")
+        print()
+    if claims is None:
+        print(f"(no claims found in {d}: build the book, or `pfrepro run <paper>` and "
+              f"`pfrepro scorecard --dir <out>/claims`, to see them)")
+    return 0
+
+
+def cmd_run(args) -> int:
+    from .papers import get_paper
+
+    try:
+        paper = get_paper(args.paper)
+    except KeyError as exc:
+        raise UsageError(exc.args[0]) from None
+    out = _writable_dir(Path(args.out if args.out is not None else f"pfrepro-{paper.key}"))
+    import matplotlib
+
+    if "matplotlib.pyplot" not in sys.modules:
+        matplotlib.use("Agg")  # files only: no window
+    import matplotlib.pyplot as plt
+
+    from .export import write_table
+
+    executor = None
+    if args.jobs > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        executor = ProcessPoolExecutor(max_workers=args.jobs)
+    t0 = time.perf_counter()
+    steps = _Steps(getattr(paper.figures_module, "N_STEPS", None), paper.key)
+    try:
+        rep = paper.reproduce(runs=args.runs, seed=args.seed, executor=executor, steps=steps)
+    finally:
+        steps.close()
+        if executor is not None:
+            executor.shutdown()
+    written = []
+    for label, df in rep.tables.items():
+        written.append(write_table(df, out / f"{_slug(label)}.csv"))
+    for label, fig in rep.figures.items():
+        path = out / f"{_slug(label)}.png"
+        fig.savefig(path, dpi=max(150, fig.dpi), bbox_inches="tight")
+        plt.close(fig)
+        written.append(path)
+    written.append(rep.claims.save(out / "claims"))
+    print(f"{paper.key}: {paper.citation}")
+    for k, v in rep.settings.items():
+        print(f"  {k}: {v}")
+    print(f"wrote {len(written)} files to {out} in {time.perf_counter() - t0:.1f} s:")
+    for path in written:
+        print(f"  {path.relative_to(out)}")
+    df = rep.claims.to_frame()
+    print(f"\nverdicts of the {len(df)} table-cell claims (the chapter has the ordering and cost claims too):")
+    for v, n in rep.verdict_counts().items():
+        print(f"  {n:3d}  {v}")
+    if len(df):
+        print()
+        print(_claims_table(df))
+    return 0
+
+
+def _claims_table(df) -> str:
+    cols = ["paper", "claim_id", "published", "reproduced", "se", "verdict"]
+    show = df[cols].copy()
+    return show.to_string(index=False, float_format=lambda v: f"{v:.4g}", na_rep="")
+
+
+def cmd_scorecard(args) -> int:
+    from .claims import load_all_claims
+
+    d = Path(args.dir) if args.dir is not None else _default_claims_dir()
+    if not d.is_dir():
+        raise UsageError(f"no claims directory {str(d)!r} (build the book or pass --dir <out>/claims of a run)")
+    df = load_all_claims(d)
+    if not len(df):
+        raise UsageError(f"no claims (*.json) in {str(d)!r}")
+    if args.format == "csv":
+        sys.stdout.write(df.to_csv(index=False))
+    elif args.format == "json":
+        sys.stdout.write(df.to_json(orient="records", indent=1) + "\n")
+    else:
+        print(_claims_table(df))
+        print()
+        print(df["verdict"].value_counts().to_string())
+    return 0
+
+
+COMMANDS = {"list": cmd_list, "run": cmd_run, "scorecard": cmd_scorecard}
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``pfrepro`` console script and ``python -m pfrepro``; returns the exit code."""
+    try:
+        args = build_parser().parse_args(argv)
+        return COMMANDS[args.command](args)
+    except UsageError as exc:
+        print(f"pfrepro: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("pfrepro: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,155 @@
+"""Figures and tables of Li, Li, Fang, Bai (2012), EKF vs PF (chapter ``book/30_ekf_pf.md``).
+
+The experiments are :mod:`pfrepro.experiments.ekf_pf_li2012`; this module only draws
+their results and bundles them for the command line (:func:`reproduce`).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..experiments import ekf_pf_li2012 as E
+from . import new_figure
+
+__all__ = ["one_run_panel", "per_time_panel", "figs_1_3", "figs_2_4", "fig1", "fig2", "fig3", "fig4",
+           "table1_plot", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
+
+#: what :func:`reproduce` makes
+TABLES = ("Table 1",)
+FIGURES = ("Fig. 1", "Fig. 2", "Fig. 3", "Fig. 4")
+#: experiments :func:`reproduce` runs (for a progress bar)
+N_STEPS = 4
+#: figure number -> (model, kind)
+_FIG = {1: (1, "run"), 2: (1, "rmse"), 3: (2, "run"), 4: (2, "rmse")}
+
+
+def one_run_panel(ax, res, which: int, fig_no: int, run: int = 0) -> None:
+    """Figs. 1/3 on ``ax``: truth, EKF, PF and exact posterior mean of one run of model ``which``."""
+    k = np.arange(1, res.sim.T + 1)
+    ax.plot(k, res.x_true[run, :, 0], "k-", lw=2, label="truth")
+    ax.plot(k, res.results["EKF"].x[run, :, 0], "C3--o", ms=3, label="EKF")
+    ax.plot(k, res.results["PF"].x[run, :, 0], "C0-s", ms=3, label=f"PF (N = {E.N_PARTICLES})")
+    if "Exact" in res.results:
+        ax.plot(k, res.results["Exact"].x[run, :, 0], "C2:", lw=2, label="exact posterior mean")
+    ax.set_ylabel("state $x_k$")
+    ax.set_title(f"Fig. {fig_no}: {E.MODEL_LABELS[which]}, one run")
+    ax.legend(fontsize=8, ncol=4, loc="upper left")
+
+
+def per_time_panel(ax, res, which: int, fig_no: int) -> None:
+    """Figs. 2/4 on ``ax``: RMSE over the runs at each time step (:func:`~pfrepro.experiments.ekf_pf_li2012.per_time_rmse`)."""
+    names = [n for n in ("EKF", "PF", "Exact") if n in res.results]
+    pt = E.per_time_rmse(res, names)
+    ax.plot(pt.index, pt["EKF"], "C3--o", ms=3, label="EKF")
+    ax.plot(pt.index, pt["PF"], "C0-s", ms=3, label="PF")
+    if "Exact" in pt:
+        ax.plot(pt.index, pt["Exact"], "C2:", lw=2, label="exact posterior mean")
+    ax.set_xlabel("time step k (s)")
+    ax.set_ylabel(f"RMSE over {res.sim.runs} runs")
+    ax.set_title(f"Fig. {fig_no}: {E.MODEL_LABELS[which]}")
+    ax.legend(fontsize=8)
+
+
+def figs_1_3(figs: dict, run: int = 0):
+    """Figs. 1 and 3 stacked: one run of each model. ``figs`` maps model -> MonteCarloResult."""
+    fig, axes = new_figure(2, 1, figsize=(9, 7), sharex=True)
+    for ax, w, fno in zip(axes, (1, 2), (1, 3)):
+        one_run_panel(ax, figs[w], w, fno, run)
+    axes[-1].set_xlabel("time step k (s)")
+    fig.tight_layout()
+    return fig
+
+
+def figs_2_4(figs: dict):
+    """Figs. 2 and 4 side by side: per-time RMSE over the figure runs of each model."""
+    fig, axes = new_figure(1, 2, figsize=(11, 4))
+    for ax, w, fno in zip(axes, (1, 2), (2, 4)):
+        per_time_panel(ax, figs[w], w, fno)
+    fig.tight_layout()
+    return fig
+
+
+def _single(fig_no: int, figs: dict):
+    which, kind = _FIG[fig_no]
+    fig, ax = new_figure(figsize=(9, 3.8) if kind == "run" else (6, 4))
+    if kind == "run":
+        one_run_panel(ax, figs[which], which, fig_no)
+        ax.set_xlabel("time step k (s)")
+    else:
+        per_time_panel(ax, figs[which], which, fig_no)
+    fig.tight_layout()
+    return fig
+
+
+def fig1(figs: dict):
+    """Fig. 1 alone: one run of model 1."""
+    return _single(1, figs)
+
+
+def fig2(figs: dict):
+    """Fig. 2 alone: per-time RMSE of model 1."""
+    return _single(2, figs)
+
+
+def fig3(figs: dict):
+    """Fig. 3 alone: one run of model 2."""
+    return _single(3, figs)
+
+
+def fig4(figs: dict):
+    """Fig. 4 alone: per-time RMSE of model 2."""
+    return _single(4, figs)
+
+
+def table1_plot(t1):
+    """Table 1 as a plot: ours (±2 se) beside the published values and the exact posterior's RMSE.
+
+    ``t1`` is :func:`pfrepro.experiments.ekf_pf_li2012.table1`'s frame.
+    """
+    fig, axes = new_figure(1, 2, figsize=(10, 3.8))
+    for ax, w in zip(axes, (1, 2)):
+        col = E.MODEL_LABELS[w]
+        sub = t1[t1["model"] == col]
+        x = np.arange(len(sub))
+        ax.errorbar(x - 0.1, sub["ours"], 2 * sub["se"], fmt="o", capsize=4, label="ours (±2 se)")
+        ax.plot(x + 0.1, sub["published"], "r*", ms=12, label="published (Table 1)")
+        ax.axhline(sub["exact"].iloc[0], color="C2", ls=":", lw=2, label="exact posterior mean")
+        ax.set_xticks(x, sub["filter"])
+        ax.set_xlim(-0.6, len(sub) - 0.4)
+        ax.set_ylabel("mean per-run RMSE")
+        ax.set_title(f"Table 1, {col}")
+        if w == 1:
+            ax.set_yscale("log")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def reproduce(runs: int | None = None, seed: int | None = None, executor=None, steps=None):
+    """Table 1 and Figs. 1-4 at the paper's scale (or ``runs`` runs, seeds ``seed``, ``seed + 1``).
+
+    Calls the chapter's experiment functions (:func:`pfrepro.experiments.ekf_pf_li2012.run`,
+    :func:`~pfrepro.experiments.ekf_pf_li2012.table1`) and this module's figure functions.
+    ``steps`` is an optional callback ``steps(label)`` called before each experiment
+    (the command line's progress bar). Returns a :class:`pfrepro.papers.Reproduction`.
+    """
+    from ..papers import Reproduction, call_with_executor, cell_claims
+
+    step = steps or (lambda label: None)
+    runs_t = E.RUNS_TABLE if runs is None else runs
+    runs_f = E.RUNS_FIGURES if runs is None else runs
+    seed_t = E.SEED_TABLE if seed is None else int(seed)
+    seed_f = E.SEED_FIGURES if seed is None else int(seed) + 1
+    res, figs = {}, {}
+    for w in (1, 2):
+        step(f"Table 1, {E.MODEL_LABELS[w].lower()} ({runs_t} runs)")
+        res[w] = call_with_executor(E.run, w, runs_t, seed_t, ("EKF", "PF", "Exact"), executor=executor)
+    for w in (1, 2):
+        step(f"Figs. {w * 2 - 1}-{w * 2}, {E.MODEL_LABELS[w].lower()} ({runs_f} runs)")
+        figs[w] = call_with_executor(E.run, w, runs_f, seed_f, ("EKF", "PF", "Exact"), executor=executor)
+    t1 = E.table1(res)
+    claims = cell_claims(E.PAPER, t1, lambda r: f"table1-{r['filter'].lower()}-model{r['model'][-1]}",
+                         lambda r: f"{r['filter']} RMSE on {r['model'].lower()} (Table 1)", "Table 1")
+    figures = {"Fig. 1": fig1(figs), "Fig. 2": fig2(figs), "Fig. 3": fig3(figs), "Fig. 4": fig4(figs)}
+    return Reproduction(E.PAPER, tables={"Table 1": t1}, figures=figures, claims=claims,
+                        settings={"runs (Table 1)": runs_t, "runs (figures)": runs_f,
+                                  "seed (Table 1)": seed_t, "seed (figures)": seed_f})

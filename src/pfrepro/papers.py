@@ -1,0 +1,140 @@
+"""The registry of reproduced papers: what ``pfrepro list`` shows and ``pfrepro run`` runs.
+
+Adding a paper is one :class:`Paper` entry in :data:`PAPERS`. The entry names the paper's
+experiment module ``pfrepro.experiments.<key>`` (the functions its chapter calls) and its
+figure module ``pfrepro.figures.<key>``, which must define
+
+* ``TABLES`` and ``FIGURES``: the labels of the tables and figures it regenerates, and
+* ``reproduce(runs=None, seed=None, executor=None, steps=None) -> Reproduction``: the
+  paper's tables and figures from the experiment module's functions (``runs``/``seed``
+  ``None`` mean the paper's own counts and our fixed seeds; ``steps(label)`` is called
+  before each experiment, for a progress display).
+"""
+from __future__ import annotations
+
+import importlib
+import inspect
+import math
+import numbers
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+from .claims import ClaimsRegistry
+
+__all__ = ["Paper", "PAPERS", "Reproduction", "get_paper", "paper_keys", "call_with_executor", "cell_claims"]
+
+
+@dataclass(frozen=True)
+class Paper:
+    """One reproduced paper.
+
+    Attributes
+    ----------
+    key : str
+        The experiment module's name (``pfrepro.experiments.<key>``), also the claims' paper key.
+    aliases : tuple of str
+        Short names accepted by ``pfrepro run``.
+    citation : str
+        Authors, year, short title.
+    chapter : str
+        The book chapter's source file.
+    """
+
+    key: str
+    aliases: tuple[str, ...]
+    citation: str
+    chapter: str
+
+    @property
+    def figures_module(self):
+        """``pfrepro.figures.<key>`` (imported on first use)."""
+        return importlib.import_module(f"pfrepro.figures.{self.key}")
+
+    @property
+    def tables(self) -> tuple[str, ...]:
+        return tuple(self.figures_module.TABLES)
+
+    @property
+    def figures(self) -> tuple[str, ...]:
+        return tuple(self.figures_module.FIGURES)
+
+    def reproduce(self, runs=None, seed=None, executor=None, steps=None) -> "Reproduction":
+        """Run the paper's experiments and return its tables and figures."""
+        return self.figures_module.reproduce(runs=runs, seed=seed, executor=executor, steps=steps)
+
+
+#: every paper the command line knows; add a paper here (one entry)
+PAPERS: tuple[Paper, ...] = (
+    Paper("gpff_zhang2016", ("gpff", "zhang2016"),
+          "Zhang, Zhou, Feng (2016), Gaussian particle flow filter", "book/20_gpff.md"),
+    Paper("ekf_pf_li2012", ("li2012", "ekf_pf"),
+          "Li, Li, Fang, Bai (2012), EKF and PF in target tracking", "book/30_ekf_pf.md"),
+    Paper("cmspf_ning2011", ("cmspf", "ning2011"),
+          "Ning, Chen, Zhao, He, Shi (2011), chaos map sampling PF", "book/40_cmspf.md"),
+)
+
+
+def paper_keys() -> dict[str, Paper]:
+    """Every accepted name (key and aliases) -> its :class:`Paper`."""
+    out = {}
+    for p in PAPERS:
+        for name in (p.key, *p.aliases):
+            if name in out:
+                raise RuntimeError(f"paper name {name!r} is used twice in PAPERS")
+            out[name] = p
+    return out
+
+
+def get_paper(name: str) -> Paper:
+    """The paper called ``name`` (key or alias, case-insensitive); ``KeyError`` names the choices."""
+    keys = paper_keys()
+    p = keys.get(str(name).lower())
+    if p is None:
+        raise KeyError(f"unknown paper {name!r}; choose from {', '.join(sorted(keys))}")
+    return p
+
+
+@dataclass
+class Reproduction:
+    """A paper's regenerated tables (DataFrames), figures (matplotlib Figures) and cell claims."""
+
+    paper: str
+    tables: dict[str, pd.DataFrame]
+    figures: dict
+    claims: ClaimsRegistry
+    settings: dict = field(default_factory=dict)
+
+    def verdict_counts(self) -> pd.Series:
+        """How many claims got each verdict."""
+        df = self.claims.to_frame()
+        return df["verdict"].value_counts() if len(df) else pd.Series(dtype=int)
+
+
+def call_with_executor(fn, *args, executor=None, **kwargs):
+    """``fn(*args, **kwargs)``, passing ``executor=`` only if ``fn`` accepts it and it is not None."""
+    if executor is not None:
+        try:
+            params = inspect.signature(fn).parameters
+        except (TypeError, ValueError):  # builtins: no signature
+            params = {}
+        if "executor" in params or any(p.kind is p.VAR_KEYWORD for p in params.values()):
+            kwargs["executor"] = executor
+    return fn(*args, **kwargs)
+
+
+def cell_claims(paper: str, table: pd.DataFrame, claim_id, text, source: str, *, published="published",
+                ours="ours", se="se", registry: ClaimsRegistry | None = None) -> ClaimsRegistry:
+    """A claim per table cell that has a published value: published vs ours within 2 se or 10 %.
+
+    ``claim_id`` and ``text`` are functions of the row. Rows without a finite published
+    value are skipped. The verdict is :func:`pfrepro.claims.verdict`'s, as in the chapter.
+    """
+    reg = registry if registry is not None else ClaimsRegistry(paper)
+    for _, row in table.reset_index().iterrows():
+        p = row.get(published)
+        if not isinstance(p, numbers.Real) or isinstance(p, bool) or not math.isfinite(p):
+            continue
+        reg.add(claim_id(row), text(row), published=float(p), reproduced=float(row[ours]),
+                se=float(row[se]), source=source)
+    return reg
