@@ -12,6 +12,7 @@ figure module ``pfrepro.figures.<key>``, which must define
 """
 from __future__ import annotations
 
+import contextlib
 import importlib
 import inspect
 import math
@@ -22,7 +23,7 @@ import pandas as pd
 
 from .claims import ClaimsRegistry
 
-__all__ = ["Paper", "PAPERS", "Reproduction", "get_paper", "paper_keys", "call_with_executor", "cell_claims"]
+__all__ = ["Paper", "PAPERS", "Reproduction", "get_paper", "paper_keys", "call_with_executor", "cell_claims", "override_seeds"]
 
 
 @dataclass(frozen=True)
@@ -138,3 +139,21 @@ def cell_claims(paper: str, table: pd.DataFrame, claim_id, text, source: str, *,
         reg.add(claim_id(row), text(row), published=float(p), reproduced=float(row[ours]),
                 se=float(row[se]), source=source)
     return reg
+
+
+@contextlib.contextmanager
+def override_seeds(seeds: dict, base: int | None):
+    """Temporarily set the entries of an experiment module's ``SEEDS`` dict to ``base, base + 1, ...``
+    (in the dict's order); ``base=None`` leaves them unchanged. For experiment functions that
+    read their seed from the module's table of fixed seeds."""
+    if base is None:
+        yield seeds
+        return
+    saved = dict(seeds)
+    try:
+        for i, k in enumerate(saved):
+            seeds[k] = int(base) + i
+        yield seeds
+    finally:
+        seeds.clear()
+        seeds.update(saved)

@@ -1,0 +1,240 @@
+"""Figures and tables of Ning, Chen, Zhao, He, Shi (2011), chaos map sampling PF
+(chapter ``book/40_cmspf.md``).
+
+The experiments are :mod:`pfrepro.experiments.cmspf_ning2011`; this module only draws
+their results, sets them beside the published tables, and bundles them for the command
+line (:func:`reproduce`).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .. import published
+from ..experiments import cmspf_ning2011 as E
+from . import new_figure
+
+__all__ = ["table1_side_by_side", "table1_summary", "table2_vs_published", "table3_vs_published",
+           "table1_plot", "fig2", "fig3", "fig_one_step", "fig6", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
+
+TABLES = ("Table 1", "Table 1 (means)", "Table 2", "Table 3")
+FIGURES = ("Fig. 2", "Fig. 3", "Fig. 4", "Fig. 5", "Fig. 6")
+N_STEPS = 8
+TABLE2_FILTERS = ["EKF", "UKF", "PF", "ESPF", "CMS-PF"]
+
+
+def table1_side_by_side(per_run: pd.DataFrame) -> pd.DataFrame:
+    """Table 1 as printed (rows 1-20 per-run RMSE, 21 mean, 22 variance) beside ours, plus our se.
+
+    ``per_run`` is :func:`pfrepro.experiments.cmspf_ning2011.table1`'s first output.
+    """
+    pub1 = published.table(E.PAPER, "Table 1")
+    runs = len(per_run)
+    if runs != 20:
+        raise ValueError(f"table1_side_by_side sets the paper's 20 runs beside ours; got {runs} runs "
+                         "(use table1_summary for other counts)")
+    cols = {}
+    for N in E.TABLE1_N:
+        for f in ("PF", "CMS-PF"):
+            o = per_run[(N, f)].to_numpy()
+            col = np.r_[o, o.mean(), o.var(ddof=1), o.std(ddof=1) / np.sqrt(len(o))]
+            p = pub1[f"N={N} {f}"].to_numpy()
+            cols[(f"N={N}", f, "paper")] = np.r_[p, np.nan]
+            cols[(f"N={N}", f, "ours")] = col
+    idx = [str(i) for i in range(1, 21)] + ["21 (mean)", "22 (variance)", "se"]
+    return pd.DataFrame(cols, index=idx)
+
+
+def table1_summary(per_run: pd.DataFrame) -> pd.DataFrame:
+    """Table 1's mean row: published and our mean RMSE (se) of PF and CMS-PF, and PF with 2N, by N."""
+    pub1 = published.table(E.PAPER, "Table 1")
+    m1 = per_run.mean().unstack()
+    se1 = (per_run.std(ddof=1) / np.sqrt(len(per_run))).unstack()
+    return pd.DataFrame({
+        "PF paper": [pub1.loc["21", f"N={N} PF"] for N in E.TABLE1_N],
+        "PF ours": m1["PF"], "PF se": se1["PF"],
+        "CMS-PF paper": [pub1.loc["21", f"N={N} CMS-PF"] for N in E.TABLE1_N],
+        "CMS-PF ours": m1["CMS-PF"], "CMS-PF se": se1["CMS-PF"],
+        "PF with 2N ours": m1["PF (2N)"],
+    }, index=pd.Index(E.TABLE1_N, name="N"))
+
+
+def table2_vs_published(t2: pd.DataFrame, t2_q10: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Table 2 beside the published one: RMSE (se), time ratio to the PF, likelihood evaluations."""
+    pub2 = published.table(E.PAPER, "Table 2")
+    cols = {"RMSE paper": pd.Series({n: pub2.loc["RMSE", n] for n in TABLE2_FILTERS}),
+            "RMSE ours": t2["mean"], "se": t2["se"]}
+    if t2_q10 is not None:
+        cols["RMSE ours (sigma_w^2=10)"] = t2_q10["mean"]
+    cols.update({
+        "time ratio to PF, paper": pd.Series({n: pub2.loc["time/s", n] / pub2.loc["time/s", "PF"] for n in TABLE2_FILTERS}),
+        "time ratio to PF, ours": t2["time ratio to PF"],
+        "likelihood evaluations / step": t2["likelihood evaluations / step"]})
+    return pd.DataFrame(cols).reindex(TABLE2_FILTERS + ["CMS-PF (incl. carrier)", "PF (2N)", "Grid (exact)",
+                                                        "Oracle CMS-PF (uses truth)"])
+
+
+def table3_vs_published(t3: pd.DataFrame, t3_q10: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Table 3's mean (row 21) and variance (row 22) beside ours, plus the PF and the exact posterior mean."""
+    pub3 = published.table(E.PAPER, "Table 3")
+    cols3 = list(E.TABLE3_COLUMNS)
+    mean3, se3 = t3.mean(), t3.std(ddof=1) / np.sqrt(len(t3))
+    data = {"paper mean (row 21)": pub3.loc["21", cols3], "ours mean": mean3[cols3], "ours se": se3[cols3],
+            "paper variance (row 22)": pub3.loc["22", cols3], "ours variance": t3.var(ddof=1)[cols3]}
+    extra = ["ours mean", "ours se"]
+    if t3_q10 is not None:
+        data["ours mean (sigma_w^2=10)"] = t3_q10.mean()[cols3]
+        extra.append("ours mean (sigma_w^2=10)")
+    tab3 = pd.DataFrame(data)
+    for label, col in (("PF (N=200)", "PF"), ("exact posterior mean", "Grid (exact)")):
+        vals = [mean3[col], se3[col]] + ([t3_q10.mean()[col]] if t3_q10 is not None else [])
+        tab3.loc[label, extra] = vals
+    return tab3
+
+
+def table1_plot(per_run: pd.DataFrame, grid_rmse):
+    """Table 1 as a plot: mean RMSE (±2 se) of PF, CMS-PF and PF(2N) against N, beside the paper's."""
+    s = table1_summary(per_run)
+    m1, se1 = per_run.mean().unstack(), (per_run.std(ddof=1) / np.sqrt(len(per_run))).unstack()
+    fig, ax = new_figure(figsize=(7, 4))
+    Ns = np.array(E.TABLE1_N)
+    ax.errorbar(Ns, m1["PF"], 2 * se1["PF"], marker="o", capsize=3, label="PF (ours)")
+    ax.errorbar(Ns * 1.04, m1["CMS-PF"], 2 * se1["CMS-PF"], marker="s", capsize=3, label="CMS-PF (ours)")
+    ax.plot(Ns, m1["PF (2N)"], "^-", label="PF with 2N particles (ours)")
+    ax.plot(Ns, s["PF paper"], "o--", color="C0", alpha=0.6, label="PF (paper)")
+    ax.plot(Ns, s["CMS-PF paper"], "s--", color="C1", alpha=0.6, label="CMS-PF (paper)")
+    ax.axhline(np.mean(grid_rmse), color="k", lw=1, label="exact posterior mean (grid)")
+    ax.set_xscale("log"); ax.set_xlabel("number of particles N"); ax.set_ylabel(f"mean RMSE over {len(per_run)} runs")
+    ax.set_title("Table 1, sigma_v = 1 (bars: ±2 se)"); ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def fig2(f2):
+    """Fig. 2: one run, truth, EKF, CMS-PF and the exact posterior mean (``f2`` = ``E.fig2_run()``)."""
+    k = np.arange(1, f2.sim.T + 1)
+    fig, ax = new_figure(figsize=(8, 4))
+    ax.plot(k, f2.x_true[0, :, 0], "k.-", label="true state")
+    ax.plot(k, f2.results["EKF"].x[0, :, 0], "o-", mfc="none", label=f"EKF (RMSE {f2.rmse('EKF')[0]:.2f})")
+    ax.plot(k, f2.results["CMS-PF"].x[0, :, 0], "*-", label=f"CMS-PF, N = 200 (RMSE {f2.rmse('CMS-PF')[0]:.2f})")
+    ax.plot(k, f2.results["Grid (exact)"].x[0, :, 0], "--", color="grey",
+            label=f"exact posterior mean (RMSE {f2.rmse('Grid (exact)')[0]:.2f})")
+    ax.set_xlabel("time step k"); ax.set_ylabel("state x_k"); ax.set_title("Fig. 2: one run, sigma_v^2 = 1")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def fig3(f3: pd.DataFrame, f3_grid: dict):
+    """Fig. 3: RMSE (±2 se) and relative time per run of CMS-PF and PF against N (``E.fig3()``)."""
+    fig, ax = new_figure(figsize=(8, 4))
+    idx = np.arange(1, len(f3) + 1)
+    ax.errorbar(idx, f3["CMS-PF RMSE"], 2 * f3["CMS-PF se"], marker="s", capsize=3, label="CMS-PF RMSE")
+    ax.errorbar(idx, f3["PF RMSE"], 2 * f3["PF se"], marker="o", capsize=3, label="PF RMSE")
+    ax.axhline(f3_grid["mean"], color="k", lw=1, label="exact posterior mean RMSE")
+    ax.set_xticks(idx, [str(n) for n in f3.index], rotation=45)
+    ax.set_xlabel("number of particles N"); ax.set_ylabel("mean RMSE")
+    ax2 = ax.twinx()
+    ax2.plot(idx, f3["CMS-PF time [s]"] / f3["PF time [s]"].iloc[0], "s--", color="C2",
+             label=f"CMS-PF time / PF(N={f3.index[0]}) time")
+    ax2.plot(idx, f3["PF time [s]"] / f3["PF time [s]"].iloc[0], "o--", color="C3",
+             label=f"PF time / PF(N={f3.index[0]}) time")
+    ax2.set_ylabel("time per run, relative")
+    h1, l1 = ax.get_legend_handles_labels(); h2, l2 = ax2.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="center right"); ax.set_title("Fig. 3, sigma_v = 10 (bars ±2 se)")
+    fig.tight_layout()
+    return fig
+
+
+def fig_one_step(d: dict, title: str):
+    """Figs. 4-5: one step with and without mapping (``d`` = ``E.one_step(carrier)``)."""
+    fig, axs = new_figure(2, 3, figsize=(11, 6))
+    N = d["N"]
+    ax = axs[0, 0]; ax.plot(d["x_prev"], np.zeros(N), "o", mfc="none", label="particles at k-1")
+    ax.plot(d["x_map"], np.full(N, 0.1), "*", ms=4, label="map particles")
+    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(a) before prediction, map"); ax.legend(fontsize=7)
+    ax = axs[0, 1]; ax.plot(d["x_pred"], np.zeros(N), "o", mfc="none", label="predicted")
+    ax.plot(d["x_map"], np.full(N, 0.1), "*", ms=4, label="map")
+    ax.axvline(d["x_true"], color="k", lw=1, label="true state")
+    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(b) predicted and map particles"); ax.legend(fontsize=7)
+    ax = axs[0, 2]; ax.plot(d["x_pred"], np.zeros(N), "o", mfc="none", label="without mapping")
+    ax.plot(d["x_sel"], np.full(N, 0.1), "*", ms=4, label="with mapping (kept)")
+    ax.axvline(d["x_true"], color="k", lw=1, label="true state")
+    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(c) particle sets"); ax.legend(fontsize=7)
+    axs[1, 0].stem(d["x_pred"], d["w_plain"], markerfmt="o"); axs[1, 0].set_title("(d) weights without mapping")
+    lw = np.r_[d["ll_pred"], d["ll_map"]]; wc = np.exp(lw - lw.max()); wc /= wc.sum()
+    axs[1, 1].stem(np.r_[d["x_pred"], d["x_map"]], wc, markerfmt="."); axs[1, 1].set_title("(e) predicted + map (likelihood)")
+    axs[1, 2].stem(d["x_sel"], d["w_sel"], markerfmt="*"); axs[1, 2].set_title("(f) weights with mapping")
+    for ax in axs[1]:
+        ax.axvline(d["x_true"], color="k", lw=1); ax.set_xlabel("x"); ax.set_ylabel("normalised weight")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def fig6(f6_base: dict, f6_maps: dict, sens: pd.DataFrame | None = None, sens_ref: dict | None = None):
+    """Fig. 6: map particles for several adjustment factors alpha; with ``sens`` (``E.sensitivity()``)
+    a second panel shows CMS-PF's RMSE against alpha beside the PF and the exact posterior mean."""
+    fig, axs = new_figure(1, 2 if sens is not None else 1, figsize=(11, 4) if sens is not None else (6, 4))
+    ax0 = axs[0] if sens is not None else axs
+    for i, (a, x2) in enumerate(f6_maps.items()):
+        ax0.plot(x2, np.full(x2.size, i), "|", ms=10, label=f"alpha = {a}")
+    ax0.plot(f6_base["x_pred"], np.full(f6_base["N"], -1), "|", ms=10, color="grey", label="predicted")
+    ax0.axvline(f6_base["x_true"], color="k", lw=1, label="true state")
+    ax0.set_yticks(range(-1, len(f6_maps)), ["predicted"] + [f"alpha={a}" for a in f6_maps])
+    ax0.set_xlabel("x"); ax0.set_title(f"Fig. 6: map particles for several alpha (N = {f6_base['N']})")
+    if sens is not None:
+        se_eta = sens[sens.parameter == "eta"]
+        axs[1].errorbar(se_eta["value"], se_eta["RMSE"], 2 * se_eta["se"], marker="o", capsize=3, label="CMS-PF")
+        axs[1].axhline(sens_ref["PF"]["mean"], color="C3", ls="--", label="PF")
+        axs[1].axhline(sens_ref["Grid (exact)"]["mean"], color="k", lw=1, label="exact posterior mean")
+        axs[1].axvspan(0.2, 0.8, color="grey", alpha=0.15, label="paper's range [0.2, 0.8]")
+        axs[1].set_xlabel("adjustment factor alpha (eta)"); axs[1].set_ylabel("mean RMSE"); axs[1].legend(fontsize=8)
+        axs[1].set_title("RMSE against alpha (sigma_v = 1, N = 200)")
+    fig.tight_layout()
+    return fig
+
+
+def reproduce(runs: int | None = None, seed: int | None = None, executor=None, steps=None):
+    """Tables 1-3 and Figs. 2-6 on the printed model (sigma_w^2 = 1).
+
+    ``runs`` replaces every run count (paper: 20 for Tables 1 and 3, 50 for Table 2 and
+    Fig. 3); ``seed`` replaces the fixed seeds (:data:`pfrepro.experiments.cmspf_ning2011.SEEDS`)
+    by ``seed, seed + 1, ...``. Returns a :class:`pfrepro.papers.Reproduction`.
+    """
+    from ..papers import Reproduction, call_with_executor, cell_claims, override_seeds
+
+    step = steps or (lambda label: None)
+    kw = {} if runs is None else {"runs": runs}
+    with override_seeds(E.SEEDS, seed):
+        step("Table 1"); t1, t1_grid, _ = call_with_executor(E.table1, executor=executor, **kw)
+        step("Table 2"); t2, _, _ = call_with_executor(E.table2, executor=executor, **kw)
+        step("Table 3"); t3, _ = call_with_executor(E.table3, executor=executor, **kw)
+        step("Fig. 2"); f2 = E.fig2_run()
+        step("Fig. 3"); f3, f3_grid = call_with_executor(E.fig3, executor=executor, **kw)
+        step("Figs. 4-5"); s_randn, s_chaos = E.one_step("randn"), E.one_step("logistic")
+        step("Fig. 6"); f6_base, f6_maps = E.fig6()
+        step("Fig. 6, RMSE against alpha"); sens, sens_ref = call_with_executor(E.sensitivity, executor=executor, **kw)
+        seeds = dict(E.SEEDS)
+    tab1 = table1_summary(t1)
+    tab2 = table2_vs_published(t2)
+    tab3 = table3_vs_published(t3)
+    reg = cell_claims(E.PAPER, tab1.rename(columns={"CMS-PF paper": "published", "CMS-PF ours": "ours", "CMS-PF se": "se"}),
+                      lambda r: f"t1_cms_mean_N{r['N']}", lambda r: f"Table 1: mean RMSE of CMS-PF, N = {r['N']}", "Table 1")
+    cell_claims(E.PAPER, tab1.rename(columns={"PF paper": "published", "PF ours": "ours", "PF se": "se"}),
+                lambda r: f"t1_pf_mean_N{r['N']}", lambda r: f"Table 1: mean RMSE of PF, N = {r['N']}", "Table 1",
+                registry=reg)
+    cell_claims(E.PAPER, tab2.rename(columns={"RMSE paper": "published", "RMSE ours": "ours"}),
+                lambda r: f"t2_rmse_{r['index']}", lambda r: f"Table 2: mean RMSE of {r['index']}", "Table 2",
+                registry=reg)
+    cell_claims(E.PAPER, tab3.rename(columns={"paper mean (row 21)": "published", "ours mean": "ours", "ours se": "se"}),
+                lambda r: f"t3_mean_{r['index']}", lambda r: f"Table 3: mean RMSE of {r['index']}", "Table 3",
+                registry=reg)
+    figures = {"Fig. 2": fig2(f2), "Fig. 3": fig3(f3, f3_grid),
+               "Fig. 4": fig_one_step(s_randn, "Fig. 4: randn carrier, one step (k = 20, N = 200)"),
+               "Fig. 5": fig_one_step(s_chaos, "Fig. 5: logistic-map carrier, one step (k = 20, N = 200)"),
+               "Fig. 6": fig6(f6_base, f6_maps, sens, sens_ref)}
+    tables = {"Table 1": table1_side_by_side(t1) if len(t1) == 20 else tab1, "Table 1 (means)": tab1,
+              "Table 2": tab2, "Table 3": tab3}
+    return Reproduction(E.PAPER, tables=tables, figures=figures, claims=reg,
+                        settings={"runs": "paper's (20/50)" if runs is None else runs, "seeds": seeds})
