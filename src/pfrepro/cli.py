@@ -253,6 +253,12 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("pfrepro: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # e.g. `pfrepro list | head`
+        try:
+            sys.stdout = open(os.devnull, "w")
+        except OSError:
+            pass
+        return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -235,10 +235,13 @@ def gaussian_flow_field(x, lam, h_x, y, y_hat, Pxy, Pyy, R, residual=None):
 def nonlinear_coefficients(lam, y, y_hat, Pxy, Pyy, R, form="corrected"):
     """B(lambda) and u(lambda) of eq (46), as printed or corrected (for the chapter's checks).
 
-    Printed (sec 4):  B = -1/2 Pyy C,  u = U/2 y + V/2 y_hat,
-        U = lam^2 S Pyy + 2 Pxy + 6 lam B Pyy,  V = 2 B + lam S,
-        S = Pxy C Pyy C,  C = (lam Pyy + R)^{-1}.
-    Corrected:        B = -1/2 Pxy C,  u = U/2 R^{-1} y + V/2 y_hat (same U, V, S, C).
+    ::
+
+        Printed (sec 4):  B = -1/2 Pyy C,  u = U/2 y + V/2 y_hat,
+            U = lam^2 S Pyy + 2 Pxy + 6 lam B Pyy,  V = 2 B + lam S,
+            S = Pxy C Pyy C,  C = (lam Pyy + R)^{-1}.
+        Corrected:        B = -1/2 Pxy C,  u = U/2 R^{-1} y + V/2 y_hat (same U, V, S, C).
+
     The printed B is m x m where a d x m matrix is needed, so with d != m the
     printed products fail (numpy raises ``ValueError``); with d == m they run but
     give the wrong field. Returns ``(B, u)``; f(x) = B h(x) + u.

@@ -34,7 +34,7 @@ def filter_rng(seed: int, name: str) -> np.random.Generator:
 
 
 def truth_streams(seed: int, runs: int, start: int = 0) -> RunStreams:
-    """Per-run streams of the truth of runs ``start .. start + runs - 1`` of experiment ``seed``.
+    """Per-run streams of the truth of runs ``start`` to ``start + runs - 1`` of experiment ``seed``.
 
     Run i's stream is ``SeedSequence([seed, 0], spawn_key=(i,))``: it does not depend on
     how many runs the experiment has or how they are split (see :mod:`pfrepro.rng`).
@@ -104,7 +104,7 @@ class MonteCarloResult:
 
     @property
     def x_true(self) -> np.ndarray:
-        """True states aligned with the estimates: ``(runs, T, dim_x)`` (x_1..x_T)."""
+        """The true states x_1..x_T, aligned with the estimates, shape ``(runs, T, dim_x)``."""
         return self.sim.x[:, 1:]
 
     def mse(self, name: str) -> np.ndarray:
@@ -117,7 +117,7 @@ class MonteCarloResult:
 
     # -- exports (pfrepro.export) ----------------------------------------------------------
     def to_frame(self, component_names=None, filters=None):
-        """Tidy :class:`pandas.DataFrame` of every filter: columns ``filter, run, k, component,
+        """Tidy ``pandas.DataFrame`` of every filter: columns ``filter, run, k, component,
         estimate, truth, error`` (see :func:`pfrepro.export.monte_carlo_frame`)."""
         from .export import monte_carlo_frame
 

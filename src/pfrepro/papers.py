@@ -34,18 +34,25 @@ class Paper:
     ----------
     key : str
         The experiment module's name (``pfrepro.experiments.<key>``), also the claims' paper key.
-    aliases : tuple of str
-        Short names accepted by ``pfrepro run``.
-    citation : str
-        Authors, year, short title.
+    aliases : tuple
+        Short names (str) accepted by ``pfrepro run``.
     chapter : str
         The book chapter's source file.
+    citation : str
+        Authors, year, short title (optional; default: the entry of
+        :data:`pfrepro.published.PAPERS`).
     """
 
     key: str
     aliases: tuple[str, ...]
-    citation: str
     chapter: str
+    citation: str = ""
+
+    def __post_init__(self):
+        if not self.citation:
+            from .published import PAPERS as CITATIONS
+
+            object.__setattr__(self, "citation", CITATIONS.get(self.key, self.key))
 
     @property
     def figures_module(self):
@@ -67,12 +74,9 @@ class Paper:
 
 #: every paper the command line knows; add a paper here (one entry)
 PAPERS: tuple[Paper, ...] = (
-    Paper("gpff_zhang2016", ("gpff", "zhang2016"),
-          "Zhang, Zhou, Feng (2016), Gaussian particle flow filter", "book/20_gpff.md"),
-    Paper("ekf_pf_li2012", ("li2012", "ekf_pf"),
-          "Li, Li, Fang, Bai (2012), EKF and PF in target tracking", "book/30_ekf_pf.md"),
-    Paper("cmspf_ning2011", ("cmspf", "ning2011"),
-          "Ning, Chen, Zhao, He, Shi (2011), chaos map sampling PF", "book/40_cmspf.md"),
+    Paper("gpff_zhang2016", ("gpff", "zhang2016"), "book/20_gpff.md"),
+    Paper("ekf_pf_li2012", ("li2012", "ekf_pf"), "book/30_ekf_pf.md"),
+    Paper("cmspf_ning2011", ("cmspf", "ning2011"), "book/40_cmspf.md"),
 )
 
 

@@ -57,10 +57,10 @@ RUNS_FIGURES = 50
 #: seeds fixed before any result was seen; never changed
 SEED_TABLE = 2012
 SEED_FIGURES = 2013
-#: assumptions (not in the paper): filters' prior N(x0, P0) and resampling scheme
+#: assumptions (not in the paper) -- filters' prior N(x0, P0) and resampling scheme
 P0_DEFAULT = 2.0
 RESAMPLING_DEFAULT = "multinomial"
-#: exact-posterior grid: dx = 0.05 (sqrt(Q) / 63); bounds hold every trajectory with a wide margin
+#: exact-posterior grid, dx = 0.05 (sqrt(Q) / 63); bounds hold every trajectory with a wide margin
 GRID_BOUNDS = (-70.0, 70.0)
 GRID_N = 2801
 #: sensitivity sweeps
@@ -69,7 +69,7 @@ RESAMPLING_SWEEP = ("multinomial", "systematic", "stratified", "residual")
 N_SWEEP = (50, 100, 200, 500, 1000, 2000, 5000)
 #: mass allowed to leave the grid before the grid reference is refused
 MAX_LOST_MASS = 1e-6
-#: qualitative tests of the two ratio claims, fixed before running: "PF far better" under
+#: qualitative tests of the two ratio claims, fixed before running -- "PF far better" under
 #: strong nonlinearity means EKF/PF >= 2; "about the same" under weak nonlinearity means < 1.2
 RATIO_STRONG_MIN = 2.0
 RATIO_WEAK_MAX = 1.2
@@ -108,7 +108,7 @@ def make_model(which: int, P0: float = P0_DEFAULT) -> UNGM:
 
 def make_filters(model, include=("EKF", "PF", "Exact"), *, n_particles: int = N_PARTICLES,
                  resampling: str = RESAMPLING_DEFAULT) -> dict:
-    """The filters of the experiment, by name (see :data:`FILTER_LABELS`).
+    """The filters of the experiment, by name (see ``FILTER_LABELS``).
 
     ``EKF`` is eqs (8)-(11); ``EKF-prev`` linearises h at x_{k-1|k-1} as the circulating
     MATLAB code does; ``PF`` is the bootstrap filter of eqs (15)-(16), resampling every
@@ -188,7 +188,7 @@ def published_table1() -> pd.DataFrame:
 def table1(results: dict, names=("EKF", "PF")) -> pd.DataFrame:
     """Table 1 regenerated: one row per (model, filter), beside the published value.
 
-    ``results`` maps model number -> :class:`MonteCarloResult` (with the exact grid run).
+    ``results`` maps model number -> :class:`~pfrepro.montecarlo.MonteCarloResult` (with the exact grid run).
     Columns: our mean per-run RMSE and its standard error, the published value, z (in our
     SE), the verdict of the claims rule for this cell, and the exact-posterior RMSE on the
     same data.
@@ -245,7 +245,7 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
     PF mean per-run RMSE with SE, the exact-posterior RMSE, the EKF/PF ratio, and the
     verdicts the claims rule gives for the two cells and for the model's ratio claim
     ("more than 7x" on model 1, "about the same" on model 2; tests
-    :data:`RATIO_STRONG_MIN`, :data:`RATIO_WEAK_MAX`). The baseline (P0 = 2, multinomial,
+    ``RATIO_STRONG_MIN``, ``RATIO_WEAK_MAX``). The baseline (P0 = 2, multinomial,
     eq-10 EKF) appears in each block.
     """
     pub = published_table1()
@@ -362,7 +362,7 @@ def jacobian_check(model, n_points: int = 1000, seed: int = 0, k: int = 3, step:
 
 def literal_eq11_ekf(model, y, m0: float | None = None, P0: float | None = None) -> np.ndarray:
     """Eq (11) written out literally for a scalar model, batched over runs: returns x_{k|k}
-    ``(runs, T, 1)``. Used to check that :class:`ExtendedKalmanFilter` (Joseph form) is the
+    ``(runs, T, 1)``. Used to check that :class:`~pfrepro.filters.ExtendedKalmanFilter` (Joseph form) is the
     paper's EKF: x- = f(x), P- = A P A + Q, K = P- B / (B P- B + R), x = x- + K (y - h(x-)),
     P = P- - K B P-."""
     y = np.asarray(y, float)

@@ -43,9 +43,9 @@ RUNS = 100
 #: seeds fixed before any result was seen; never changed
 SEEDS = {"cwpa_gaussian": 51, "cwpa_mixture": 52, "ung": 57, "bot": 59, "checks": 2016,
          "sweep_ung": 571, "sweep_bot": 591}
-#: unscented-transform parameters (not in the paper): the standard alpha = 1, beta = 2, kappa = 0
+#: unscented-transform parameters (not in the paper) -- the standard alpha = 1, beta = 2, kappa = 0
 UT = {"alpha": 1.0, "beta": 2.0, "kappa": 0.0}
-#: the paper's lambda step: Delta lambda = 0.05 -> 20 Euler steps
+#: the paper's lambda step, Delta lambda = 0.05 -> 20 Euler steps
 N_LAMBDA = 20
 #: per-run times are the median of this many single-run timings (a shared machine is noisy)
 TIMING_REPEATS = 7

@@ -21,10 +21,10 @@ class FilterResult:
 
     Attributes
     ----------
-    x : ndarray (runs, T, dim_x)
-        Posterior means E[x_k | y_1:k]; ``x[:, k - 1]`` estimates x_k.
-    P : ndarray (runs, T, dim_x, dim_x) or None
-        Posterior covariances, where the filter provides them.
+    x : ndarray
+        Posterior means E[x_k | y_1:k], shape (runs, T, dim_x); ``x[:, k - 1]`` estimates x_k.
+    P : ndarray or None
+        Posterior covariances (runs, T, dim_x, dim_x), where the filter provides them.
     diagnostics : dict
         Filter-specific extras (effective sample sizes, resampling flags,
         collapse counts, lost grid mass, ...).
@@ -36,11 +36,12 @@ class FilterResult:
 
     @property
     def runs(self) -> int:
+        """Number of Monte Carlo runs."""
         return self.x.shape[0]
 
     # -- exports (pfrepro.export) ----------------------------------------------------------
     def to_frame(self, truth=None, component_names=None):
-        """Tidy :class:`pandas.DataFrame`: one row per (run, k, component); see
+        """Tidy ``pandas.DataFrame``: one row per (run, k, component); see
         :func:`pfrepro.export.filter_result_frame`."""
         from ..export import filter_result_frame
 
@@ -82,6 +83,22 @@ class Filter:
         return y
 
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
+        """Filter measurements ``y`` of every run at once.
+
+        Parameters
+        ----------
+        y : array_like
+            Measurements (runs, T, dim_y), ``y[:, k - 1]`` = y_k; one run may be given
+            as (T, dim_y).
+        rng : numpy.random.Generator or RunStreams, optional
+            Randomness of a stochastic filter (required for particle filters; see
+            :mod:`pfrepro.rng` for per-run streams); ignored by deterministic ones.
+
+        Returns
+        -------
+        FilterResult
+            Estimates of x_1..x_T, ``x`` of shape (runs, T, dim_x).
+        """
         raise NotImplementedError
 
     def __repr__(self) -> str:
@@ -109,9 +126,11 @@ class GaussianFilter(Filter):
     _last_innovation = None
 
     def predict(self, x, P, k):
+        """Time update from step k - 1 to k: ``(x, P)`` of shapes (runs, n), (runs, n, n) -> predicted ``(x, P)``."""
         raise NotImplementedError
 
     def update(self, x, P, y):
+        """Measurement update with y_k (runs, m): predicted ``(x, P)`` -> posterior ``(x, P)``."""
         raise NotImplementedError
 
     def filter(self, y, rng=None) -> FilterResult:

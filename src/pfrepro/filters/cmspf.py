@@ -1,18 +1,18 @@
 """Chaos-map-sampling particle filter, Ning, Chen, Zhao, He & Shi (2011), batched over runs.
 
-Ning et al. 2011, sec 2.2 (Steps 1-5), with the prior as proposal:
+Ning et al. 2011, sec 2.2 (Steps 1-5), with the prior as proposal::
 
-1. x_0^i ~ p(x_0), w_0^i = 1/N.
-2. For k >= 1:
-   2.1 predict  x1^i = f(x_{k-1}^i, k) + w^i                      (N predicted particles)
-   2.2 map      x2^j = c_j + r_j eta (big_j - small_j)           (N map particles)
-       c_j: a centre -- the paper prints the *true state* x_k here; sec 2.3 note 1
-       replaces it by high-weight particles big(x) and adds the estimate x_hat_k.
-   2.3 pool     x' = x1 U x2                                      (2N candidates)
-   2.4 select   keep the N candidates with the highest p(z_k | x) (the "upper half")
-   2.5 weight   w_k^i ∝ w_{k-1}^i p(z_k | x_k^i)                  (eq 3, prior proposal)
-3. resample when N_eff = round(1 / sum w^2) < N_th.
-4. output    x_hat_k = sum w_k^i x_k^i                           (eq 4)
+    1. x_0^i ~ p(x_0), w_0^i = 1/N.
+    2. For k >= 1:
+       2.1 predict  x1^i = f(x_{k-1}^i, k) + w^i                      (N predicted particles)
+       2.2 map      x2^j = c_j + r_j eta (big_j - small_j)           (N map particles)
+           c_j: a centre -- the paper prints the *true state* x_k here; sec 2.3 note 1
+           replaces it by high-weight particles big(x) and adds the estimate x_hat_k.
+       2.3 pool     x' = x1 U x2                                      (2N candidates)
+       2.4 select   keep the N candidates with the highest p(z_k | x) (the "upper half")
+       2.5 weight   w_k^i ∝ w_{k-1}^i p(z_k | x_k^i)                  (eq 3, prior proposal)
+    3. resample when N_eff = round(1 / sum w^2) < N_th.
+    4. output    x_hat_k = sum w_k^i x_k^i                           (eq 4)
 
 Reading taken here (the paper leaves these open; see the chapter):
 
@@ -134,22 +134,41 @@ class CMSStep:
 
 
 class CMSParticleFilter(Filter):
-    """Chaos-map-sampling particle filter (Ning et al. 2011, Steps 1-5, eqs 1, 3, 4, 6).
+    """Chaos-map-sampling particle filter (Ning et al. 2011, sec 2.2 Steps 1-5, eqs 1, 3, 4, 6).
+
+    Steps 2.1-2.5 of the module docstring: predict N particles, add N map particles
+    x2 = c + r eta (big - small) with a chaotic carrier r (eq 1 or 6), keep the N of the
+    2N with the highest likelihood, weight them by eq 3 (prior proposal), estimate by
+    eq 4, resample when N_eff < N_th (Step 3).
 
     Parameters
     ----------
-    n_particles : N >= 2 (the map adds N more candidates; N are kept).
-    carrier : ``"logistic"`` (eq 1), ``"chebyshev"`` (eq 6) or ``"randn"``; or a
+    model : StateSpaceModel
+        Any model that can draw transitions and evaluate p(y | x).
+    n_particles : int
+        N >= 2 (the map adds N more candidates; N are kept).
+    carrier : str or ChaosCarrier
+        ``"logistic"`` (eq 1), ``"chebyshev"`` (eq 6) or ``"randn"``, or a
         :class:`~pfrepro.chaos.ChaosCarrier`.
-    eta : adjustment factor eta/alpha (> 0); the paper finds 0.2-0.8 works.
-    big_fraction : n_big = max(1, round(big_fraction * N)) big (and small) particles,
-        capped at N // 2.
-    n_th : resampling threshold as a fraction of N (Step 3: resample when
+    eta : float
+        Adjustment factor eta/alpha (> 0); the paper finds 0.2-0.8 works.
+    big_fraction : float
+        n_big = max(1, round(big_fraction * N)) big (and small) particles, capped at N // 2.
+    n_th : float
+        Resampling threshold as a fraction of N (Step 3: resample when
         round(1/sum w^2) < n_th * N); ``0`` never resamples (the paper's CMS-PF of
         Table 3), ``1`` resamples at (almost) every step.
-    resampling : scheme used in Step 3.
-    m0, P0 : override the model's prior p(x_0).
+    resampling : str
+        Scheme used in Step 3.
+    m0, P0 : array_like, optional
+        Override the model's prior p(x_0).
 
+    Model methods
+    -------------
+    ``sample_transition``, ``log_likelihood``, ``m0``, ``P0``.
+
+    Notes
+    -----
     Diagnostics: ``ess`` (runs, T) after selection, ``resampled`` (runs, T),
     ``map_share`` (runs, T) fraction of the kept particles that are map particles,
     ``likelihood_evaluations`` per run (2 N T).
@@ -274,6 +293,10 @@ class OracleCMSParticleFilter(CMSParticleFilter):
     truth: :meth:`filter` requires ``x_true`` (``(runs, T + 1, d)`` as in
     ``Simulation.x``) and refuses to run otherwise. Map particles are spread over
     the ``n_big`` (big - small) pairs, all centred on the truth.
+
+    Model methods
+    -------------
+    As :class:`CMSParticleFilter`.
     """
 
     name = "Oracle CMS-PF (uses the true state)"

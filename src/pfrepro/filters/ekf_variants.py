@@ -24,6 +24,10 @@ class PreviousEstimateJacobianEKF(ExtendedKalmanFilter):
     with A = df/dx at x_{k-1|k-1}. Update with the innovation y_k - h(x_{k|k-1})
     as in eq (11) but with the gain built from B = dh/dx at x_{k-1|k-1}.
     Batched over runs like every Gaussian filter of the package.
+
+    Model methods
+    -------------
+    As :class:`~pfrepro.filters.ExtendedKalmanFilter`.
     """
 
     name = "EKF (B at previous estimate)"

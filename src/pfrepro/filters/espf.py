@@ -64,15 +64,32 @@ def sbx_children(p1, p2, u, eta_c: float):
 class EvolutionSamplingParticleFilter(Filter):
     """ESPF (Hu et al. 2009) as reconstructed from its abstract; see the module docstring.
 
+    The comparison filter of Ning et al. 2011 (Table 2). Its steps (resample, MCMC
+    move, SBX crossover, fitness selection) are our reading of Hu et al.'s abstract:
+    no equation of theirs was available to check against.
+
     Parameters
     ----------
-    n_particles : N >= 2 (SBX needs pairs; an odd N leaves one particle unpaired,
-        which is then copied as its own child).
-    mcmc_scale : random-walk proposal std in units of sqrt(Q) (default 1).
-    sbx_eta : SBX distribution index (default 2; Deb & Agrawal suggest 2-5).
-    resampling : scheme for step 1.
-    m0, P0 : override the model's prior.
+    model : StateSpaceModel
+        A model with Gaussian process noise (the MCMC move targets N(x; f, Q)).
+    n_particles : int
+        N >= 2 (SBX needs pairs; an odd N leaves one particle unpaired, which is then
+        copied as its own child).
+    mcmc_scale : float
+        Random-walk proposal std in units of sqrt(Q) (default 1).
+    sbx_eta : float
+        SBX distribution index (default 2; Deb & Agrawal suggest 2-5).
+    resampling : str
+        Scheme for step 1.
+    m0, P0 : array_like, optional
+        Override the model's prior.
 
+    Model methods
+    -------------
+    ``f``, ``Q``, ``log_likelihood``, ``m0``, ``P0``.
+
+    Notes
+    -----
     Diagnostics: ``acceptance`` (runs, T) MCMC acceptance rates, ``origin_share``
     (runs, T, 3) fractions of kept particles from (resampled, MCMC, SBX).
     """

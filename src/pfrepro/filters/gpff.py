@@ -42,29 +42,54 @@ def particle_moments(x):
 
 
 class GaussianParticleFlowFilter(Filter):
-    """GPFF (Zhang et al. 2016, sec 4): unweighted particles moved by a Gaussian flow.
+    """Gaussian particle flow filter (Zhang, Zhou & Feng 2016, sec 4): unweighted particles moved by a Gaussian flow.
+
+    Per step: propagate the particles (eq 1), their mean and covariance (eqs 51, 52), the
+    unscented transform of that Gaussian through h (eqs 47-50), then integrate the flow
+    dx/dlambda = B(lambda) h(x) + u(lambda) over lambda in (0, 1] (eq 41 with the
+    coefficients of eq 46, corrected: :func:`pfrepro.flow.nonlinear_coefficients`); the
+    estimate is the moved particles' mean (eq 51). For a linear model the flow is the
+    affine one of eqs 13-27, which moves the mean exactly as the Kalman update does.
 
     Parameters
     ----------
-    model : a ``StateSpaceModel``.
-    n_particles : N >= 2 (the paper: 100, and 500/1000 in Table 1).
-    n_steps : number of lambda steps (the paper: 20, i.e. Delta lambda = 0.05).
-    schedule : "uniform" (the paper) or "exponential" (ratio ``ratio``).
-    integrator : "euler" (the paper), "midpoint", "rk4", or "exact" (linear models only).
-    field : "eq41" -- f = B h(x) + u with h evaluated at every particle (eq 41, the literal
+    model : StateSpaceModel
+        A model with additive measurement noise.
+    n_particles : int
+        N >= 2 (the paper: 100, and 500/1000 in Table 1).
+    n_steps : int
+        Number of lambda steps (the paper: 20, i.e. Delta lambda = 0.05).
+    schedule : str
+        "uniform" (the paper) or "exponential" (step ratio ``ratio``).
+    ratio : float
+        Ratio of consecutive steps of the exponential schedule.
+    integrator : str
+        "euler" (the paper), "midpoint", "rk4", or "exact" (linear models only).
+    field : str
+        "eq41": f = B h(x) + u with h evaluated at every particle (eq 41, the literal
         reading; the field is then nonlinear in x and for a quadratic h such as the UNG's
-        the exact flow can blow up in finite lambda), or "eq43" -- h(x) replaced by its
+        the exact flow can blow up in finite lambda). "eq43": h(x) replaced by its
         statistical linearisation y_hat + Pxy^T P^{-1} (x - mean) about the prior (the
         first-order expansion (42)-(43) with J P = Pxy^T, eq 44), an affine field.
         Identical for linear h.
-    on_divergence : "raise" (default) raises ``FilterDivergenceError`` when a run's
-        particles become non-finite; "drop" stops that run (its estimates become NaN)
-        and records the step in ``diagnostics["diverged_at"]`` (0 = never).
-    alpha, beta, kappa : scaled-UT parameters (not given in the paper; default
-        alpha = 1, beta = 2, kappa = 0, the same as our UKF; exact for linear h and,
-        with beta = 2, exact for the mean and variance of x^2/20 under a Gaussian).
-    m0, P0 : override the model's initial distribution N(m0, P0).
-    return_cov : also return the particles' sample covariance.
+    on_divergence : str
+        "raise" (default) raises ``FilterDivergenceError`` when a run's particles become
+        non-finite; "drop" stops that run (its estimates become NaN) and records the step
+        in ``diagnostics["diverged_at"]`` (0 = never).
+    alpha, beta, kappa : float
+        Scaled-UT parameters (not given in the paper; default alpha = 1, beta = 2,
+        kappa = 0, as our UKF; exact for linear h and, with beta = 2, exact for the mean
+        and variance of x^2/20 under a Gaussian).
+    m0, P0 : array_like, optional
+        Override the model's initial distribution N(m0, P0).
+    return_cov : bool
+        Also return the particles' sample covariance.
+
+    Model methods
+    -------------
+    ``sample_transition``, ``h``, ``residual_y``, ``R``, ``m0``, ``P0``; with
+    ``integrator="exact"`` also ``H``. The measurement must be additive (y = h(x) + v):
+    the flow is derived for a Gaussian likelihood N(y; h(x), R).
     """
 
     name = "GPFF"

@@ -26,12 +26,27 @@ __all__ = ["GridFilter"]
 class GridFilter(Filter):
     """Exact-reference point-mass filter for a scalar model with Gaussian process noise.
 
+    Not from a paper: the accuracy reference of the book. It carries p(x_k | y_1:k) on a
+    uniform grid (see the module docstring): prediction moves the masses by f and
+    convolves with the Gaussian transition kernel, the update multiplies by p(y_k | x):
+    the Bayesian recursion of Li et al. 2012, eqs 3-5, on a grid. Its posterior mean
+    is the minimum-MSE estimate up to grid error.
+
     Parameters
     ----------
-    model : a scalar ``StateSpaceModel`` (dim_x == 1) with Gaussian process noise.
-    bounds : (lo, hi) of the grid; must contain essentially all posterior mass.
+    model : StateSpaceModel
+        A scalar model (dim_x == 1) with Gaussian process noise; any measurement model.
+    bounds : tuple of float
+        (lo, hi) of the grid; must contain essentially all posterior mass.
         Mass pushed outside is lost and reported in ``diagnostics["lost_mass"]``.
-    n_grid : number of grid nodes M.
+    n_grid : int
+        Number of grid nodes M (>= 3).
+    m0, P0 : array_like, optional
+        Override the model's initial distribution N(m0, P0).
+
+    Model methods
+    -------------
+    ``f``, ``Q`` (Gaussian ``process_noise``), ``log_likelihood``, ``m0``, ``P0``.
     """
 
     name = "Grid"

@@ -37,10 +37,27 @@ def kalman_update(x, P, innovation, H, R):
 
 
 class KalmanFilter(GaussianFilter):
-    """Linear Kalman filter (Kalman 1960) for a :class:`~pfrepro.models.LinearGaussianModel`.
+    """Linear Kalman filter (Kalman 1960), batched over runs.
 
-    Exact (the posterior mean and covariance) when the model's noises are Gaussian;
-    for mixture measurement noise it uses the mixture's covariance ``model.R``.
+    For a linear-Gaussian model x_k = F x_{k-1} + w_{k-1}, y_k = H x_k + v_k this is the
+    exact posterior N(x_{k|k}, P_{k|k}): predict x- = F x, P- = F P F^T + Q; update
+    K = P- H^T (H P- H^T + R)^{-1}, x = x- + K (y - H x-), Joseph-form P. It is the
+    update that the GPFF's affine flow reproduces at lambda = 1 in the linear-Gaussian
+    case (Zhang et al. 2016, eq 12 and eqs 22-27), and the reference of their sec 5.1.
+    For mixture measurement noise it uses the mixture's covariance ``model.R`` (then it
+    is the best *linear* estimator, no longer the posterior mean).
+
+    Parameters
+    ----------
+    model : LinearGaussianModel
+        Any model with matrices ``F`` and ``H`` (e.g. :class:`~pfrepro.models.CWPA`).
+    m0, P0 : array_like, optional
+        Override the model's initial distribution N(m0, P0).
+
+    Model methods
+    -------------
+    ``F``, ``H``, ``Q``, ``R``, ``residual_y``, ``m0``, ``P0``; the measurement must be
+    additive (y = H x + v).
     """
 
     name = "KF"
@@ -64,12 +81,25 @@ class KalmanFilter(GaussianFilter):
 
 
 class ExtendedKalmanFilter(GaussianFilter):
-    """Extended Kalman filter: linearise f and h at the current estimate.
+    """Extended Kalman filter: linearise f and h at the current estimate (Li et al. 2012, eqs 8-11).
 
-    Predict: x- = f(x, k), P- = F P F^T + Q with F = df/dx at x.
-    Update:  H = dh/dx at x-, K = P- H^T (H P- H^T + R)^{-1},
-             x = x- + K (y - h(x-)), Joseph-form P.
-    (Li et al. 2012, eqs 9-11, state exactly this.)
+    Predict: x- = f(x, k), P- = A P A^T + Q with A = df/dx at x_{k-1|k-1} (eq 10);
+    update: B = dh/dx at x- (eq 10), K = P- B^T (B P- B^T + R)^{-1},
+    x = x- + K (y - h(x-)) (eq 11), with the Joseph-form covariance update (equal to
+    eq 11's P_{k|k} = P- - K B P- in exact arithmetic, better conditioned in floating
+    point). The chapter checks it against eq (11) written out literally.
+
+    Parameters
+    ----------
+    model : StateSpaceModel
+        A model with additive process and measurement noise.
+    m0, P0 : array_like, optional
+        Override the model's initial distribution N(m0, P0).
+
+    Model methods
+    -------------
+    ``f``, ``jacobian_f``, ``h``, ``jacobian_h``, ``residual_y``, ``Q``, ``R``, ``m0``,
+    ``P0``; the measurement must be additive (y = h(x) + v).
     """
 
     name = "EKF"

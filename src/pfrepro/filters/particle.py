@@ -40,21 +40,38 @@ def normalize_log_weights(logw):
 
 
 class BootstrapParticleFilter(Filter):
-    """Sequential importance resampling with the transition prior as proposal.
+    """Bootstrap particle filter: sequential importance resampling with the transition prior as proposal.
 
-    For k = 1..T: propagate x_k^i ~ p(x_k | x_{k-1}^i); weight
-    w_k^i ∝ w_{k-1}^i p(y_k | x_k^i) (log domain); estimate E[x_k | y_1:k] by
-    the weighted mean; resample when ESS < ``ess_threshold`` * N
-    (``ess_threshold=None``: every step, as the papers' algorithms do).
+    Gordon, Salmond & Smith (1993); Li et al. 2012, sec 1.3.2 and eqs 12-16 (proposal
+    q = p(x_k | x_{k-1}), eq 15, so the weight is w_k^i ∝ w_{k-1}^i p(y_k | x_k^i),
+    eq 16); the PF of Zhang et al. 2016 (sec 5) and Ning et al. 2011 (eqs 3, 4).
+    For k = 1..T: propagate x_k^i ~ p(x_k | x_{k-1}^i); weight in the log domain;
+    estimate E[x_k | y_1:k] by the weighted mean (before resampling); resample when
+    ESS < ``ess_threshold`` * N (``ess_threshold=None``: every step, as the papers'
+    algorithms do).
 
     Parameters
     ----------
-    n_particles : N >= 1.
-    resampling : "systematic" (default), "stratified", "multinomial" or "residual".
-    ess_threshold : None or a fraction in [0, 1].
-    return_cov : also return the weighted covariance of the particles.
-    m0, P0 : override the model's initial distribution N(m0, P0).
+    model : StateSpaceModel
+        Any model that can draw transitions and evaluate p(y | x), including models
+        with non-additive measurement noise.
+    n_particles : int
+        N >= 1.
+    resampling : str
+        "systematic" (default), "stratified", "multinomial" or "residual".
+    ess_threshold : float or None
+        None (resample every step) or a fraction in [0, 1].
+    return_cov : bool
+        Also return the weighted covariance of the particles.
+    m0, P0 : array_like, optional
+        Override the model's initial distribution N(m0, P0).
 
+    Model methods
+    -------------
+    ``sample_transition``, ``log_likelihood``, ``m0``, ``P0``.
+
+    Notes
+    -----
     Diagnostics: ``ess`` (runs, T) before resampling, ``resampled`` (runs, T),
     ``log_evidence`` (runs,) — the estimate of log p(y_1:T) — and
     ``collapsed`` (runs, T): steps where every weight underflowed.

@@ -11,17 +11,36 @@ __all__ = ["UnscentedKalmanFilter"]
 
 
 class UnscentedKalmanFilter(GaussianFilter):
-    """UKF with additive noise and scaled sigma points (parameters explicit).
+    """Unscented Kalman filter with additive noise and scaled sigma points (Julier & Uhlmann 2004).
 
-    Predict: sigma points of N(x, P) through f, mean and covariance + Q.
+    Predict: sigma points of N(x, P) through f, their mean and covariance plus Q.
     Update: sigma points through h give y_hat, Pyy (+ R) and Pxy;
-    K = Pxy Pyy^{-1}, x = x- + K (y - y_hat), P = P- - K Pyy K^T.
+    K = Pxy Pyy^{-1}, x = x- + K (y - y_hat), P = P- - K Pyy K^T. The scaled unscented
+    transform (:class:`ScaledSigmaPoints`) is the one inside the GPFF, Zhang et al. 2016,
+    eqs 47-50 (with the standard weight of eq 47, see that chapter's errata), and the
+    UKF is a comparison filter of their sec 5 and of Li et al. 2012's chapter.
 
     ``redraw=True`` (default) draws fresh sigma points from N(x-, P-) for the
     update, the textbook additive-noise UKF, so Q enters Pxy and Pyy; this is
     also what filterpy's ``UnscentedKalmanFilter`` does (its ``predict`` ends by
     redrawing ``sigmas_f`` from N(x-, P-); checked against filterpy 2.0.0).
     ``redraw=False`` reuses the propagated points f(X_{k-1}) for the update.
+
+    Parameters
+    ----------
+    model : StateSpaceModel
+        A model with additive process and measurement noise.
+    alpha, beta, kappa : float
+        Scaled-UT parameters (default 1, 2, 0).
+    redraw : bool
+        See above.
+    m0, P0 : array_like, optional
+        Override the model's initial distribution N(m0, P0).
+
+    Model methods
+    -------------
+    ``f``, ``h``, ``residual_y``, ``Q``, ``R``, ``m0``, ``P0`` (no Jacobians); the
+    measurement must be additive (y = h(x) + v).
     """
 
     name = "UKF"

@@ -33,10 +33,11 @@ class Simulation:
 
     Attributes
     ----------
-    x : ndarray (runs, T + 1, dim_x)
-        True states; ``x[:, 0]`` is the initial state x_0, ``x[:, k]`` is x_k.
-    y : ndarray (runs, T, dim_y)
-        Measurements; ``y[:, k - 1]`` is y_k.
+    x : ndarray
+        True states, shape (runs, T + 1, dim_x); ``x[:, 0]`` is the initial state x_0,
+        ``x[:, k]`` is x_k.
+    y : ndarray
+        Measurements, shape (runs, T, dim_y); ``y[:, k - 1]`` is y_k.
     """
 
     x: np.ndarray
@@ -44,10 +45,12 @@ class Simulation:
 
     @property
     def runs(self) -> int:
+        """Number of runs."""
         return self.x.shape[0]
 
     @property
     def T(self) -> int:
+        """Number of time steps (measurements per run)."""
         return self.y.shape[1]
 
     def run(self, i: int) -> "Simulation":
@@ -96,6 +99,7 @@ class StateSpaceModel:
     # -- covariances a Gaussian filter is given ------------------------------------
     @property
     def Q(self) -> np.ndarray:
+        """Process-noise covariance (dim_x, dim_x)."""
         return self.process_noise.cov
 
     @property
