@@ -1,0 +1,190 @@
+"""The pfrepro command line: list, run (tiny), scorecard formats, and every bad-argument path."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from pfrepro import cli, papers
+
+
+def run_cli(argv, capsys):
+    code = cli.main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+# -- registry -----------------------------------------------------------------------------
+def test_registry_names_are_unique_and_resolve():
+    keys = papers.paper_keys()
+    for p in papers.PAPERS:
+        assert keys[p.key] is p
+        for a in p.aliases:
+            assert papers.get_paper(a.upper()) is p          # case-insensitive
+        assert p.tables and p.figures and callable(p.figures_module.reproduce)
+        assert p.citation and p.citation != p.key             # from pfrepro.published.PAPERS
+    with pytest.raises(KeyError, match="choose from"):
+        papers.get_paper("nosuchpaper")
+
+
+def test_override_seeds_restores_the_table():
+    seeds = {"a": 1, "b": 2}
+    with papers.override_seeds(seeds, 100):
+        assert seeds == {"a": 100, "b": 101}
+    assert seeds == {"a": 1, "b": 2}
+    with pytest.raises(RuntimeError):
+        with papers.override_seeds(seeds, 5):
+            raise RuntimeError
+    assert seeds == {"a": 1, "b": 2}
+    with papers.override_seeds(seeds, None):
+        assert seeds == {"a": 1, "b": 2}
+
+
+def test_call_with_executor_passes_it_only_where_accepted():
+    def plain(x):
+        return ("plain", x)
+
+    def takes(x, executor=None):
+        return ("takes", x, executor)
+
+    ex = object()
+    assert papers.call_with_executor(plain, 1, executor=ex) == ("plain", 1)
+    assert papers.call_with_executor(takes, 1, executor=ex) == ("takes", 1, ex)
+    assert papers.call_with_executor(takes, 1) == ("takes", 1, None)
+
+
+# -- list ------------------------------------------------------------------------------------
+def test_list_shows_papers_tables_figures(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("PFREPRO_CLAIMS_DIR", raising=False)
+    code, out, err = run_cli(["list"], capsys)
+    assert code == 0 and err == ""
+    for p in papers.PAPERS:
+        assert p.key in out and all(a in out for a in p.aliases)
+    assert "Table 1" in out and "Fig. 4" in out
+    assert "no claims found" in out
+
+
+def test_list_shows_claims_of_a_build(capsys, tmp_path, monkeypatch):
+    from pfrepro.claims import ClaimsRegistry
+
+    reg = ClaimsRegistry("ekf_pf_li2012")
+    reg.add("c1", "a claim", published=1.0, reproduced=1.02, se=0.1)
+    reg.save(tmp_path)
+    monkeypatch.setenv("PFREPRO_CLAIMS_DIR", str(tmp_path))
+    code, out, _ = run_cli(["list"], capsys)
+    assert code == 0 and "[reproduced] c1: a claim" in out
+
+
+# -- run + scorecard ---------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def li_run(tmp_path_factory):
+    import contextlib
+    import io
+
+    out = tmp_path_factory.mktemp("li")
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        code = cli.main(["run", "li2012", "--runs", "2", "--seed", "3", "--out", str(out)])
+    (out / "stdout.txt").write_text(buf.getvalue())
+    return code, out
+
+
+def test_run_li2012_writes_tables_figures_claims(li_run):
+    code, out = li_run
+    assert code == 0
+    t1 = pd.read_csv(out / "table1.csv")
+    assert list(t1["filter"]) == ["EKF", "PF", "EKF", "PF"]
+    assert {"published", "ours", "se", "verdict"} <= set(t1.columns)
+    for n in (1, 2, 3, 4):
+        png = (out / f"fig{n}.png").read_bytes()
+        assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    claims = json.loads((out / "claims" / "ekf_pf_li2012.json").read_text())
+    assert len(claims) == 4 and {c["claim_id"] for c in claims} == {
+        "table1-ekf-model1", "table1-pf-model1", "table1-ekf-model2", "table1-pf-model2"}
+
+
+def test_run_uses_the_chapter_experiment(li_run):
+    """The CSV is exactly the experiment module's table1 on the same runs and seeds."""
+    from pfrepro.experiments import ekf_pf_li2012 as E
+
+    _, out = li_run
+    res = {w: E.run(w, 2, 3, ("EKF", "PF", "Exact")) for w in (1, 2)}
+    direct = E.table1(res)
+    t1 = pd.read_csv(out / "table1.csv")
+    assert t1["ours"].to_numpy() == pytest.approx(direct["ours"].to_numpy(), rel=1e-12)
+
+
+def test_run_prints_the_verdict_summary(li_run):
+    _, out = li_run
+    text = (out / "stdout.txt").read_text()
+    assert "verdicts of the 4 table-cell claims" in text
+    assert "table1-ekf-model1" in text and "seed (figures): 4" in text
+
+
+@pytest.mark.parametrize("fmt", ["table", "csv", "json"])
+def test_scorecard_formats(fmt, li_run, capsys):
+    _, out = li_run
+    code, text, err = run_cli(["scorecard", "--format", fmt, "--dir", str(out / "claims")], capsys)
+    assert code == 0 and err == ""
+    if fmt == "csv":
+        from io import StringIO
+
+        df = pd.read_csv(StringIO(text))
+        assert len(df) == 4 and "verdict" in df.columns
+    elif fmt == "json":
+        rows = json.loads(text)
+        assert len(rows) == 4 and all("verdict" in r for r in rows)
+    else:
+        assert "table1-pf-model2" in text and "verdict" in text
+
+
+# -- bad arguments: one line on stderr, exit code 2, no traceback ---------------------------
+def _bad_paths(tmp_path):
+    a_file = tmp_path / "a_file"
+    a_file.write_text("x")
+    return [
+        [],                                                   # no command
+        ["frobnicate"],                                       # unknown command
+        ["run"],                                              # no paper
+        ["run", "nosuchpaper"],                               # unknown paper
+        ["run", "li2012", "--runs", "0"],                     # runs < 1
+        ["run", "li2012", "--runs", "-3"],
+        ["run", "li2012", "--runs", "many"],
+        ["run", "li2012", "--jobs", "0"],
+        ["run", "li2012", "--seed", "-1"],
+        ["run", "li2012", "--seed", "x"],
+        ["run", "li2012", "--out", str(a_file)],              # --out is a file
+        ["run", "li2012", "--out", str(a_file / "sub")],      # --out under a file
+        ["run", "li2012", "--bogus"],                         # unknown option
+        ["scorecard", "--format", "xml"],
+        ["scorecard", "--dir", str(tmp_path / "missing")],
+        ["scorecard", "--dir", str(tmp_path)],                # a directory without claims
+    ]
+
+
+def test_every_bad_argument_exits_2_with_one_line(capsys, tmp_path):
+    for argv in _bad_paths(tmp_path):
+        code, out, err = run_cli(argv, capsys)
+        assert code == 2, argv
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("pfrepro: error:"), (argv, err)
+        assert "Traceback" not in err and out == "", argv
+
+
+def test_bad_paper_message_names_the_choices(capsys):
+    code, _, err = run_cli(["run", "nosuchpaper"], capsys)
+    assert code == 2 and "li2012" in err and "gpff" in err
+
+
+def test_python_dash_m_entry_point(tmp_path):
+    env_path = str(Path(cli.__file__).parents[1])
+    env = {"PYTHONPATH": env_path, "PATH": "/usr/bin:/bin"}
+    bad = subprocess.run([sys.executable, "-m", "pfrepro", "run", "li2012", "--runs", "0"],
+                         capture_output=True, text=True, env=env, cwd=tmp_path, timeout=120)
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in bad.stderr
