@@ -106,15 +106,30 @@ def _writable_dir(path: Path) -> Path:
     return path
 
 
+def _progress_bars() -> bool:
+    """Whether to draw progress bars: the engine's rule (a terminal, not CI) when available."""
+    try:
+        from .montecarlo import progress_enabled
+    except ImportError:  # older montecarlo without the rule
+        return sys.stderr.isatty() and "CI" not in os.environ
+    return bool(progress_enabled(None))
+
+
 class _Steps:
-    """Progress over a paper's experiments: a tqdm bar if tqdm is installed, else one line per step."""
+    """Progress over a paper's experiments: a tqdm bar in a terminal, else one line per experiment.
+
+    Each experiment's Monte Carlo runner draws its own bar under it (``run_monte_carlo``'s
+    ``progress``, on in a terminal).
+    """
 
     def __init__(self, total_hint: int | None, desc: str):
         self.t0 = time.perf_counter()
-        try:
-            from tqdm.auto import tqdm
-        except ImportError:  # pragma: no cover - tqdm is in requirements.txt
-            tqdm = None
+        tqdm = None
+        if _progress_bars():
+            try:
+                from tqdm.auto import tqdm
+            except ImportError:  # pragma: no cover - tqdm is in requirements.txt
+                tqdm = None
         self.bar = tqdm(total=total_hint, desc=desc, unit="exp", file=sys.stderr, leave=True) if tqdm else None
         self.n = 0
 
