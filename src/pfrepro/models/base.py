@@ -251,7 +251,17 @@ def _has_density(model):
     return isinstance(noise, GaussianNoise) and not noise.is_singular
 
 
-#: capability -> (test on the model, what a filter needs, what the model lacks)
+def _density_lack(model):
+    if not model.implements("f"):
+        return "does not implement f"
+    if not isinstance(getattr(model, "process_noise", None), GaussianNoise):
+        return "has non-Gaussian process noise"
+    lam = np.linalg.eigvalsh(model.Q).min()
+    return (f"has a singular process-noise covariance Q (smallest eigenvalue {lam:.3g}), "
+            "so x_k | x_k-1 has no density")
+
+
+#: capability -> (test on the model, what a filter needs, what the model lacks (text or callable))
 CAPABILITIES = {
     "f": (lambda m: m.implements("f"), "a transition mean f(x, k)", "does not implement f"),
     "jacobian_f": (lambda m: m.implements("jacobian_f"), "jacobian_f", "does not implement jacobian_f"),
@@ -259,7 +269,9 @@ CAPABILITIES = {
     "jacobian_h": (lambda m: m.implements("jacobian_h"), "jacobian_h", "does not implement jacobian_h"),
     "additive_measurement": (
         lambda m: bool(getattr(m, "additive_measurement_noise", False)) and m.implements("h"),
-        "additive measurement noise y = h(x) + v", "has non-additive measurement noise"),
+        "additive measurement noise y = h(x) + v",
+        lambda m: ("has non-additive measurement noise" if not getattr(m, "additive_measurement_noise", False)
+                   else "does not implement h")),
     "linear": (lambda m: _is_matrix(m, "F") and _is_matrix(m, "H"),
                "linear dynamics and measurements (matrices F and H)", "has no matrices F and H"),
     "measurement_matrix": (lambda m: _is_matrix(m, "H"), "a measurement matrix H", "has no matrix H"),
@@ -272,7 +284,7 @@ CAPABILITIES = {
                    "has no log_likelihood"),
     "transition_density": (lambda m: m.implements("f") and _has_density(m),
                            "a transition density (f and Gaussian process noise with non-singular Q)",
-                           "has no transition density (singular or zero Q, non-Gaussian process noise, or no f)"),
+                           lambda m: _density_lack(m)),
     "scalar_state": (lambda m: m.dim_x == 1, "a scalar state (dim_x == 1)", "has dim_x != 1"),
 }
 
@@ -303,6 +315,7 @@ def require_capabilities(model, capabilities, who: str) -> None:
     if missing:
         needs = [CAPABILITIES[c][1] for c in capabilities]
         lacks = [CAPABILITIES[c][2] for c in missing]
+        lacks = [t(model) if callable(t) else t for t in lacks]
         if model.dim_x != 1 and "scalar_state" in missing:
             lacks[missing.index("scalar_state")] = f"has dim_x = {model.dim_x}"
         need_txt = needs[0] if len(needs) == 1 else ", ".join(needs[:-1]) + " and " + needs[-1]
