@@ -120,7 +120,8 @@ class GridFilter(Filter):
             moved = p @ self._move_matrix(k).T
             pred = self._convolve(moved)
             lost += 1.0 - pred.sum(axis=1)
-            loglik = self.model.log_likelihood(y[:, k - 1], np.broadcast_to(gx, (runs, self.n_grid, 1)))
+            with np.errstate(over="ignore"):  # an outlier's -inf is handled below and reported
+                loglik = self.model.log_likelihood(y[:, k - 1], np.broadcast_to(gx, (runs, self.n_grid, 1)))
             with np.errstate(invalid="ignore", over="ignore"):
                 post = pred * np.exp(loglik - loglik.max(axis=1, keepdims=True))
                 s = post.sum(axis=1, keepdims=True)
