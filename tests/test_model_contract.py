@@ -163,3 +163,26 @@ def test_simulate_uses_the_sample_measurement_hook():
 
     sim = Poisson().simulate(50, 2, np.random.default_rng(0))
     assert np.all(sim.y == np.round(sim.y)) and np.all(sim.y >= 0)
+
+
+def test_documented_requirements_are_the_ones_checked():
+    """The contract table (models/base.py docstring, CONTRIBUTING.md) against the code."""
+    from pfrepro.filters import EvolutionSamplingParticleFilter
+    from pfrepro.models import CAPABILITIES
+
+    expected = {
+        KalmanFilter: {"linear", "additive_measurement"},
+        ExtendedKalmanFilter: {"f", "jacobian_f", "jacobian_h", "additive_measurement"},
+        PreviousEstimateJacobianEKF: {"f", "jacobian_f", "jacobian_h", "additive_measurement"},
+        UnscentedKalmanFilter: {"f", "additive_measurement"},
+        GaussianParticleFlowFilter: {"transition_sampler", "additive_measurement"},
+        BootstrapParticleFilter: {"transition_sampler", "likelihood"},
+        CMSParticleFilter: {"transition_sampler", "likelihood"},
+        GridFilter: {"scalar_state", "transition_density", "likelihood"},
+    }
+    for F, req in expected.items():
+        assert set(F.model_requirements) == req, F.__name__
+        assert set(F.model_requirements) <= set(CAPABILITIES)
+    # ESPF evaluates N(x; f, Q): at least the generic needs (its own check is in espf.py)
+    assert {"transition_sampler", "likelihood"} <= set(EvolutionSamplingParticleFilter.model_requirements) \
+        or "transition_density" in EvolutionSamplingParticleFilter.model_requirements
