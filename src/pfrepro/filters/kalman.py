@@ -45,7 +45,8 @@ class KalmanFilter(GaussianFilter):
     update that the GPFF's affine flow reproduces at lambda = 1 in the linear-Gaussian
     case (Zhang et al. 2016, eq 12 and eqs 22-27), and the reference of their sec 5.1.
     For mixture measurement noise it uses the mixture's covariance ``model.R`` (then it
-    is the best *linear* estimator, no longer the posterior mean).
+    is the best *linear* estimator, no longer the posterior mean). ``Q`` may be singular
+    or zero (P stays positive definite because P0 and R are).
 
     Parameters
     ----------
@@ -56,17 +57,20 @@ class KalmanFilter(GaussianFilter):
 
     Model methods
     -------------
-    ``F``, ``H``, ``Q``, ``R``, ``residual_y``, ``m0``, ``P0``; the measurement must be
-    additive (y = H x + v).
+    ``F``, ``H`` (matrices), ``Q``, ``R``, ``residual_y``, ``m0``, ``P0``; additive
+    measurement noise (y = H x + v). Another model raises
+    :class:`~pfrepro.models.ModelContractError`.
+
+    Notes
+    -----
+    ``filter(y)``: ``y`` is ``(runs, T, dim_y)``, or ``(T,)`` for one scalar run, or
+    ``(T, dim_y)`` for one run when ``dim_y > 1``. Returns ``x`` (runs, T, dim_x),
+    ``P`` (runs, T, dim_x, dim_x) and ``diagnostics["log_likelihood"]`` (runs, T),
+    ``diagnostics["log_evidence"]`` (runs,).
     """
 
     name = "KF"
-
-    def __init__(self, model, m0=None, P0=None):
-        for attr in ("F", "H"):
-            if not hasattr(model, attr):
-                raise TypeError("KalmanFilter needs a linear model with matrices F and H")
-        super().__init__(model, m0, P0)
+    model_requirements = ("linear", "additive_measurement")
 
     def predict(self, x, P, k=None):
         F = self.model.F
@@ -87,7 +91,8 @@ class ExtendedKalmanFilter(GaussianFilter):
     update: B = dh/dx at x- (eq 10), K = P- B^T (B P- B^T + R)^{-1},
     x = x- + K (y - h(x-)) (eq 11), with the Joseph-form covariance update (equal to
     eq 11's P_{k|k} = P- - K B P- in exact arithmetic, better conditioned in floating
-    point). The chapter checks it against eq (11) written out literally.
+    point). The chapter checks it against eq (11) written out literally. ``Q`` may be
+    singular or zero.
 
     Parameters
     ----------
@@ -99,10 +104,16 @@ class ExtendedKalmanFilter(GaussianFilter):
     Model methods
     -------------
     ``f``, ``jacobian_f``, ``h``, ``jacobian_h``, ``residual_y``, ``Q``, ``R``, ``m0``,
-    ``P0``; the measurement must be additive (y = h(x) + v).
+    ``P0``; additive measurement noise (y = h(x) + v). Another model raises
+    :class:`~pfrepro.models.ModelContractError`.
+
+    Notes
+    -----
+    ``y`` shapes and diagnostics as for :class:`KalmanFilter`.
     """
 
     name = "EKF"
+    model_requirements = ("additive_measurement", "jacobian_h", "f", "jacobian_f")
 
     def predict(self, x, P, k):
         F = self.model.jacobian_f(x, k)
