@@ -47,16 +47,16 @@ overridden). ``simulate`` uses ``x0``/``truth_init``, ``sample_transition`` and
 
 Models whose measurement is not ``y = h(x) + v``
     set the class attribute ``additive_measurement_noise = False`` and override
-    :meth:`StateSpaceModel.log_likelihood` (the density p(y | x)) and
-    :meth:`StateSpaceModel.sample_measurement` (a draw y ~ p(y | x), which
-    :meth:`StateSpaceModel.simulate` calls). ``measurement_noise`` then describes
+    :meth:`~pfrepro.models.StateSpaceModel.log_likelihood` (the density p(y | x)) and
+    :meth:`~pfrepro.models.StateSpaceModel.sample_measurement` (a draw y ~ p(y | x), which
+    :meth:`~pfrepro.models.StateSpaceModel.simulate` calls). ``measurement_noise`` then describes
     the model's own noise variable (e.g. the e of y = exp(x/2) e) and ``h``/``R``
     mean nothing to a Gaussian filter, so KF/EKF/UKF/GPFF refuse the model while
     the particle filters and the grid filter accept it. See
     :class:`pfrepro.models.StochasticVolatility` for a complete example.
 
 Models whose transition is not ``f(x) + w``
-    override :meth:`StateSpaceModel.sample_transition` (a particle filter then
+    override :meth:`~pfrepro.models.StateSpaceModel.sample_transition` (a particle filter then
     needs nothing else); do not override ``f`` unless it is the transition mean
     a Gaussian filter may use.
 
@@ -231,7 +231,7 @@ class StateSpaceModel:
         """Draw y ~ p(y | x) for every state in the batch ``x`` (runs first); ``(..., dim_y)``.
 
         The default is ``h(x) + v``; a model with non-additive measurement noise
-        overrides it (and :meth:`log_likelihood`). :meth:`simulate` calls it.
+        overrides it (and :meth:`log_likelihood`). :meth:`~pfrepro.models.StateSpaceModel.simulate` calls it.
         """
         out = self.measurement_noise.sample(rng, x.shape[:-1])
         out += self.h(x)
