@@ -125,3 +125,32 @@ def test_run_chunks_and_progress_switch(monkeypatch):
 def test_progress_bar_when_forced(capsys):
     run_monte_carlo(UNG, {"PF": BootstrapParticleFilter(UNG, 20)}, 5, 4, SEED, progress=True)
     assert "Monte Carlo" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("make", [
+    lambda m: BootstrapParticleFilter(m, 50),
+    lambda m: BootstrapParticleFilter(m, 50, ess_threshold=0.5),
+    lambda m: CMSParticleFilter(m, 50),
+    lambda m: EvolutionSamplingParticleFilter(m, 50),
+])
+def test_weight_collapse_is_one_clear_warning_not_numpy_noise(make):
+    """An outlier measurement makes every likelihood underflow: no numpy RuntimeWarning leaks,
+    one WeightCollapseWarning names the count, the diagnostics record it, estimates stay finite."""
+    import warnings
+
+    from pfrepro.filters.particle import WeightCollapseWarning
+    from pfrepro.models import LinearGaussianModel
+
+    model = LinearGaussianModel([[0.5]], [[1.0]], [[1.0]], [[1e-4]], [0.0], P0=[[1.0]])
+    y = np.zeros((3, 5, 1))
+    y[1, 2] = 1e200          # squared residual overflows: every log-weight -inf
+    y[2, 3] = -1e200
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = make(model).filter(y, rng=filter_streams(SEED, "collapse", 3))
+    kinds = [type(w.message) for w in caught]
+    assert kinds == [WeightCollapseWarning], [str(w.message) for w in caught]
+    assert "2 of 15 run-steps" in str(caught[0].message)
+    coll = res.diagnostics["collapsed"]
+    assert coll[1, 2] and coll[2, 3] and coll.sum() == 2 and res.diagnostics["n_collapsed"] == 2
+    assert np.all(np.isfinite(res.x))

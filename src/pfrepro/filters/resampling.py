@@ -20,7 +20,7 @@ from ..rng import run_stream
 
 __all__ = ["resample", "resample_counts", "check_scheme", "multinomial_resample", "stratified_resample",
            "systematic_resample", "residual_resample", "offspring_counts", "effective_sample_size",
-           "normalize_weights", "indices_from_counts", "RESAMPLING_SCHEMES"]
+           "normalize_weights", "indices_from_counts", "resampling_counts_function", "RESAMPLING_SCHEMES"]
 
 
 def normalize_weights(weights) -> np.ndarray:
@@ -120,6 +120,12 @@ def check_scheme(scheme: str) -> str:
     if scheme not in _COUNTS:
         raise ValueError(f"unknown resampling scheme {scheme!r}; choose from {list(RESAMPLING_SCHEMES)}")
     return scheme
+
+
+def resampling_counts_function(scheme: str):
+    """The counts function ``f(w, rng)`` of the named scheme, for a filter's inner loop: ``w``
+    must already be normalised, finite and non-negative (no validation is repeated per step)."""
+    return _COUNTS[check_scheme(scheme)]
 
 
 def resample_counts(weights, rng: np.random.Generator, scheme: str = "systematic") -> np.ndarray:
