@@ -184,7 +184,8 @@ def fig2_run(N: int = 200, sigma_v: float = 1.0, seed=SEEDS["fig2"]):
 
 
 # -- Fig. 3 --------------------------------------------------------------------------------
-def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["fig3"], timing_repeats=9, *, executor=None):
+def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["fig3"], timing_repeats=9,
+         *, executor=None):
     """RMSE and time per run of CMS-PF (and PF) against N, sigma_v = 10."""
     runs = ASSUMPTIONS["runs_fig3"] if runs is None else runs
     m = model(sigma_v)
@@ -211,7 +212,8 @@ def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["
 TABLE3_COLUMNS = ("EKF", "UKF", "CMS1-PF", "CMSR1-PF", "CMS2-PF", "CMSR2-PF", "CMS3-PF", "CMSR3-PF")
 
 
-def table3(runs: int = 20, N: int | None = None, sigma_v: float = 10.0, sigma_w2=None, seed=SEEDS["table3"], *, executor=None):
+def table3(runs: int = 20, N: int | None = None, sigma_v: float = 10.0, sigma_w2=None, seed=SEEDS["table3"],
+           *, executor=None):
     """Per-run RMSE, sigma_v = 10: EKF, UKF and CMS-PF with randn (1), eq-1 (2), eq-6 (3)
     carriers, without (CMS) and with (CMSR, N_eff < N_th) resampling; + PF and grid."""
     N = ASSUMPTIONS["N_table2"] if N is None else N
@@ -280,7 +282,8 @@ def fig6(alphas=(0.05, 0.2, 0.5, 0.8, 2.0), k: int = 20, N: int = 200, seed=SEED
 
 
 # -- sensitivity -----------------------------------------------------------------------------
-def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed=SEEDS["sensitivity"], *, executor=None):
+def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed=SEEDS["sensitivity"],
+                *, executor=None):
     """Mean RMSE of CMS-PF when one assumption at a time is varied over its reasonable range."""
     N = ASSUMPTIONS["N_table2"] if N is None else N
     m = model(sigma_v)
@@ -294,7 +297,8 @@ def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed
     rows = []
     for par, values in grids.items():
         for v in values:
-            res = run_monte_carlo(m, {"CMS-PF": cms(m, N, **{par: v})}, T, runs, seed, sim=sim, executor=executor)
+            res = run_monte_carlo(m, {"CMS-PF": cms(m, N, **{par: v})}, T, runs, seed, sim=sim,
+                                  executor=executor)
             s = summarise(res.rmse("CMS-PF"))
             rows.append({"parameter": par, "value": v, "RMSE": s["mean"], "se": s["se"],
                          "chosen": v == ASSUMPTIONS[par]})
@@ -303,7 +307,8 @@ def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed
 
 
 # -- consistency (improper weights) ------------------------------------------------------------
-def consistency(Ns=(50, 200, 1000, 4000), runs: int = 50, sigma_v: float = 1.0, seed=SEEDS["consistency"], *, executor=None):
+def consistency(Ns=(50, 200, 1000, 4000), runs: int = 50, sigma_v: float = 1.0, seed=SEEDS["consistency"],
+                *, executor=None):
     """Distance of PF and CMS-PF estimates from the exact posterior mean, and their spread.
 
     ``dist``: RMS over runs and steps of (x_hat - E[x_k | y_1:k]) with the grid's
