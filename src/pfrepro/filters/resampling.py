@@ -61,8 +61,7 @@ def _diff_rows(below):
 def _systematic_counts(w, rng):
     Nc = _scaled_cumulative(w)
     Nc -= rng.random((w.shape[0], 1))
-    np.ceil(Nc, out=Nc)
-    np.maximum(Nc, 0.0, out=Nc)
+    np.ceil(Nc, out=Nc)   # N C_i >= 0 and U < 1, so ceil(N C_i - U) >= 0: no clipping needed
     return _diff_rows(Nc.astype(np.intp))
 
 
