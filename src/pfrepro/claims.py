@@ -255,9 +255,15 @@ def _fmt(v, digits=3) -> str:
 
 
 def _pm(value, se) -> str:
+    """``value ± se`` with the se in 2 significant digits and the value to the same decimals."""
     if not _isnum(value):
         return "–"
-    return f"{_fmt(value)} ± {_fmt(se, 2)}" if _isnum(se) and se > 0 else _fmt(value)
+    if not (_isnum(se) and se > 0):
+        return _fmt(value)
+    dec = 1 - int(math.floor(math.log10(se)))
+    if 0 <= dec <= 6 and abs(value) < 1e6:
+        return f"{value:.{dec}f} ± {se:.{dec}f}"
+    return f"{_fmt(value)} ± {_fmt(se, 2)}"
 
 
 def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFrame:
