@@ -268,7 +268,7 @@ def test_claims_table(tmp_path):
     assert t["verdict"].tolist() == ["reproduced", "inconclusive", "reproduced", "inconclusive"]
     assert t.loc[0, "ours"] == "10.50 ± 0.20" and t.loc[0, "published"] == "10.00 ± 0.10"
     assert "√(se²+se_pub²)" in t.loc[0, "test"] and "n1" in t.loc[0, "test"]
-    assert t.loc[1, "ours"].== "Δ 0.020 ± 0.030" and "z = 0.7" in t.loc[1, "test"]
+    assert t.loc[1, "ours"] == "Δ 0.020 ± 0.030" and "z = 0.7" in t.loc[1, "test"]
     assert "cost count" in t.loc[2, "test"]
     assert "R = 10 → holds" in t.loc[3, "test"] and "R = 100 → fails" in t.loc[3, "test"]
     # the same table from saved claims (the scorecard's path), with the paper column
