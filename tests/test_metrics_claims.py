@@ -276,3 +276,17 @@ def test_claims_table(tmp_path):
     t2 = claims_table(load_all_claims(tmp_path), paper=True)
     assert t2.drop(columns="paper").equals(t)
     assert (t2["paper"] == "paper_x").all()
+
+
+def test_published_se_helpers():
+    assert published.se_from_std(3.0, 100) == 0.3
+    with pytest.raises(ValueError):
+        published.se_from_std(3.0, 1)
+    t = published.table("cmspf_ning2011", "Table 1")
+    rows = [str(i) for i in range(1, 21)]
+    v = t.loc[rows, "N=10 PF"].to_numpy(float)
+    assert published.per_run_se("cmspf_ning2011", "Table 1", "N=10 PF", range(1, 21)) == pytest.approx(
+        v.std(ddof=1) / math.sqrt(20), rel=1e-15)
+    # row 22 is the printed variance of rows 1-20: the two readings of the spread agree
+    assert published.per_run_se("cmspf_ning2011", "Table 1", "N=10 PF", range(1, 21)) == pytest.approx(
+        math.sqrt(t.loc["22", "N=10 PF"] / 20), rel=1e-3)
