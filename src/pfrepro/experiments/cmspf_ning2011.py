@@ -24,7 +24,7 @@ from ..montecarlo import filter_rng, run_monte_carlo, time_filters, truth_rng
 __all__ = ["PAPER", "T", "SEEDS", "ASSUMPTIONS", "model", "cms", "pf", "grid", "ekf", "ukf", "espf",
            "table1", "table2", "fig2_run", "fig3", "table3", "one_step", "fig6", "sensitivity",
            "consistency", "summarise", "TABLE1_N", "FIG3_N", "T3_READINGS", "cost_evidence_table2",
-           "cost_counts_fig3", "eta_sweep"]
+           "cost_counts_fig3", "eta_sweep", "fig3_per_run"]
 
 PAPER = "cmspf_ning2011"
 #: horizon M of sec 3.1
@@ -391,4 +391,19 @@ def eta_sweep(values=(0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 1.0, 1.5), runs: int = 50,
     for v in values:
         res = run_monte_carlo(m, {"CMS-PF": cms(m, N, eta=v)}, T, runs, seed, sim=sim)
         out[v] = res.rmse("CMS-PF")
+    return pd.DataFrame(out, index=pd.RangeIndex(1, runs + 1, name="run"))
+
+
+def fig3_per_run(Ns=(FIG3_N[0], FIG3_N[-1]), runs: int | None = None, sigma_v: float = 10.0, sigma_w2=None,
+                 seed=SEEDS["fig3"]) -> pd.DataFrame:
+    """Per-run RMSE of CMS-PF at the given N on the Fig. 3 runs (the same data and filter
+    stream as :func:`fig3`, without the timing), columns = N; for paired comparisons
+    between N and for other readings of the noise levels (``sigma_v``, ``sigma_w2``)."""
+    runs = ASSUMPTIONS["runs_fig3"] if runs is None else runs
+    m = model(sigma_v, sigma_w2)
+    sim = m.simulate(T, runs, truth_rng(seed))
+    out = {}
+    for N in Ns:
+        res = run_monte_carlo(m, {"CMS-PF": cms(m, N)}, T, runs, seed, sim=sim)
+        out[N] = res.rmse("CMS-PF")
     return pd.DataFrame(out, index=pd.RangeIndex(1, runs + 1, name="run"))
