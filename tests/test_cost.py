@@ -134,3 +134,11 @@ def test_time_repeats_and_summary(ung):
     with pytest.raises(ValueError, match="repeats"):
         time_repeats(fs, sim.y[:1], repeats=0)
     assert isinstance(t, pd.DataFrame)
+
+
+def test_cms_fig3_counts_are_3n_and_2n():
+    from pfrepro.experiments import cmspf_ning2011 as E
+
+    c = E.cost_counts_fig3(Ns=(10, 25))
+    assert c["CMS-PF evals / step"].tolist() == [30.0, 75.0]
+    assert c["PF evals / step"].tolist() == [20.0, 50.0]
