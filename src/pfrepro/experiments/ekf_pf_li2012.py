@@ -46,7 +46,7 @@ __all__ = [
     "table1", "ratio_of_means", "gap_to", "per_time_rmse", "statistic_readings", "sensitivity",
     "rmse_and_cost_vs_n", "cost_ratios", "jacobian_check", "literal_eq11_ekf",
     "eq9_linearisation_check", "resampling_after_estimate_effect", "published_table1",
-, "cost_evidence"]
+    "cost_evidence"]
 
 PAPER = "ekf_pf_li2012"
 #: horizon (60 s at 1 s sampling), particles, Monte Carlo counts (sec 2, Table 1)
