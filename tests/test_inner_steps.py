@@ -1,0 +1,384 @@
+"""Inner steps of the existing filters, pinned by hand-computed cases and invariants (issue 14).
+
+End-to-end accuracy tests cannot see a wrong inner formula whose effect is below the Monte
+Carlo noise (or that even improves the result). Each test here checks ONE step against a
+number computed by hand (written out in the test) or against an invariant the step must
+keep, with model stubs whose dynamics and likelihood the test controls:
+
+* bootstrap PF, ESS-threshold branch: which weights a resampled / non-resampled run carries
+  into the next step (checked through the next step's estimate and log evidence);
+* the flow integrator: one Euler / midpoint / RK4 step on a field that depends on lambda,
+  on uniform and exponential grids (value and the lambdas at which the field is evaluated);
+* GPFF's particle covariance, eq (52): the paper's 1/(N-1) normalisation;
+* ESPF's Metropolis-Hastings move: with a flat likelihood it leaves the transition prior
+  invariant (statistical test, tolerances from the sample size);
+* CMS-PF's weight recursion, eq (3) / Step 2.5: w_k ∝ w_{k-1} p(z_k | x_k) with non-uniform
+  w_{k-1}, for predicted and for map particles.
+
+Each test was checked against the wrong formula once (see the issue-14 note).
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from pfrepro import flow
+from pfrepro.filters import BootstrapParticleFilter, CMSParticleFilter
+from pfrepro.filters import espf as espf_module
+from pfrepro.filters.espf import EvolutionSamplingParticleFilter
+from pfrepro.filters.gpff import GaussianParticleFlowFilter, particle_moments
+from pfrepro.models import LinearGaussianModel
+
+
+# ------------------------------------------------------------------------------ stubs
+class ScriptedModel:
+    """Model stub: the transition puts particle i at ``positions[i]`` whatever its past, and
+    the log-likelihood at step k is the scripted table ``loglik[k - 1]`` (runs, N).
+
+    The step index is read from the measurement (y_k = k), so the stub has no hidden
+    state. Because the transition forgets the ancestors, the weighted estimate at step k is
+    sum_i w_{k-1}^i l_k^i c_i / sum_i w_{k-1}^i l_k^i with w_{k-1} the weights the filter
+    carried out of step k-1: uniform after resampling, the normalised weights otherwise.
+    """
+
+    dim_x = 1
+    dim_y = 1
+
+    def __init__(self, positions, loglik):
+        self.positions = np.asarray(positions, float)      # (N,)
+        self.loglik = np.asarray(loglik, float)            # (T, runs, N)
+        self.m0 = np.zeros(1)
+        self.P0 = np.eye(1)
+
+    def sample_transition(self, x, k, rng):
+        return np.broadcast_to(self.positions[:, None], x.shape).copy()
+
+    def log_likelihood(self, y, x):
+        k = int(round(float(y[0, 0])))
+        assert np.all(y[:, 0] == k), "stub: every run must carry y_k = k"
+        return self.loglik[k - 1]
+
+
+def scripted_measurements(runs, T):
+    return np.broadcast_to(np.arange(1.0, T + 1)[None, :, None], (runs, T, 1)).copy()
+
+
+# ------------------------------------------------------------------------------ 1. PF
+# positions c_i and scripted likelihoods for two runs and two steps
+C = np.array([1.0, 2.0, 5.0, 10.0])
+W1 = np.array([[0.97, 0.01, 0.01, 0.01],        # run 0: ESS = 1/0.9412 = 1.06 < 0.5 N -> resample
+               [0.40, 0.30, 0.20, 0.10]])       # run 1: ESS = 1/0.30 = 3.33 >= 0.5 N -> keep
+L2 = np.array([1.0, 2.0, 3.0, 4.0])             # step-2 likelihoods, both runs
+
+
+def _pf_on_script(ess_threshold):
+    loglik = np.stack([np.log(W1), np.log(np.broadcast_to(L2, (2, 4)))])   # (T=2, runs=2, N=4)
+    model = ScriptedModel(C, loglik)
+    pf = BootstrapParticleFilter(model, 4, ess_threshold=ess_threshold)
+    return pf.filter(scripted_measurements(2, 2), rng=np.random.default_rng(0))
+
+
+def _step2_estimate(carried):
+    """sum_i w_{k-1}^i l_2^i c_i / sum_i w_{k-1}^i l_2^i (by hand, for a (4,) carried weight)."""
+    v = carried * L2
+    return float(v @ C / v.sum())
+
+
+# by hand: uniform carry -> (1*1 + 2*2 + 3*5 + 4*10) / 10 = 60/10 = 6.0
+#          carry W1[1]   -> (.4*1*1 + .3*2*2 + .2*3*5 + .1*4*10) / (.4 + .6 + .6 + .4) = 8.6/2 = 4.3
+#          carry W1[0]   -> (.97 + .04 + .15 + .4) / (.97 + .02 + .03 + .04) = 1.56/1.06
+UNIFORM_CARRY, RUN1_CARRY, RUN0_CARRY = 6.0, 4.3, 1.56 / 1.06
+
+
+def test_hand_numbers_of_the_pf_script():
+    assert _step2_estimate(np.full(4, 0.25)) == pytest.approx(UNIFORM_CARRY)
+    assert _step2_estimate(W1[1]) == pytest.approx(RUN1_CARRY)
+    assert _step2_estimate(W1[0]) == pytest.approx(RUN0_CARRY)
+
+
+def test_pf_partial_resampling_carries_uniform_and_kept_weights():
+    """ESS threshold 0.5, two runs: only run 0 resamples at step 1. Run 0 must enter step 2
+    with equal weights, run 1 with its own step-1 weights."""
+    res = _pf_on_script(0.5)
+    d = res.diagnostics
+    np.testing.assert_allclose(d["ess"][:, 0], [1 / np.sum(W1[0] ** 2), 1 / np.sum(W1[1] ** 2)])
+    np.testing.assert_array_equal(d["resampled"][:, 0], [True, False])
+    # step 1: the weighted mean with weights W1 (the scripted likelihoods are normalised)
+    np.testing.assert_allclose(res.x[:, 0, 0], W1 @ C)
+    # step 2: the weights carried into it
+    np.testing.assert_allclose(res.x[:, 1, 0], [UNIFORM_CARRY, RUN1_CARRY], rtol=1e-12)
+    # log evidence: log sum_i w1_i (step 1, prior weights 1/N) + log sum_i carried_i l2_i
+    ev = np.log(W1.sum(axis=1) / 4) + np.log([np.mean(L2), W1[1] @ L2])
+    np.testing.assert_allclose(d["log_evidence"], ev, rtol=1e-12)
+
+
+@pytest.mark.parametrize("ess_threshold, carried", [
+    (None, [UNIFORM_CARRY, UNIFORM_CARRY]),     # every run resamples (the all-runs branch)
+    (0.0, [RUN0_CARRY, RUN1_CARRY]),            # no run resamples (SIS)
+])
+def test_pf_all_or_no_runs_resampling_carry(ess_threshold, carried):
+    res = _pf_on_script(ess_threshold)
+    np.testing.assert_array_equal(res.diagnostics["resampled"][:, 0], ess_threshold is None)
+    np.testing.assert_allclose(res.x[:, 1, 0], carried, rtol=1e-12)
+
+
+# ------------------------------------------------------------------------------ 2. flow integrator
+def lam_field(calls=None):
+    """f(x, lambda) = (1 + 2 lambda) x + 3 lambda^2: depends on lambda in both terms, so a step
+    taken at lambda_j differs from one taken at lambda_{j+1}; records the lambdas it is called at."""
+    def field(x, lam):
+        if calls is not None:
+            calls.append(float(lam))
+        return (1.0 + 2.0 * lam) * x + 3.0 * lam ** 2
+    return field
+
+
+def _f(x, lam):  # the same field, written out again for the hand computations
+    return (1.0 + 2.0 * lam) * x + 3.0 * lam ** 2
+
+
+@pytest.mark.parametrize("kind", ["uniform", "exponential"])
+@pytest.mark.parametrize("j", [0, 3])
+def test_one_integrator_step_by_hand(kind, j):
+    grid = flow.lambda_schedule(5, kind, ratio=1.5)
+    l0, l1 = grid[j], grid[j + 1]
+    h = l1 - l0
+    x0 = np.array([[[0.7], [-1.3]], [[2.0], [0.1]]])     # (runs, N, d) = (2, 2, 1)
+    # Euler: x + h f(x, l0)
+    euler = x0 + h * ((1 + 2 * l0) * x0 + 3 * l0 ** 2)
+    # midpoint: x + h f(x + h/2 f(x, l0), l0 + h/2)
+    lm = l0 + h / 2
+    xm = x0 + h / 2 * ((1 + 2 * l0) * x0 + 3 * l0 ** 2)
+    midpoint = x0 + h * ((1 + 2 * lm) * xm + 3 * lm ** 2)
+    # classical RK4
+    k1 = (1 + 2 * l0) * x0 + 3 * l0 ** 2
+    k2 = (1 + 2 * lm) * (x0 + h / 2 * k1) + 3 * lm ** 2
+    k3 = (1 + 2 * lm) * (x0 + h / 2 * k2) + 3 * lm ** 2
+    k4 = (1 + 2 * l1) * (x0 + h * k3) + 3 * l1 ** 2
+    rk4 = x0 + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    expected_calls = {"euler": [l0], "midpoint": [l0, lm], "rk4": [l0, lm, lm, l1]}
+    for method, want in (("euler", euler), ("midpoint", midpoint), ("rk4", rk4)):
+        calls = []
+        got = flow.integrate_flow(x0, lam_field(calls), grid[j:j + 2], method)
+        np.testing.assert_allclose(got, want, rtol=1e-14, atol=1e-14, err_msg=method)
+        np.testing.assert_allclose(calls, expected_calls[method], rtol=0, atol=1e-15, err_msg=method)
+    # the test can tell the lambdas apart: the step taken at l1 is a different number
+    assert np.max(np.abs(euler - (x0 + h * _f(x0, l1)))) > 1e-3
+
+
+@pytest.mark.parametrize("kind", ["uniform", "exponential"])
+@pytest.mark.parametrize("method", ["euler", "midpoint", "rk4"])
+def test_integration_over_a_grid_chains_the_steps(kind, method):
+    """The whole grid = the one-step map applied on consecutive pairs of lambdas, in order,
+    and the input is not modified in place."""
+    grid = flow.lambda_schedule(4, kind, ratio=2.0)
+    x0 = np.array([[0.5], [-2.0]])
+    x0_copy = x0.copy()
+    calls = []
+    got = flow.integrate_flow(x0, lam_field(calls), grid, method)
+    x = x0_copy.copy()
+    for a, b in zip(grid[:-1], grid[1:]):
+        x = flow.integrate_flow(x, lam_field(), np.array([a, b]), method)
+    np.testing.assert_allclose(got, x, rtol=1e-14)
+    np.testing.assert_array_equal(x0, x0_copy)
+    per_step = {"euler": 1, "midpoint": 2, "rk4": 4}[method]
+    assert len(calls) == per_step * (len(grid) - 1)
+    np.testing.assert_allclose(calls[::per_step], grid[:-1], atol=1e-15)   # each step starts at lambda_j
+
+
+def test_euler_two_exponential_steps_by_hand():
+    """Exponential grid, n = 2, ratio 3: lambda = 0, 1/4, 1. From x = 1:
+    step 1 at lambda 0: x = 1 + 1/4 * (1*1 + 0) = 1.25;
+    step 2 at lambda 1/4: x = 1.25 + 3/4 * (1.5 * 1.25 + 3/16) = 1.25 + 0.75 * 2.0625 = 2.796875."""
+    grid = flow.lambda_schedule(2, "exponential", ratio=3.0)
+    np.testing.assert_allclose(grid, [0.0, 0.25, 1.0])
+    got = flow.integrate_flow(np.array([1.0]), lam_field(), grid, "euler")
+    assert got[0] == pytest.approx(2.796875, rel=1e-15)
+
+
+# ------------------------------------------------------------------------------ 3. GPFF eq (52)
+def test_particle_covariance_is_eq52_by_hand():
+    """Eq (52) prints P = 1/(N-1) sum_i (x_i - x_hat)(x_i - x_hat)^T with x_hat the sample mean (51).
+
+    By hand, N = 4 particles in 2-D: x = (0, 1), (1, 0), (2, 4), (5, 3);
+    mean (2, 2); deviations (-2, -1), (-1, -2), (0, 2), (3, 1);
+    sums of products: xx = 4 + 1 + 0 + 9 = 14, yy = 1 + 4 + 4 + 1 = 10, xy = 2 + 2 + 0 + 3 = 7;
+    divided by N - 1 = 3."""
+    x = np.array([[[0.0, 1.0], [1.0, 0.0], [2.0, 4.0], [5.0, 3.0]]])
+    m, P = particle_moments(x)
+    np.testing.assert_allclose(m, [[2.0, 2.0]])
+    np.testing.assert_allclose(P, [[[14 / 3, 7 / 3], [7 / 3, 10 / 3]]], rtol=1e-15)
+
+
+def test_particle_covariance_matches_np_cov_per_run():
+    rng = np.random.default_rng(52)
+    x = rng.standard_normal((3, 7, 3)) @ np.array([[1.0, 0.5, 0.0], [0.0, 2.0, 0.3], [0.0, 0.0, 0.1]])
+    m, P = particle_moments(x)
+    for r in range(3):
+        np.testing.assert_allclose(m[r], x[r].mean(axis=0), rtol=1e-14)
+        np.testing.assert_allclose(P[r], np.cov(x[r], rowvar=False, ddof=1), rtol=1e-12)
+
+
+def test_gpff_uses_eq52_for_its_prior_statistics():
+    """The filter's prior statistics (eqs 47-52) start from the eq-52 covariance: for a linear h
+    the UT is exact, so Pxy = P H^T and Pyy = H P H^T with P = np.cov(ddof=1)."""
+    H = np.array([[1.0, -0.5]])
+    model = LinearGaussianModel(np.eye(2), H, np.eye(2), [[0.3]], [0.0, 0.0])
+    gpff = GaussianParticleFlowFilter(model, n_particles=5)
+    x = np.random.default_rng(3).standard_normal((2, 5, 2))
+    m, P, y_hat, Pyy, Pxy = gpff.prior_statistics(x)
+    for r in range(2):
+        C = np.cov(x[r], rowvar=False, ddof=1)
+        np.testing.assert_allclose(P[r], C, rtol=1e-12)
+        np.testing.assert_allclose(Pxy[r], C @ H.T, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(Pyy[r], H @ C @ H.T, rtol=1e-10)
+        np.testing.assert_allclose(y_hat[r], H @ x[r].mean(axis=0), rtol=1e-10, atol=1e-12)
+
+
+# ------------------------------------------------------------------------------ 4. ESPF MH move
+class FlatLikelihoodModel:
+    """x_k = c + w, w ~ N(0, Q) (the transition forgets x_{k-1}), flat likelihood.
+
+    ``seen`` records the particles handed to ``f`` (at step 2: the output of step 1)."""
+
+    dim_x = 2
+    dim_y = 1
+
+    def __init__(self, c, Q):
+        self.c = np.asarray(c, float)
+        self.Q = np.asarray(Q, float)
+        self.m0 = self.c.copy()
+        self.P0 = self.Q.copy()
+        self.seen = {}
+
+    def f(self, x, k):
+        self.seen[k] = np.array(x)
+        return np.broadcast_to(self.c, x.shape).copy()
+
+    def log_likelihood(self, y, x):
+        return np.zeros(x.shape[:-1])
+
+
+def test_espf_mh_move_leaves_the_transition_prior_invariant(monkeypatch):
+    """With a flat likelihood the MH target is the transition prior N(c, Q) itself; the
+    resampled particles are exact draws from it, so after one MH step the moved particles must
+    still be N(c, Q) draws. The selection step is replaced by "keep the MCMC block" (indices
+    N..2N-1 of the pool) so the filter's output at step 1 is exactly the MH output.
+
+    n = runs * N = 16000 whitened 2-D samples: each whitened coordinate has mean 0 (se 1/sqrt(n)),
+    variance 1 (se sqrt(2/n)), their correlation 0 (se 1/sqrt(n)); tolerance 4.5 se on each
+    (two-sided p = 7e-6 per check), and a KS test of each coordinate against N(0, 1) at
+    p > 1e-4. A one-step kernel that is not invariant moves the variance by O(1)."""
+    c = np.array([3.0, -1.0])
+    Q = np.array([[2.0, 0.6], [0.6, 0.5]])
+    runs, N = 4, 4000
+    model = FlatLikelihoodModel(c, Q)
+    kept = []
+
+    def keep_mcmc_block(pool_ll, n_keep, sort=False):
+        assert pool_ll.shape == (runs, 3 * N) and n_keep == N
+        kept.append(True)
+        return np.broadcast_to(np.arange(N, 2 * N), (runs, N)).copy()
+
+    monkeypatch.setattr(espf_module, "select_top_likelihood", keep_mcmc_block)
+    f = EvolutionSamplingParticleFilter(model, N, mcmc_scale=1.5)
+    res = f.filter(np.zeros((runs, 2, 1)), rng=np.random.default_rng(2011))
+    assert kept
+    moved = model.seen[2]                                  # (runs, N, 2): output of step 1
+    acc = res.diagnostics["acceptance"][:, 0]
+    assert np.all((acc > 0.2) & (acc < 0.8)), acc          # the move really moves particles
+    z = np.linalg.solve(np.linalg.cholesky(Q), (moved - c).reshape(-1, 2).T).T
+    n = z.shape[0]
+    tol = 4.5
+    assert np.all(np.abs(z.mean(axis=0)) < tol / np.sqrt(n)), z.mean(axis=0)
+    assert np.all(np.abs(z.var(axis=0, ddof=1) - 1) < tol * np.sqrt(2 / n)), z.var(axis=0, ddof=1)
+    assert abs(np.corrcoef(z.T)[0, 1]) < tol / np.sqrt(n)
+    for i in range(2):
+        assert stats.kstest(z[:, i], "norm").pvalue > 1e-4
+
+
+# ------------------------------------------------------------------------------ 5. CMS-PF eq (3)
+class IdentityGaussModel:
+    """x_k = x_{k-1} exactly (no noise); log p(z | x) = -(z - x)^2 / 2 (scalar)."""
+
+    dim_x = 1
+    dim_y = 1
+    m0 = np.zeros(1)
+    P0 = np.eye(1)
+
+    def sample_transition(self, x, k, rng):
+        return np.array(x, float)
+
+    def log_likelihood(self, y, x):
+        return -0.5 * (y[:, None, 0] - x[..., 0]) ** 2
+
+
+W_PREV = np.array([0.1, 0.2, 0.3, 0.4])
+X_PREV = np.array([[[0.0], [1.0], [2.0], [3.0]]])
+
+
+def _cms_step(y, r, use_map=True):
+    f = CMSParticleFilter(IdentityGaussModel(), 4, eta=0.5, big_fraction=0.1)
+    assert f.n_big == 1
+    return f.step(X_PREV, np.log(W_PREV)[None], np.array([[y]]), 1, np.asarray(r, float)[None, :, None],
+                  np.random.default_rng(0), use_map=use_map)
+
+
+def _sorted_by_x(st):
+    o = np.argsort(st.x[0, :, 0])
+    return st.x[0, o, 0], np.exp(st.logw[0, o])
+
+
+def test_cms_weights_keep_the_previous_weights_of_predicted_particles():
+    """z = 1.5 and carrier r = 100: the map particles land ~150 away and are never kept, so the
+    kept set is the 4 predicted particles x = 0, 1, 2, 3 with likelihoods
+    exp(-1.125), exp(-0.125), exp(-0.125), exp(-1.125). Eq (3) by hand:
+    w ∝ (0.1 e^-1, 0.2, 0.3, 0.4 e^-1) = (0.0367879, 0.2, 0.3, 0.1471518) / 0.6839397,
+    estimate = (0.2 + 0.6 + 1.2 e^-1) / 0.6839397 = 1.8151531.
+    Dropping w_{k-1} (uniform previous weights) would give 1.5 by symmetry."""
+    st = _cms_step(1.5, [100.0] * 4)
+    assert np.all(st.selected[0] < 4)
+    x, w = _sorted_by_x(st)
+    np.testing.assert_allclose(x, [0, 1, 2, 3])
+    e = np.exp(-1.0)
+    raw = np.array([0.1 * e, 0.2, 0.3, 0.4 * e])
+    np.testing.assert_allclose(w, raw / raw.sum(), rtol=1e-12)
+    np.testing.assert_allclose(w, [0.0537883, 0.2924234, 0.4386352, 0.2151531], atol=1e-7)
+    assert st.estimate[0, 0] == pytest.approx((0.2 + 0.6 + 1.2 * e) / (0.5 + 0.5 * e), rel=1e-12)
+    assert st.estimate[0, 0] == pytest.approx(1.8151531, abs=1e-7)
+    # the same recursion without the map (the "without mapping" panels of Figs. 4-5)
+    plain = _cms_step(1.5, [100.0] * 4, use_map=False)
+    np.testing.assert_allclose(np.exp(plain.logw[0]), raw / raw.sum(), rtol=1e-12)
+    assert plain.estimate[0, 0] == pytest.approx(1.8151531, abs=1e-7)
+
+
+def test_cms_weights_of_a_kept_map_particle_inherit_the_big_particles_weight():
+    """z = 2.6: the big particle (largest w_{k-1} p(z|x)) is x = 3 (w_prev 0.4), the small one
+    x = 0, spread 3, eta = 0.5. Carrier r_1 = -0.4/1.5 puts map particle 1 (centre: the big
+    particle) at 3 - 0.4 = 2.6 (likelihood 1); r = 10 sends the other three ~15 away.
+    Kept: map 2.6 (prev 0.4, lik 1), x = 3 (0.4, e^-0.08), x = 2 (0.3, e^-0.18),
+    x = 1 (0.2, e^-1.28); x = 0 (lik e^-3.38) is dropped. Eq (3): w ∝ prev * lik."""
+    st = _cms_step(2.6, [10.0, -0.4 / 1.5, 10.0, 10.0])
+    assert sorted(st.selected[0].tolist()) == [1, 2, 3, 5]           # x1 = 1, 2, 3 and map 1
+    x, w = _sorted_by_x(st)
+    np.testing.assert_allclose(x, [1.0, 2.0, 2.6, 3.0], rtol=1e-12)
+    raw = np.array([0.2 * np.exp(-1.28), 0.3 * np.exp(-0.18), 0.4, 0.4 * np.exp(-0.08)])
+    np.testing.assert_allclose(w, raw / raw.sum(), rtol=1e-10)
+    assert st.estimate[0, 0] == pytest.approx(raw @ x / raw.sum(), rel=1e-12)
+
+
+def test_cms_filter_carries_weights_between_steps():
+    """Two steps through ``filter`` with no resampling (n_th = 0): the weights leaving step 1
+    are the w_{k-1} of step 2. Identity dynamics, z_1 = z_2 = 1.5, r = 100 (map never kept),
+    prior draws x_0 = m0 + z: step 2's weights are ∝ exp(-(1.5 - x)^2) (two likelihood
+    factors), not exp(-(1.5 - x)^2 / 2) (one)."""
+    f = CMSParticleFilter(IdentityGaussModel(), 6, eta=0.5, n_th=0.0)
+    r = np.full((2, 1, 6, 1), 100.0)
+    y = np.full((1, 2, 1), 1.5)
+    res = f.filter(y, rng=np.random.default_rng(4), r=r)
+    x0 = f.sample_prior(np.random.default_rng(4), (1, 6))[0, :, 0]   # same first draw as the filter
+    for k, est in ((1, res.x[0, 0, 0]), (2, res.x[0, 1, 0])):
+        w = np.exp(-0.5 * k * (1.5 - x0) ** 2)
+        assert est == pytest.approx(w @ x0 / w.sum(), rel=1e-12)
+    assert not res.diagnostics["resampled"].any()
