@@ -123,6 +123,102 @@ def test_pf_all_or_no_runs_resampling_carry(ess_threshold, carried):
     np.testing.assert_allclose(res.x[:, 1, 0], carried, rtol=1e-12)
 
 
+class ScriptedModel2D(ScriptedModel):
+    """2-D variant: step 1 puts particle i at ``positions[i]`` (N, 2); later steps keep the
+    particles where resampling left them (identity transition), so the next step's estimate
+    shows which particles a run resampled."""
+
+    dim_x = 2
+
+    def __init__(self, positions, loglik):
+        super().__init__(positions, loglik)
+        self.m0, self.P0 = np.zeros(2), np.eye(2)
+
+    def sample_transition(self, x, k, rng):
+        if k == 1:
+            return np.broadcast_to(self.positions, x.shape).copy()
+        return np.array(x)
+
+
+C2 = np.array([[1.0, -1.0], [3.0, 2.0], [10.0, 7.0], [-4.0, 5.0]])
+
+
+def _pf2d(runs, ess_threshold, resampling="systematic"):
+    """Step 1: run 0 (and every run but the last) has weights (1/2, 1/2, 0, 0) -> ESS 2;
+    the last run W1[1] -> ESS 3.33. Step 2: flat likelihood, so its estimate is the plain mean
+    of the particles carried out of step 1 (resampled or not) under the carried weights."""
+    w1 = np.tile([0.5, 0.5, 0.0, 0.0], (runs, 1))
+    w1[-1] = W1[1]
+    with np.errstate(divide="ignore"):
+        loglik = np.stack([np.log(w1), np.zeros((runs, 4))])
+    pf = BootstrapParticleFilter(ScriptedModel2D(C2, loglik), 4, ess_threshold=ess_threshold,
+                                 resampling=resampling)
+    return pf.filter(scripted_measurements(runs, 2), rng=np.random.default_rng(5))
+
+
+def test_pf_partial_resampling_moves_the_resampled_runs_particles_2d():
+    """Threshold 0.6 (2.4 particles): the (1/2, 1/2, 0, 0) runs resample, the last run keeps its
+    particles and weights. Systematic resampling of (1/2, 1/2, 0, 0) gives exactly two copies of
+    particles 0 and 1, so their step-2 estimate is (c_0 + c_1) / 2 = (2, 0.5); the last run's is
+    W1[1] @ C2 = (0.4 + 0.9 + 2 - 0.4, -0.4 + 0.6 + 1.4 + 0.5) = (2.9, 2.1)."""
+    res = _pf2d(3, 0.6)
+    np.testing.assert_array_equal(res.diagnostics["resampled"][:, 0], [True, True, False])
+    np.testing.assert_allclose(res.x[:2, 1], [[2.0, 0.5], [2.0, 0.5]], rtol=1e-12)
+    np.testing.assert_allclose(res.x[2, 1], [2.9, 2.1], rtol=1e-12)
+    # the step-1 estimates are the weighted means before resampling
+    np.testing.assert_allclose(res.x[:, 0], [[2.0, 0.5], [2.0, 0.5], [2.9, 2.1]], rtol=1e-12)
+
+
+@pytest.mark.parametrize("ess_threshold", [None, 0.6])
+def test_pf_uses_the_requested_resampling_scheme(ess_threshold):
+    """Systematic resampling of (1/2, 1/2, 0, 0) always gives counts (2, 2, 0, 0); multinomial
+    gives Binomial(4, 1/2) counts, i.e. a step-2 estimate other than (2, 0.5) with
+    probability 10/16 per run: over 30 runs all equal has probability (6/16)^30 = 2e-13."""
+    runs = 31
+    sysm = _pf2d(runs, ess_threshold, "systematic").x[:-1, 1]
+    mult = _pf2d(runs, ess_threshold, "multinomial").x[:-1, 1]
+    np.testing.assert_allclose(sysm, np.broadcast_to([2.0, 0.5], sysm.shape), rtol=1e-12)
+    assert np.sum(np.any(np.abs(mult - [2.0, 0.5]) > 1e-9, axis=1)) >= 5
+    # each multinomial estimate is the mean of 4 copies of c_0 / c_1: (j c_0 + (4 - j) c_1) / 4
+    j = (mult[:, 0] - 3.0) / -0.5
+    np.testing.assert_allclose(j, np.round(j), atol=1e-9)
+
+
+def test_pf_resamples_only_strictly_below_the_threshold():
+    """Flat likelihood: the weights stay exactly 1/4, ESS = 1 / (4/16) = 4 = 1.0 * N exactly;
+    the rule is ESS < threshold * N, so threshold 1.0 never resamples."""
+    loglik = np.zeros((3, 2, 4))
+    pf = BootstrapParticleFilter(ScriptedModel(C, loglik), 4, ess_threshold=1.0)
+    d = pf.filter(scripted_measurements(2, 3), rng=np.random.default_rng(0)).diagnostics
+    np.testing.assert_array_equal(d["ess"], 4.0)
+    assert not d["resampled"].any()
+
+
+def test_pf_diagnostics_types_and_optional_covariance():
+    res = _pf_on_script(0.5)
+    assert res.P is None                                   # return_cov=False: no covariance
+    for key in ("resampled", "collapsed"):
+        assert res.diagnostics[key].dtype == bool, key
+    loglik = np.stack([np.log(W1), np.log(np.broadcast_to(L2, (2, 4)))])
+    res = BootstrapParticleFilter(ScriptedModel(C, loglik), 4, ess_threshold=0.0, return_cov=True).filter(
+        scripted_measurements(2, 2), rng=np.random.default_rng(0))
+    # weighted covariance of the step-1 particles under W1: sum_i w_i (c_i - mean)^2
+    np.testing.assert_allclose(res.P[:, 0, 0, 0], [W1[r] @ (C - W1[r] @ C) ** 2 for r in range(2)])
+
+
+class _NaNModel(ScriptedModel):
+    def sample_transition(self, x, k, rng):
+        return np.full(x.shape, np.nan) if k == 2 else super().sample_transition(x, k, rng)
+
+
+def test_pf_divergence_error_names_the_step():
+    from pfrepro.filters.base import FilterDivergenceError
+
+    model = _NaNModel(C, np.zeros((3, 1, 4)))
+    with pytest.raises(FilterDivergenceError, match="non-finite at step 3"):
+        BootstrapParticleFilter(model, 4).filter(scripted_measurements(1, 3), rng=np.random.default_rng(0))
+
+
 # ------------------------------------------------------------------------------ 2. flow integrator
 def lam_field(calls=None):
     """f(x, lambda) = (1 + 2 lambda) x + 3 lambda^2: depends on lambda in both terms, so a step
