@@ -156,6 +156,7 @@ def _pf2d(runs, ess_threshold, resampling="systematic"):
     return pf.filter(scripted_measurements(runs, 2), rng=np.random.default_rng(5))
 
 
+@pytest.mark.filterwarnings("error")  # zero weights: log(0) = -inf is expected, not a RuntimeWarning
 def test_pf_partial_resampling_moves_the_resampled_runs_particles_2d():
     """Threshold 0.6 (2.4 particles): the (1/2, 1/2, 0, 0) runs resample, the last run keeps its
     particles and weights. Systematic resampling of (1/2, 1/2, 0, 0) gives exactly two copies of
@@ -167,6 +168,16 @@ def test_pf_partial_resampling_moves_the_resampled_runs_particles_2d():
     np.testing.assert_allclose(res.x[2, 1], [2.9, 2.1], rtol=1e-12)
     # the step-1 estimates are the weighted means before resampling
     np.testing.assert_allclose(res.x[:, 0], [[2.0, 0.5], [2.0, 0.5], [2.9, 2.1]], rtol=1e-12)
+
+
+@pytest.mark.filterwarnings("error")
+def test_pf_without_resampling_carries_zero_weights_silently():
+    """Threshold 0: nobody resamples; zero weights are carried as log 0 = -inf without a warning,
+    and with a flat step-2 likelihood the step-2 estimate equals the step-1 weighted mean."""
+    res = _pf2d(3, 0.0)
+    assert not res.diagnostics["resampled"].any()
+    np.testing.assert_allclose(res.x[:, 1], res.x[:, 0], rtol=1e-12)
+    np.testing.assert_allclose(res.x[:, 1], [[2.0, 0.5], [2.0, 0.5], [2.9, 2.1]], rtol=1e-12)
 
 
 @pytest.mark.parametrize("ess_threshold", [None, 0.6])
