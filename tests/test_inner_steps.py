@@ -343,6 +343,89 @@ def test_gpff_uses_eq52_for_its_prior_statistics():
         np.testing.assert_allclose(y_hat[r], H @ x[r].mean(axis=0), rtol=1e-10, atol=1e-12)
 
 
+def test_gpff_exact_update_by_hand():
+    """integrator="exact", scalar model x -> y = x + v, R = 1, particles (0, 1, 2, 5): eq (52) gives
+    m = 2, P = 14/3; the Kalman posterior for y = 4 has mean 2 + (14/3)/(17/3) * 2 = 62/17 and the
+    exact flow map is x -> 62/17 + sqrt(R / (R + P)) (x - m) = 62/17 + sqrt(3/17) (x - 2)
+    (increasing: the flow never mirrors the cloud); its sample variance is 14/17 = P R / (P + R)."""
+    model = LinearGaussianModel([[1.0]], [[1.0]], [[1.0]], [[1.0]], [0.0])
+    gpff = GaussianParticleFlowFilter(model, n_particles=4, integrator="exact")
+    x = np.array([[[0.0], [1.0], [2.0], [5.0]]])
+    moved = gpff.update(x, np.array([[4.0]]))
+    np.testing.assert_allclose(moved[0, :, 0], 62 / 17 + np.sqrt(3 / 17) * (x[0, :, 0] - 2), rtol=1e-12)
+    assert np.var(moved[0, :, 0], ddof=1) == pytest.approx(14 / 17, rel=1e-12)
+
+
+class QuadraticMeasurement(LinearGaussianModel):
+    """Scalar random walk measured through h(x) = x^2 / 20 (the UNGM's h), R = 0.5."""
+
+    def __init__(self):
+        super().__init__([[1.0]], [[1.0]], [[1.0]], [[0.5]], [0.0])
+
+    def h(self, x):
+        return x ** 2 / 20.0
+
+
+def test_gpff_eq41_field_is_not_the_linearised_eq43_field():
+    """field="eq43" replaces h(x) by its statistical linearisation, so its map is affine in x:
+    equally spaced prior particles stay equally spaced (zero second differences). field="eq41"
+    evaluates h at every particle, so for a quadratic h the map is not affine."""
+    x = np.linspace(-1.0, 3.0, 9)[None, :, None]
+    y = np.array([[2.0]])
+    d2 = {}
+    for field in ("eq41", "eq43"):
+        moved = GaussianParticleFlowFilter(QuadraticMeasurement(), 9, field=field).update(x, y)[0, :, 0]
+        d2[field] = np.max(np.abs(np.diff(moved, 2)))
+        assert np.all(np.diff(moved) > 0)
+    assert d2["eq43"] < 1e-12
+    assert d2["eq41"] > 1e-3, d2
+
+
+class WrappedLinear(LinearGaussianModel):
+    """y = x + v measured as an angle: innovations wrapped to (-pi, pi] (like the BOT model)."""
+
+    def residual_y(self, y, y_pred):
+        from pfrepro.models.bot import wrap_angle
+
+        return wrap_angle(y - y_pred)
+
+
+def test_gpff_ut_deviations_use_the_models_residual():
+    """Prior statistics (eqs 47-50) for particles m -+ 2 sqrt(2), m = 0.5 (eq 52: P = 16), with the
+    UT alpha = 1, beta = 2, kappa = 0 in 1-D: lambda = 0, Wm = (0, 1/2, 1/2), Wc = (2, 1/2, 1/2),
+    sigma points m, m + 4, m - 4; y_hat = m; wrapped deviations dy = (0, 4 - 2 pi, 2 pi - 4), so
+    Pyy = (2 pi - 4)^2 and Pxy = 4 (4 - 2 pi) (16 and 16 without the wrap)."""
+    model = WrappedLinear([[1.0]], [[1.0]], [[1.0]], [[0.5]], [0.0])
+    gpff = GaussianParticleFlowFilter(model, n_particles=2)
+    x = np.array([[[0.5 - 2 * np.sqrt(2)], [0.5 + 2 * np.sqrt(2)]]])
+    m, P, y_hat, Pyy, Pxy = gpff.prior_statistics(x)
+    np.testing.assert_allclose(P[0, 0, 0], 16.0, rtol=1e-12)
+    np.testing.assert_allclose(y_hat[0], [0.5], rtol=1e-12)
+    np.testing.assert_allclose(Pyy[0, 0, 0], (2 * np.pi - 4) ** 2, rtol=1e-12)
+    np.testing.assert_allclose(Pxy[0, 0, 0], 4 * (4 - 2 * np.pi), rtol=1e-12)
+
+
+EQ43_WRAP_BUG = (
+    "BUG (gpff.py, update, field='eq43'): the linearised field calls flow.gaussian_flow_field "
+    "without residual=model.residual_y, so its R C r(y, y_hat) term uses the unwrapped y - y_hat; "
+    "for angle measurements whose y and y_hat straddle +-pi the flow is pushed by ~2 pi. Fix: pass "
+    "residual=model.residual_y there too.")
+
+
+@pytest.mark.parametrize("field", [
+    "eq41", pytest.param("eq43", marks=pytest.mark.xfail(strict=True, reason=EQ43_WRAP_BUG))])
+def test_gpff_flow_innovations_use_the_models_residual(field):
+    """With wrapped innovations a measurement y and y - 2 pi are the same angle, so the flow must
+    move the particles identically (cloud around 0.3, y = 2.9: innovation 2.6 either way)."""
+    model = WrappedLinear([[1.0]], [[1.0]], [[1.0]], [[0.5]], [0.0])
+    gpff = GaussianParticleFlowFilter(model, n_particles=5, field=field)
+    x = 0.3 + 0.1 * np.array([[[-2.0], [-1.0], [0.0], [1.0], [2.0]]])
+    a = gpff.update(x, np.array([[2.9]]))
+    b = gpff.update(x, np.array([[2.9 - 2 * np.pi]]))
+    np.testing.assert_allclose(a, b, rtol=1e-10)
+    assert np.all(a > x)                            # moved towards the measurement (+2.6)
+
+
 # ------------------------------------------------------------------------------ 4. ESPF MH move
 class FlatLikelihoodModel:
     """x_k = c + w, w ~ N(0, Q) (the transition forgets x_{k-1}), flat likelihood.
