@@ -538,6 +538,54 @@ def test_gpff_raise_names_the_step_and_run():
         GaussianParticleFlowFilter(model, 20).filter(np.ones((2, 3, 1)), rng=np.random.default_rng(0))
 
 
+def test_gpff_documented_defaults_and_settings_reach_the_filter():
+    """The class docstring's defaults (the paper's N = 100, 20 uniform Euler steps; our UT
+    alpha = 1, beta = 2, kappa = 0; eq41; raise; no covariance) and the overrides are used."""
+    model = _linear_2d()
+    g = GaussianParticleFlowFilter(model)
+    assert (g.n_particles, g.n_steps, g.integrator, g.field, g.on_divergence, g.return_cov) == \
+        (100, 20, "euler", "eq41", "raise", False)
+    assert (g.points.alpha, g.points.beta, g.points.kappa) == (1.0, 2.0, 0.0)
+    np.testing.assert_array_equal(g.grid, flow.lambda_schedule(20, "uniform"))
+    np.testing.assert_array_equal(GaussianParticleFlowFilter(model, schedule="exponential").grid,
+                                  flow.lambda_schedule(20, "exponential", 1.2))
+    m0, P0 = np.array([1.0, -2.0]), np.array([[3.0, 0.5], [0.5, 2.0]])
+    g = GaussianParticleFlowFilter(model, n_steps=7, schedule="exponential", ratio=2.0, m0=m0, P0=P0,
+                                   alpha=0.5, beta=1.0, kappa=1.0, return_cov=True)
+    np.testing.assert_array_equal(g.grid, flow.lambda_schedule(7, "exponential", 2.0))
+    np.testing.assert_array_equal(g.m0, m0)
+    np.testing.assert_array_equal(g.P0, P0)
+    assert (g.points.alpha, g.points.beta, g.points.kappa, g.return_cov) == (0.5, 1.0, 1.0, True)
+    assert "exponential" in repr(g) and "n_steps=7" in repr(g)
+
+
+def test_gpff_errors_name_the_argument():
+    model = _linear_2d()
+    with pytest.raises(ValueError, match=r"n_particles >= 2 \(eq 52 divides by N - 1\)"):
+        GaussianParticleFlowFilter(model, n_particles=1)
+    with pytest.raises(ValueError, match="n_particles must be >= 1"):
+        GaussianParticleFlowFilter(model, n_particles=0)
+    with pytest.raises(ValueError, match="n_steps must be >= 1"):
+        GaussianParticleFlowFilter(model, n_steps=0)
+    with pytest.raises(ValueError, match="unknown integrator 'heun'.*'euler'.*'exact'"):
+        GaussianParticleFlowFilter(model, integrator="heun")
+    with pytest.raises(TypeError, match="integrator='exact' needs a linear model with a matrix H"):
+        GaussianParticleFlowFilter(_NoH(), integrator="exact")
+    with pytest.raises(ValueError, match=r"particles must be \(runs, N, d\), got shape \(3, 2\)"):
+        particle_moments(np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="need at least 2 particles for a sample covariance"):
+        particle_moments(np.zeros((1, 1, 2)))
+    m, P = particle_moments(np.array([[[0.0], [2.0]]]))          # N = 2 is enough: 1/(N-1) = 1
+    assert P[0, 0, 0] == 2.0
+
+
+class _NoH:
+    """A nonlinear model without a matrix H (only what the constructor reads)."""
+
+    dim_x, dim_y = 1, 1
+    m0, P0 = np.zeros(1), np.eye(1)
+
+
 # ------------------------------------------------------------------------------ 4. ESPF MH move
 class FlatLikelihoodModel:
     """x_k = c + w, w ~ N(0, Q) (the transition forgets x_{k-1}), flat likelihood.
