@@ -648,6 +648,112 @@ def test_espf_mh_move_leaves_the_transition_prior_invariant(monkeypatch):
         assert stats.kstest(z[:, i], "norm").pvalue > 1e-4
 
 
+class FlatSpy1D:
+    """1-D: x_k = c + w, w ~ N(0, q); flat likelihood; records every call (k, y, x shape)."""
+
+    dim_x = 1
+    dim_y = 1
+
+    def __init__(self, c=2.0, q=0.5):
+        self.c, self.Q = c, np.array([[q]])
+        self.m0, self.P0 = np.array([c]), self.Q.copy()
+        self.f_calls, self.ll_calls = [], []
+
+    def f(self, x, k):
+        self.f_calls.append((k, np.array(x)))
+        return np.full(x.shape, self.c)
+
+    def log_likelihood(self, y, x):
+        self.ll_calls.append((np.array(y), x.shape))
+        return np.zeros(x.shape[:-1])
+
+
+@pytest.mark.parametrize("scale", [None, 1.5])
+def test_espf_mh_acceptance_rate_is_the_random_walk_formula(scale):
+    """Flat likelihood, 1-D: the resampled particles are exact N(c, q) draws (systematic
+    resampling of equal weights keeps each once) and the move is random-walk MH with step
+    s sqrt(q) on the target N(c, q). In whitened units its acceptance probability at
+    stationarity is E min(1, exp(-(y^2 - x^2)/2)) = (2/pi) arctan(2/s) (0.705 for the default
+    s = 1, 0.590 for s = 1.5). n = 16000 iid accept events: tolerance 4.5 sqrt(p(1-p)/n)."""
+    runs, N = 4, 4000
+    kw = {} if scale is None else {"mcmc_scale": scale}
+    s = 1.0 if scale is None else scale
+    res = EvolutionSamplingParticleFilter(FlatSpy1D(), N, **kw).filter(np.zeros((runs, 1, 1)),
+                                                                      rng=np.random.default_rng(21))
+    p = 2 / np.pi * np.arctan(2 / s)
+    acc = res.diagnostics["acceptance"][:, 0].mean()
+    assert abs(acc - p) < 4.5 * np.sqrt(p * (1 - p) / (runs * N)), (acc, p)
+
+
+def test_espf_step_k_uses_y_k_and_pools_3n_candidates():
+    """Per step k = 1..T: f(., k) once, and three likelihood calls with y_k -- the N resampled /
+    predicted particles, the N MH proposals and the N SBX children (N odd: (N-1)/2 pairs give
+    N - 1 children, the unpaired particle is copied)."""
+    for N in (6, 7):
+        model = FlatSpy1D()
+        y = np.arange(1.0, 7.0).reshape(2, 3, 1)
+        res = EvolutionSamplingParticleFilter(model, N).filter(y, rng=np.random.default_rng(0))
+        assert [k for k, _ in model.f_calls] == [1, 2, 3]
+        assert len(model.ll_calls) == 9
+        for i, (yy, shape) in enumerate(model.ll_calls):
+            np.testing.assert_array_equal(yy, y[:, i // 3])
+            assert shape == (2, N, 1), (N, i, shape)
+        assert res.diagnostics["likelihood_evaluations"] == 3 * N * 3
+        np.testing.assert_allclose(res.diagnostics["origin_share"].sum(axis=-1), 1.0)
+
+
+def test_espf_uses_the_requested_resampling_scheme(monkeypatch):
+    """Flat likelihood; the selection is replaced by "keep the resampled block" (pool indices
+    0..N-1). Systematic resampling of equal weights keeps every particle once (N distinct
+    values); multinomial draws duplicates (expected distinct share 1 - 1/e = 0.63)."""
+    N = 200
+    monkeypatch.setattr(espf_module, "select_top_likelihood",
+                        lambda ll, n, sort=False: np.broadcast_to(np.arange(n), (ll.shape[0], n)).copy())
+    distinct = {}
+    for scheme in ("systematic", "multinomial"):
+        model = FlatSpy1D()
+        EvolutionSamplingParticleFilter(model, N, resampling=scheme).filter(np.zeros((2, 2, 1)),
+                                                                           rng=np.random.default_rng(3))
+        kept = model.f_calls[1][1]                          # step-1 output, seen by f at step 2
+        distinct[scheme] = [len(np.unique(kept[r])) for r in range(2)]
+    assert distinct["systematic"] == [N, N]
+    assert all(d < 0.8 * N for d in distinct["multinomial"]), distinct
+
+
+def test_sbx_children_by_hand():
+    """Deb & Agrawal's spread factor: b = (2u)^(1/(eta+1)) for u <= 1/2, (1/(2(1-u)))^(1/(eta+1))
+    otherwise. eta = 1: u = 1/8 -> b = 1/2; u = 7/8 -> b = 2. eta = 0 (allowed): u = 1/4 -> 1/2,
+    u = 3/4 -> 2. Children 0.5[(1 +- b) p1 + (1 -+ b) p2] with p1 = 1, p2 = 3."""
+    p1, p2 = np.full(4, 1.0), np.full(4, 3.0)
+    for eta, u in ((1.0, [1 / 8, 7 / 8, 0.5, 0.5]), (0.0, [0.25, 0.75, 0.5, 0.5])):
+        c1, c2 = espf_module.sbx_children(p1, p2, np.array(u), eta)
+        b = np.array([0.5, 2.0, 1.0, 1.0])
+        np.testing.assert_allclose(c1, 0.5 * ((1 + b) * 1 + (1 - b) * 3), rtol=1e-12)
+        np.testing.assert_allclose(c2, 0.5 * ((1 - b) * 1 + (1 + b) * 3), rtol=1e-12)
+    with pytest.raises(ValueError, match=r"u must lie in \(0, 1\)"):
+        espf_module.sbx_children(p1[:1], p2[:1], np.array([1.0]), 2.0)
+    with pytest.raises(ValueError, match="SBX distribution index must be >= 0"):
+        espf_module.sbx_children(p1[:1], p2[:1], np.array([0.5]), -0.5)
+
+
+def test_espf_settings_reach_the_filter_and_errors_name_them():
+    model = FlatSpy1D()
+    m0, P0 = np.array([5.0]), np.array([[3.0]])
+    f = EvolutionSamplingParticleFilter(model, 2, sbx_eta=0.0, m0=m0, P0=P0)   # N = 2, eta = 0 allowed
+    np.testing.assert_array_equal(f.m0, m0)
+    np.testing.assert_array_equal(f.P0, P0)
+    with pytest.raises(ValueError, match=r"ESPF needs n_particles >= 2 \(crossover pairs\)"):
+        EvolutionSamplingParticleFilter(model, 1)
+    with pytest.raises(ValueError, match="n_particles must be >= 1"):
+        EvolutionSamplingParticleFilter(model, 0)
+    with pytest.raises(ValueError, match="mcmc_scale must be positive"):
+        EvolutionSamplingParticleFilter(model, 4, mcmc_scale=0.0)
+    with pytest.raises(ValueError, match="sbx_eta must be >= 0"):
+        EvolutionSamplingParticleFilter(model, 4, sbx_eta=-1.0)
+    with pytest.raises(TypeError, match="ESPF needs a model with additive Gaussian process noise Q"):
+        EvolutionSamplingParticleFilter(_NoH(), 4)
+
+
 # ------------------------------------------------------------------------------ 5. CMS-PF eq (3)
 class IdentityGaussModel:
     """x_k = x_{k-1} exactly (no noise); log p(z | x) = -(z - x)^2 / 2 (scalar)."""
