@@ -838,3 +838,62 @@ def test_cms_filter_carries_weights_between_steps():
         w = np.exp(-0.5 * k * (1.5 - x0) ** 2)
         assert est == pytest.approx(w @ x0 / w.sum(), rel=1e-12)
     assert not res.diagnostics["resampled"].any()
+
+
+def test_cms_filter_outputs_by_hand_without_resampling():
+    """Three steps, n_th = 0 (no resampling), identity dynamics, z = (1.5, 0.5, 2.0), r = 100
+    (the map particles land far away and are never kept): the weights after step k are
+    ∝ prod_{j<=k} exp(-(z_j - x)^2 / 2) over the prior draws x (eq 3 applied k times); the
+    estimate is their weighted mean (eq 4), P the weighted covariance about it, ess the
+    rounded 1 / sum w^2 (Step 3), map_share 0."""
+    f = CMSParticleFilter(IdentityGaussModel(), 6, eta=0.5, n_th=0.0, big_fraction=0.34)
+    z = np.array([1.5, 0.5, 2.0])
+    res = f.filter(np.broadcast_to(z[None, :, None], (2, 3, 1)).copy(), rng=np.random.default_rng(6),
+                   r=np.full((3, 2, 6, 1), 100.0))
+    x0 = f.sample_prior(np.random.default_rng(6), (2, 6))[..., 0]
+    lw = np.zeros((2, 6))
+    for k in range(3):
+        lw = lw - 0.5 * (z[k] - x0) ** 2
+        w = np.exp(lw - lw.max(axis=1, keepdims=True))
+        w /= w.sum(axis=1, keepdims=True)
+        est = np.sum(w * x0, axis=1)
+        np.testing.assert_allclose(res.x[:, k, 0], est, rtol=1e-12)
+        np.testing.assert_allclose(res.P[:, k, 0, 0], np.sum(w * (x0 - est[:, None]) ** 2, axis=1), rtol=1e-10)
+        np.testing.assert_array_equal(res.diagnostics["ess"][:, k], np.round(1 / np.sum(w * w, axis=1)))
+    d = res.diagnostics
+    np.testing.assert_array_equal(d["map_share"], 0.0)
+    assert d["resampled"].dtype == bool and not d["resampled"].any()
+    assert d["likelihood_evaluations"] == 2 * 6 * 3 and d["n_big"] == 2
+
+
+class PositionScripted(ScriptedModel2D):
+    """Like ScriptedModel2D, but the likelihood is looked up by POSITION: a particle exactly at
+    ``positions[i]`` gets ``loglik[k-1][run, i]``; anything else (a map particle) -1e6."""
+
+    def log_likelihood(self, y, x):
+        k = int(round(float(y[0, 0])))
+        eq = np.all(x[..., None, :] == self.positions, axis=-1)           # (runs, M, N)
+        table = np.take_along_axis(self.loglik[k - 1][:, None, :].repeat(x.shape[1], 1),
+                                   eq.argmax(-1)[..., None], axis=-1)[..., 0]
+        return np.where(eq.any(-1), table, -1e6)
+
+
+@pytest.mark.filterwarnings("error")
+def test_cms_step3_resamples_only_runs_below_n_th():
+    """Step 3 with n_th = 0.6 (2.4 particles), three runs. Step 1 weights: runs 0-1 (1/2, 1/2, ~0, ~0)
+    -> N_eff = round(2.0) = 2 < 2.4 -> resample (systematic: exactly two copies of c_0 and c_1);
+    run 2 W1[1] -> round(3.33) = 3 -> keep. Step 2 likelihood flat: runs 0-1 estimate
+    (c_0 + c_1) / 2 = (2, 0.5) with uniform weights; run 2 keeps W1[1]: (2.9, 2.1)."""
+    w1 = np.tile([0.5, 0.5, 1e-200, 1e-200], (3, 1))
+    w1[-1] = W1[1]
+    loglik = np.stack([np.log(w1), np.zeros((3, 4))])
+    f = CMSParticleFilter(PositionScripted(C2, loglik), 4, eta=0.5, n_th=0.6, big_fraction=0.25)
+    res = f.filter(scripted_measurements(3, 2), rng=np.random.default_rng(1), r=np.full((2, 3, 4, 2), 100.0))
+    d = res.diagnostics
+    np.testing.assert_array_equal(d["ess"][:, 0], [2, 2, 3])
+    np.testing.assert_array_equal(d["resampled"][:, 0], [True, True, False])
+    np.testing.assert_allclose(res.x[:, 0], [[2.0, 0.5], [2.0, 0.5], [2.9, 2.1]], rtol=1e-12)
+    np.testing.assert_allclose(res.x[:, 1], [[2.0, 0.5], [2.0, 0.5], [2.9, 2.1]], rtol=1e-12)
+    np.testing.assert_array_equal(d["ess"][:, 1], [4, 4, 3])            # resampled runs: 4 equal weights
+    np.testing.assert_array_equal(d["map_share"], 0.0)
+
