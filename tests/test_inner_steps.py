@@ -897,3 +897,13 @@ def test_cms_step3_resamples_only_runs_below_n_th():
     np.testing.assert_array_equal(d["ess"][:, 1], [4, 4, 3])            # resampled runs: 4 equal weights
     np.testing.assert_array_equal(d["map_share"], 0.0)
 
+
+
+def test_cms_step3_threshold_is_strict():
+    """Flat likelihood: 4 equal weights, N_eff = 4 = 1.0 * N; Step 3 resamples only when
+    N_eff < n_th N, so n_th = 1 does not resample here."""
+    loglik = np.zeros((2, 2, 4))
+    f = CMSParticleFilter(PositionScripted(C2, loglik), 4, n_th=1.0)
+    d = f.filter(scripted_measurements(2, 2), rng=np.random.default_rng(0), r=np.full((2, 2, 4, 2), 100.0)).diagnostics
+    np.testing.assert_array_equal(d["ess"], 4)
+    assert not d["resampled"].any()
