@@ -26,6 +26,7 @@ from scipy import stats
 from pfrepro import flow
 from pfrepro.filters import BootstrapParticleFilter, CMSParticleFilter
 from pfrepro.filters import espf as espf_module
+from pfrepro.filters.cmspf import map_particles, select_top_likelihood
 from pfrepro.filters.espf import EvolutionSamplingParticleFilter
 from pfrepro.filters.gpff import GaussianParticleFlowFilter, particle_moments
 from pfrepro.models import LinearGaussianModel
@@ -907,3 +908,46 @@ def test_cms_step3_threshold_is_strict():
     d = f.filter(scripted_measurements(2, 2), rng=np.random.default_rng(0), r=np.full((2, 2, 4, 2), 100.0)).diagnostics
     np.testing.assert_array_equal(d["ess"], 4)
     assert not d["resampled"].any()
+
+
+def test_map_particles_by_hand_two_pairs():
+    """Step 2.2 with n_big = 2 and a small particle away from 0 (so big - small != big + small).
+    x = (1, 2, 4, 7, 11), w_{k-1} p(z|x) ∝ (0.3, 0.1, 0.05, 0.15, 0.4): big = (11, 1) (largest
+    first), small = (4, 2) (smallest first); spreads 11 - 4 = 7, 1 - 2 = -1; x_hat =
+    0.3 + 0.2 + 0.2 + 1.05 + 4.4 = 6.15. Centres cycle (x_hat, big_1, big_2); x_hat takes the
+    best pair's spread: map j = centre + eta r_j spread with eta = 0.5, r = 1:
+    (6.15 + 3.5, 11 + 3.5, 1 - 0.5, 6.15 + 3.5, 11 + 3.5); their w_{k-1} is that of the big
+    particle at the centre (of the best particle for x_hat)."""
+    x = np.array([[[1.0], [2.0], [4.0], [7.0], [11.0]]])
+    lw = np.log(np.array([[0.3, 0.1, 0.05, 0.15, 0.4]]))
+    logw_prev = np.log(np.array([[0.1, 0.2, 0.3, 0.15, 0.25]]))
+    x2, lwm, idx = map_particles(x, lw, logw_prev, np.ones((1, 5, 1)), eta=0.5, n_big=2)
+    np.testing.assert_allclose(x2[0, :, 0], [9.65, 14.5, 0.5, 9.65, 14.5], rtol=1e-12)
+    np.testing.assert_allclose(np.exp(lwm[0]), [0.25, 0.25, 0.1, 0.25, 0.25], rtol=1e-12)
+    np.testing.assert_array_equal(idx, [0, 1, 2, 0, 1])
+    # a NaN weight counts as -inf: that particle is the smallest
+    lw_nan = lw.copy()
+    lw_nan[0, 1] = np.nan
+    x2, _, _ = map_particles(x, lw_nan, logw_prev, np.ones((1, 3, 1)), eta=1.0, n_big=1)
+    assert x2[0, 1, 0] == pytest.approx(11 + (11 - 2))
+
+
+def test_select_top_likelihood_edges():
+    """n_keep = M keeps everything (sorted by decreasing likelihood); on a large random row the
+    kept set is exactly the n_keep largest; errors name the argument."""
+    ll = np.array([[0.5, -1.0, 3.0, 2.0]])
+    np.testing.assert_array_equal(select_top_likelihood(ll, 4), [[2, 3, 0, 1]])
+    assert sorted(select_top_likelihood(ll, 4, sort=False)[0]) == [0, 1, 2, 3]
+    rng = np.random.default_rng(17)
+    big = rng.standard_normal((5, 1000))
+    for n_keep in (1, 2, 37, 500, 999):
+        got = select_top_likelihood(big, n_keep, sort=False)
+        want = np.argsort(-big, axis=1)[:, :n_keep]
+        for r in range(5):
+            assert set(got[r]) == set(want[r]), n_keep
+    with pytest.raises(ValueError, match="cannot keep 5 of 4 candidates"):
+        select_top_likelihood(ll, 5)
+    with pytest.raises(ValueError, match="n_keep must be >= 1"):
+        select_top_likelihood(ll, 0)
+    with pytest.raises(ValueError, match=r"loglik must be \(runs, M\), got shape \(4,\)"):
+        select_top_likelihood(ll[0], 1)
