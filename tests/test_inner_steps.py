@@ -26,7 +26,8 @@ from scipy import stats
 from pfrepro import flow
 from pfrepro.filters import BootstrapParticleFilter, CMSParticleFilter
 from pfrepro.filters import espf as espf_module
-from pfrepro.filters.cmspf import map_particles, select_top_likelihood
+from pfrepro.chaos import ChaosCarrier
+from pfrepro.filters.cmspf import OracleCMSParticleFilter, map_particles, select_top_likelihood
 from pfrepro.filters.espf import EvolutionSamplingParticleFilter
 from pfrepro.filters.gpff import GaussianParticleFlowFilter, particle_moments
 from pfrepro.models import LinearGaussianModel
@@ -951,3 +952,32 @@ def test_select_top_likelihood_edges():
         select_top_likelihood(ll, 0)
     with pytest.raises(ValueError, match=r"loglik must be \(runs, M\), got shape \(4,\)"):
         select_top_likelihood(ll[0], 1)
+
+
+def test_oracle_cms_centres_the_map_on_the_true_state():
+    """The oracle's Step 2.2 centre is x_true (not x_hat / big particles): with eta = 1e-9 every
+    map particle sits on x_true = z = 1.5 (the likelihood's peak) to 1e-8, so at step 1 the N kept
+    particles are all map particles and the estimate is 1.5 (the particles then stay there)."""
+    f = OracleCMSParticleFilter(IdentityGaussModel(), 5, eta=1e-9, n_th=0.0)
+    res = f.filter(np.full((2, 3, 1), 1.5), rng=np.random.default_rng(2), x_true=np.full((2, 4, 1), 1.5))
+    np.testing.assert_allclose(res.x, 1.5, atol=1e-7)
+    np.testing.assert_array_equal(res.diagnostics["map_share"][:, 0], 1.0)   # later: ties with x_pred
+
+
+def test_cms_settings_reach_the_filter():
+    """n_big = min(max(1, round(big_fraction N)), N // 2); m0/P0 overrides; a carrier instance is
+    used as given; N = 2 is allowed."""
+    model = IdentityGaussModel()
+    for N, bf, want in ((20, 0.1, 2), (20, 0.01, 1), (20, 0.5, 10), (5, 1.0, 2), (2, 0.5, 1)):
+        assert CMSParticleFilter(model, N, big_fraction=bf).n_big == want, (N, bf)
+    c = ChaosCarrier("chebyshev")
+    f = CMSParticleFilter(model, 4, carrier=c, m0=[2.0], P0=[[3.0]])
+    assert f.carrier is c
+    np.testing.assert_array_equal(f.m0, [2.0])
+    np.testing.assert_array_equal(f.P0, [[3.0]])
+    with pytest.raises(ValueError, match=r"CMSParticleFilter needs n_particles >= 2 \(big and small"):
+        CMSParticleFilter(model, 1)
+    with pytest.raises(ValueError, match="big_fraction"):
+        CMSParticleFilter(model, 4, big_fraction=1.5)
+    with pytest.raises(ValueError, match="n_th"):
+        CMSParticleFilter(model, 4, n_th=-0.1)
