@@ -981,3 +981,20 @@ def test_cms_settings_reach_the_filter():
         CMSParticleFilter(model, 4, big_fraction=1.5)
     with pytest.raises(ValueError, match="n_th"):
         CMSParticleFilter(model, 4, n_th=-0.1)
+
+
+@pytest.mark.parametrize("scheme", ["systematic", "stratified", "multinomial", "residual"])
+def test_resample_uses_the_named_scheme(scheme):
+    """resample(w, rng, scheme) = sorted ancestors of resample_counts(w, rng, scheme) with the same
+    stream; the default is systematic; the named wrappers are their scheme."""
+    from pfrepro.filters import resampling as rs
+
+    w = np.random.default_rng(1).dirichlet(np.full(50, 0.3), size=3)
+    got = rs.resample(w, np.random.default_rng(2), scheme)
+    np.testing.assert_array_equal(got, rs.indices_from_counts(rs.resample_counts(w, np.random.default_rng(2), scheme)))
+    wrapper = getattr(rs, f"{scheme}_resample")
+    np.testing.assert_array_equal(wrapper(w, np.random.default_rng(2)), got)
+    np.testing.assert_array_equal(rs.resample(w, np.random.default_rng(2)),
+                                  rs.resample(w, np.random.default_rng(2), "systematic"))
+    if scheme != "systematic":   # the schemes really differ on these weights and this stream
+        assert np.any(got != rs.resample(w, np.random.default_rng(2), "systematic"))
