@@ -1064,3 +1064,36 @@ def test_espf_crossover_children_are_kept_and_runs_are_independent():
     three = f.filter(y, rng=RunStreams.from_entropy(9, 3))
     np.testing.assert_array_equal(one.x[0], three.x[0])
     np.testing.assert_array_equal(one.diagnostics["acceptance"][0], three.diagnostics["acceptance"][0])
+
+
+def test_cms_step_reports_its_internals():
+    """CMSStep (Figs. 4-6 of the paper) carries the predicted particles and likelihoods, the map
+    particles and likelihoods and the pooled indices; without the map, no map particles and the
+    identity selection."""
+    st = _cms_step(2.6, [10.0, -0.4 / 1.5, 10.0, 10.0])
+    np.testing.assert_array_equal(st.x_pred, X_PREV)                       # identity dynamics
+    np.testing.assert_allclose(st.ll_pred[0], -0.5 * (2.6 - X_PREV[0, :, 0]) ** 2)
+    assert st.x_map.shape == (1, 4, 1)
+    np.testing.assert_allclose(st.x_map[0, 1, 0], 2.6)
+    np.testing.assert_allclose(st.ll_map[0], -0.5 * (2.6 - st.x_map[0, :, 0]) ** 2)
+    plain = _cms_step(2.6, [10.0] * 4, use_map=False)
+    np.testing.assert_array_equal(plain.x_pred, X_PREV)
+    np.testing.assert_array_equal(plain.x, X_PREV)
+    np.testing.assert_allclose(plain.ll_pred[0], -0.5 * (2.6 - X_PREV[0, :, 0]) ** 2)
+    assert plain.x_map.shape == (1, 0, 1) and plain.ll_map.shape == (1, 0)
+    np.testing.assert_array_equal(plain.selected, [[0, 1, 2, 3]])
+
+
+def test_cms_step3_uses_the_requested_resampling_scheme():
+    """As for the PF: Step 3 resampling of (1/2, 1/2, ~0, ~0) is always (2, 2, 0, 0) with the
+    systematic scheme (step-2 estimate (2, 0.5)); multinomial gives other counts in most runs."""
+    runs = 31
+    w1 = np.tile([0.5, 0.5, 1e-200, 1e-200], (runs, 1))
+    loglik = np.stack([np.log(w1), np.zeros((runs, 4))])
+    est = {}
+    for scheme in ("systematic", "multinomial"):
+        f = CMSParticleFilter(PositionScripted(C2, loglik), 4, n_th=0.6, resampling=scheme)
+        est[scheme] = f.filter(scripted_measurements(runs, 2), rng=np.random.default_rng(3),
+                               r=np.full((2, runs, 4, 2), 100.0)).x[:, 1]
+    np.testing.assert_allclose(est["systematic"], np.broadcast_to([2.0, 0.5], (runs, 2)), rtol=1e-12)
+    assert np.sum(np.any(np.abs(est["multinomial"] - [2.0, 0.5]) > 1e-9, axis=1)) >= 5
