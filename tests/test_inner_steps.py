@@ -724,12 +724,14 @@ def test_espf_uses_the_requested_resampling_scheme(monkeypatch):
 
 def test_sbx_children_by_hand():
     """Deb & Agrawal's spread factor: b = (2u)^(1/(eta+1)) for u <= 1/2, (1/(2(1-u)))^(1/(eta+1))
-    otherwise. eta = 1: u = 1/8 -> b = 1/2; u = 7/8 -> b = 2. eta = 0 (allowed): u = 1/4 -> 1/2,
-    u = 3/4 -> 2. Children 0.5[(1 +- b) p1 + (1 -+ b) p2] with p1 = 1, p2 = 3."""
-    p1, p2 = np.full(4, 1.0), np.full(4, 3.0)
-    for eta, u in ((1.0, [1 / 8, 7 / 8, 0.5, 0.5]), (0.0, [0.25, 0.75, 0.5, 0.5])):
+    otherwise. eta = 1: u = 1/8 -> b = 1/2; u = 7/8 -> b = 2; u = 15/16 -> b = sqrt(8).
+    eta = 0 (allowed): u = 1/4 -> 1/2, u = 3/4 -> 2, u = 15/16 -> 8.
+    Children 0.5[(1 +- b) p1 + (1 -+ b) p2] with p1 = 1, p2 = 3."""
+    p1, p2 = np.full(5, 1.0), np.full(5, 3.0)
+    for eta, u, b in ((1.0, [1 / 8, 7 / 8, 0.5, 0.5, 15 / 16], [0.5, 2.0, 1.0, 1.0, np.sqrt(8)]),
+                      (0.0, [0.25, 0.75, 0.5, 0.5, 15 / 16], [0.5, 2.0, 1.0, 1.0, 8.0])):
         c1, c2 = espf_module.sbx_children(p1, p2, np.array(u), eta)
-        b = np.array([0.5, 2.0, 1.0, 1.0])
+        b = np.array(b)
         np.testing.assert_allclose(c1, 0.5 * ((1 + b) * 1 + (1 - b) * 3), rtol=1e-12)
         np.testing.assert_allclose(c2, 0.5 * ((1 - b) * 1 + (1 + b) * 3), rtol=1e-12)
     with pytest.raises(ValueError, match=r"u must lie in \(0, 1\)"):
