@@ -1099,3 +1099,36 @@ def test_cms_step3_uses_the_requested_resampling_scheme():
                                r=np.full((2, runs, 4, 2), 100.0)).x[:, 1]
     np.testing.assert_allclose(est["systematic"], np.broadcast_to([2.0, 0.5], (runs, 2)), rtol=1e-12)
     assert np.sum(np.any(np.abs(est["multinomial"] - [2.0, 0.5]) > 1e-9, axis=1)) >= 5
+
+
+# ------------------------------------------------------------------------------ shared base (filters/base.py)
+@pytest.mark.parametrize("m", [1, 2, 3])
+def test_gaussian_loglik_is_the_multivariate_normal_logpdf(m):
+    """log N(nu; 0, S) per run, against scipy, for m = 1, 2, 3 (the constant is -m/2 log 2 pi: a
+    wrong constant is invisible at m = 1 only). IMM mode probabilities will rest on this."""
+    from pfrepro.filters.base import gaussian_loglik
+
+    rng = np.random.default_rng(m)
+    A = rng.standard_normal((4, m, m))
+    S = A @ np.swapaxes(A, -1, -2) + 0.5 * np.eye(m)
+    nu = rng.standard_normal((4, m))
+    want = [stats.multivariate_normal(np.zeros(m), S[r]).logpdf(nu[r]) for r in range(4)]
+    np.testing.assert_allclose(gaussian_loglik(nu, S), want, rtol=1e-12)
+
+
+def test_kalman_family_log_evidence_is_the_per_run_sum():
+    from pfrepro.filters import KalmanFilter
+
+    model = _linear_2d()
+    y = np.random.default_rng(12).standard_normal((3, 5, 1))
+    d = KalmanFilter(model).filter(y).diagnostics
+    assert d["log_evidence"].shape == (3,)
+    np.testing.assert_allclose(d["log_evidence"], d["log_likelihood"].sum(axis=1), rtol=1e-12)
+
+
+def test_filter_prior_override_is_checked_against_dim_x():
+    model = _linear_2d()
+    with pytest.raises(ValueError, match="P0"):
+        BootstrapParticleFilter(model, 10, P0=np.eye(3))
+    with pytest.raises(ValueError, match="m0"):
+        BootstrapParticleFilter(model, 10, m0=np.zeros(3))
