@@ -106,7 +106,8 @@ def truth_system(sc=None) -> JumpMarkovSystem:
     w = math.radians(sc["turn_rate_deg"])
     T, q, meas, x0 = sc["T_s"], sc["q_truth"], _meas(sc), np.array(sc["x0"])
     models = [cv_model(T, q, meas, x0), coupled_ct_model(T, w, q, meas, x0), coupled_ct_model(T, -w, q, meas, x0)]
-    return JumpMarkovSystem(models, np.eye(3), initial_probs=(1.0, 0.0, 0.0), names=["CV", "CT left", "CT right"])
+    return JumpMarkovSystem(models, np.eye(3), initial_probs=(1.0, 0.0, 0.0), names=["CV", "CT left", "CT right"],
+                            schedule=schedule(sc))
 
 
 def filter_system(sc=None) -> JumpMarkovSystem:
@@ -125,7 +126,7 @@ def simulate(sc=None, runs: int | None = None, seed: int = SEEDS["main"], start:
     """Truth and measurements of runs ``start .. start + runs - 1`` (per-run streams)."""
     sc = sc or SCENARIO
     runs = sc["runs"] if runs is None else runs
-    return truth_system(sc).simulate(sc["duration"], runs, truth_streams(seed, runs, start), schedule=schedule(sc))
+    return truth_system(sc).simulate(sc["duration"], runs, truth_streams(seed, runs, start))
 
 
 def immpf(sc=None, N=None, **over) -> IMMParticleFilter:
@@ -217,7 +218,7 @@ def run(builders: dict, sc=None, runs: int | None = None, seed: int = SEEDS["mai
         return Run(sim, res, seed)
     bounds = np.linspace(0, runs, chunks + 1).astype(int)
     jobs = [(sc, builders, int(b - a), int(a), seed) for a, b in zip(bounds[:-1], bounds[1:]) if b > a]
-    sim, res = _cat_results(list(executor.map(_chunk, jobs)))
+    sim, res = _cat_results([f.result() for f in [executor.submit(_chunk, j) for j in jobs]])
     return Run(sim, res, seed)
 
 

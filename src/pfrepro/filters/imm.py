@@ -348,9 +348,9 @@ class IMMPFOR(IMMParticleFilter):
         wj = (u[:, :, None] * w).reshape(R_, r * N)
         wj = wj / wj.sum(axis=1, keepdims=True)
         flat = x.reshape(R_, r * N, n)
-        m = np.einsum("al,ali->ai", wj, flat)
+        m = (wj[:, None, :] @ flat)[:, 0]
         dev = flat - m[:, None, :]
-        C = np.einsum("al,ali,alj->aij", wj, dev, dev)
+        C = np.swapaxes(dev * wj[..., None], -1, -2) @ dev
         scale = np.maximum(np.einsum("aii->ai", C), 1e-300)
         C = C + np.einsum("ai,ij->aij", 1e-9 * scale, np.eye(n))               # jitter: C may be singular
         L = np.linalg.cholesky(C)
@@ -358,46 +358,51 @@ class IMMPFOR(IMMParticleFilter):
         z = dev @ np.swapaxes(Linv, -1, -2)
         return m, L, z.reshape(R_, r, N, n)
 
-    def replacement(self, x, w, u, M, counts, other_slots):
+    def replacement(self, x, w, u, M, counts, other_slots, do=None):
         """Eqs 22-25 for the modes of ``R`` runs; returns the new particle sets (R, r, N, n) and |S^j|.
 
         ``x`` (R, r, N, n) particles after weighting, ``w`` (R, r, N) their weights, ``u`` (R, r)
         the model probabilities, ``M`` (R, r, r) the mixing probabilities mu_{i|j}(k|k),
         ``counts`` (R, r, N) systematic offspring counts of every mode, ``other_slots``
-        (R, r, N) uniform slot indices that pick the parents x_a^i, i != j.
+        (R, r, N) uniform slot indices that pick the parents x_a^i, i != j; ``do`` (R, r)
+        the modes to resample (default all). Modes not in ``do`` are returned unchanged.
+        Only the extra-copy slots are computed (flat arrays over all of them at once).
         """
         R_, r, N, n = x.shape
+        do = np.ones((R_, r), dtype=bool) if do is None else np.asarray(do, bool)
         m, L, z = self.joint_whitening(x, w, u)                                   # (24)
-        logp = -0.5 * np.sum(z * z, axis=-1) - 0.5 * n * np.log(2 * np.pi)
+        logp = -0.5 * np.einsum("arni,arni->arn", z, z) - 0.5 * n * np.log(2 * np.pi)
         logL = math.lgamma(1 + 1 / n) - (np.log(r * N) + logp + np.log(unit_ball_volume(n))) / n   # (22), (25)
         logstep = np.log(self.d) + logL                                          # (R, r, N) per particle
         idx = _indices_from_counts(counts)                                       # (R, r, N) ancestors
         a_ = np.arange(R_)[:, None, None]
         r_ = np.arange(r)[None, :, None]
-        z_res = z[a_, r_, idx]                                                    # resampled sets, whitened
-        s_res = logstep[a_, r_, idx]
+        out = x.copy()
+        out[do] = x[a_, r_, idx][do]                                             # standard resampled sets
+        n_disc = (counts == 0).sum(axis=-1)                                       # |S^j| = number of extra copies
         is_dup = np.zeros((R_, r, N), dtype=bool)
         is_dup[..., 1:] = idx[..., 1:] == idx[..., :-1]
-        n_disc = (counts == 0).sum(axis=-1)                                       # |S^j| = number of extra copies
+        is_dup &= do[..., None]
+        if not is_dup.any():
+            return out, n_disc
+        # m-th extra copy (slot order) <-> m-th discarded particle (index order)
         disc_order = np.argsort(counts > 0, axis=-1, kind="stable")               # discarded indices first
-        rank = np.clip(np.cumsum(is_dup, axis=-1) - 1, 0, N - 1)
-        z_s = np.take_along_axis(z, np.take_along_axis(disc_order, rank, axis=-1)[..., None], axis=2)
-        new = np.zeros((R_, r, N, n))
+        rank = np.cumsum(is_dup, axis=-1) - 1
+        A, J, Sl = np.nonzero(is_dup)                                             # K extra-copy slots
+        z_s = z[A, J, disc_order[A, J, rank[A, J, Sl]]]                           # (K, n)
+        new = np.zeros((A.size, n))
         for i in range(r):
-            # parent from mode i for every slot of every target mode j
-            own = np.arange(r)[None, :, None] == i
-            slot_i = np.where(own, np.arange(N)[None, None, :], other_slots)
-            z_a = z_res[np.arange(R_)[:, None, None], i, slot_i]                 # (R, r_j, N, n)
-            logL_a = s_res[np.arange(R_)[:, None, None], i, slot_i]
+            # parent from mode i: the slot's own copy (i == j) or a uniformly drawn slot of mode i
+            slot = np.where(J == i, Sl, other_slots[A, J, Sl])
+            par = idx[A, i, slot]
+            z_a = z[A, i, par]
             dv = z_s - z_a
-            dist = np.sqrt(np.sum(dv * dv, axis=-1))
+            dist = np.sqrt(np.einsum("ki,ki->k", dv, dv))
             # fraction of the way to x_s: d L / ||z_s - z_a||, capped at 1 (never past x_s)
             with np.errstate(divide="ignore", over="ignore"):
-                lam = np.exp(np.minimum(logL_a - np.log(dist), 0.0))
-            new += M[:, i, :, None, None] * (z_a + lam[..., None] * dv)             # (23)
-        x_new = m[:, None, None, :] + new @ np.swapaxes(L, -1, -2)[:, None]
-        x_res = x[a_, r_, idx]
-        out = np.where(is_dup[..., None], x_new, x_res)
+                lam = np.exp(np.minimum(logstep[A, i, par] - np.log(dist), 0.0))
+            new += M[A, i, J][:, None] * (z_a + lam[:, None] * dv)               # (23)
+        out[A, J, Sl] = m[A] + np.einsum("kij,kj->ki", L[A], new)
         return out, n_disc
 
     def _resample(self, x, w, do, u_next, M_next, rng, k, cost):
@@ -410,12 +415,10 @@ class IMMPFOR(IMMParticleFilter):
         uu = rs.random((sel.size, r))
         other = rs.integers(0, N, size=(sel.size, r, N))
         counts = systematic_counts(w[sel], uu, N)
-        new, n_disc = self.replacement(x[sel], w[sel], u_next[sel], M_next[sel], counts, other)
-        cost["density"][sel] += r * N
-        xs = x[sel]
         dsel = do[sel]
-        xs[dsel] = new[dsel]
-        x[sel] = xs
+        new, n_disc = self.replacement(x[sel], w[sel], u_next[sel], M_next[sel], counts, other, dsel)
+        cost["density"][sel] += r * N
+        x[sel] = new
         replaced[sel] = np.where(dsel, n_disc, 0)
         w = w.copy()
         w[do] = 1.0 / N

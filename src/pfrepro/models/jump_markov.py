@@ -137,9 +137,11 @@ class JumpMarkovSystem:
     transition_matrix : (r, r), row = from, column = to, rows sum to 1.
     initial_probs : (r,) initial mode probabilities (default uniform, as Zhou et al. sec 3).
     names : optional mode names for tables and plots.
+    schedule : optional fixed mode timeline ``(T + 1,)`` used by :meth:`simulate` when it is
+        given none (so a scheduled-manoeuvre truth can be handed to a generic Monte Carlo runner).
     """
 
-    def __init__(self, models, transition_matrix, initial_probs=None, names=None):
+    def __init__(self, models, transition_matrix, initial_probs=None, names=None, schedule=None):
         self.models = list(models)
         if not self.models:
             raise ValueError("models must hold at least one mode model")
@@ -159,6 +161,7 @@ class JumpMarkovSystem:
         self.dim_x, self.dim_y = m0.dim_x, m0.dim_y
         self.measurement_noise = m0.measurement_noise
         self.x0, self.m0, self.P0 = m0.x0, m0.m0, m0.P0
+        self.schedule = None if schedule is None else np.asarray(schedule)
 
     # the shared measurement model
     @property
@@ -184,7 +187,8 @@ class JumpMarkovSystem:
     def simulate(self, T: int, runs: int = 1, rng=None, schedule=None) -> JumpMarkovSimulation:
         """Simulate modes, states and measurements of ``runs`` runs.
 
-        ``schedule=None`` draws the modes from the chain; a ``(T + 1,)`` integer array
+        ``schedule=None`` uses the system's own ``schedule`` if it has one, else draws the
+        modes from the chain; a ``(T + 1,)`` integer array
         (see :func:`schedule_from_segments`) fixes the same mode timeline for every run
         (a scheduled manoeuvre; the chain is then not used for the truth).
         Per step: one ``standard_normal((runs, dim_x))`` draw for the process noise (mapped
@@ -194,6 +198,8 @@ class JumpMarkovSystem:
         T = check_positive_int(T, "T")
         runs = check_positive_int(runs, "runs")
         check_rng(rng)
+        if schedule is None:
+            schedule = self.schedule
         if schedule is None:
             modes = self.simulate_modes(T, runs, rng)
         else:
