@@ -148,7 +148,8 @@ class IMMParticleFilter(Filter):
     m0, P0 : override the initial distribution N(m0, P0) shared by every mode.
 
     With r = 1 (Pi = [[1]]) and ``n_th = 0`` this is the bootstrap PF with systematic
-    resampling at every step, bit for bit (``tests/test_imm.py``).
+    resampling at every step (same random numbers and arithmetic, up to the last bits of the
+    likelihood; ``tests/test_imm.py``).
 
     Diagnostics: ``mode_probs`` (runs, T, r); ``model_estimates`` (runs, T, r, dim_x);
     ``log_model_likelihood`` (runs, T, r); ``ess`` (runs, T, r) before resampling;
@@ -168,6 +169,20 @@ class IMMParticleFilter(Filter):
             raise ValueError(f"model_likelihood must be one of {MODEL_LIKELIHOODS}, got {model_likelihood!r}")
         self.model_likelihood = model_likelihood
         self.n_th = check_probability(n_th, "n_th")
+        noise = system.measurement_noise
+        if hasattr(noise, "components") or np.any(getattr(noise, "mean", 0.0) != 0):
+            self._meas_whiten = None          # mixture / non-zero mean: use the noise's own logpdf
+        else:
+            Lr = np.linalg.cholesky(noise.cov)
+            self._meas_whiten = np.linalg.inv(Lr).T
+            self._meas_lognorm = -0.5 * noise.cov.shape[0] * np.log(2 * np.pi) - np.sum(np.log(np.diag(Lr)))
+
+    def particle_log_likelihood(self, eps):
+        """Eq 13: log N(eps; 0, R) for residuals ``eps`` (runs, r, N, m)."""
+        if self._meas_whiten is None:
+            return self.system.measurement_noise.logpdf(eps)
+        z = eps @ self._meas_whiten                       # stacked matmul (no tall 2-D BLAS call)
+        return -0.5 * np.einsum("...i,...i->...", z, z) + self._meas_lognorm
 
     # -- inner steps (each is tested on a hand-computed case) ------------------------------------
     def interact(self, x, w, mu, rng):
@@ -260,7 +275,7 @@ class IMMParticleFilter(Filter):
                 raise FilterDivergenceError(f"{self.name}: particles became non-finite at step {k}")
             yk = y[:, k - 1][:, None, None, :]
             eps = sysm.residual_y(yk, sysm.h(x))                                 # (9)-(10)
-            ll = sysm.measurement_noise.logpdf(eps)                               # (13)
+            ll = self.particle_log_likelihood(eps)                                # (13)
             cost["likelihood"] += r * N
             lam = self.model_log_likelihood(eps, logw, ll)                        # (11)-(15)
             u = self.update_mode_probabilities(c, lam)                            # (16)

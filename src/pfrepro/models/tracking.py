@@ -166,8 +166,10 @@ class RadarTrackingModel(StateSpaceModel):
             return super().sample_transition(x, k, rng)
         B = self.noise_factor
         z = rng.standard_normal(x.shape[:-1] + (B.shape[1],))
-        out = (z.reshape(-1, B.shape[1]) @ B.T).reshape(x.shape)
-        out += (x.reshape(-1, 6) @ self.F.T).reshape(x.shape)
+        # stacked matmuls on the batch as it is: reshaping to one tall 2-D product sends it to a
+        # threaded BLAS call that is many times slower on a loaded machine
+        out = z @ B.T
+        out += x @ self.F.T
         return out
 
     def jacobian_f(self, x, k):
