@@ -214,6 +214,9 @@ class JumpMarkovSystem:
         x = np.empty((runs, T + 1, n))
         y = np.empty((runs, T, self.dim_y))
         x[:, 0] = self.x0
+        gaussian_v = not hasattr(self.measurement_noise, "components") and not np.any(self.measurement_noise.mean)
+        if gaussian_v:
+            root_v = np.linalg.cholesky(self.measurement_noise.cov)
         for k in range(1, T + 1):
             z = rng.standard_normal((runs, n))
             prev = x[:, k - 1]
@@ -221,9 +224,14 @@ class JumpMarkovSystem:
             for j, m in enumerate(self.models):
                 sel = modes[:, k] == j
                 if sel.any():
-                    nxt[sel] = m.f(prev[sel], k) + z[sel] @ roots[j].T
+                    # einsum, not a tall matmul: the result of row i must not depend on the batch size
+                    nxt[sel] = m.f(prev[sel], k) + np.einsum("ij,rj->ri", roots[j], z[sel])
             x[:, k] = nxt
-            y[:, k - 1] = self.h(nxt) + self.measurement_noise.sample(rng, runs)
+            if gaussian_v:
+                v = np.einsum("ij,rj->ri", root_v, rng.standard_normal((runs, self.dim_y)))
+            else:
+                v = self.measurement_noise.sample(rng, runs)
+            y[:, k - 1] = self.h(nxt) + v
         return JumpMarkovSimulation(x=x, y=y, modes=modes)
 
     def __repr__(self) -> str:

@@ -157,7 +157,9 @@ class RadarTrackingModel(StateSpaceModel):
     noise_factor = None
 
     def f(self, x, k):
-        return x @ self.F.T
+        # einsum: row i of a batch must not depend on the batch size (a 2-D matmul goes to BLAS,
+        # whose blocking, and so its last bits, change with the number of rows)
+        return np.einsum("ij,...j->...i", self.F, x)
 
     def sample_transition(self, x, k, rng):
         """x_k = F x + w. With a low-rank factor B (Q = B B^T) only rank(Q) normals are drawn per state
