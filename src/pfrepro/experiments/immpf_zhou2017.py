@@ -26,7 +26,12 @@ from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter
 from ..filters.imm import IMMKalman, IMMParticleFilter, IMMPFOR
 from ..models.jump_markov import JumpMarkovSystem, schedule_from_segments
 from ..models.tracking import IDX_POS, IDX_VEL, ca_model, coupled_ct_model, ct_model, cv_model
-from ..montecarlo import filter_streams, truth_streams
+from ..montecarlo import filter_streams, run_monte_carlo, truth_streams
+
+import inspect as _inspect
+
+#: True once ``run_monte_carlo`` takes ``executor=`` (package v2); :func:`run` then delegates to it
+_ENGINE_EXECUTOR = "executor" in _inspect.signature(run_monte_carlo).parameters
 
 __all__ = ["PAPER", "SCENARIO", "ALTERNATIVES", "SEEDS", "scenario", "truth_system", "filter_system",
            "schedule", "simulate", "immpf", "immpfor", "imm_ekf", "imm_ukf", "run", "Run", "errors",
@@ -62,6 +67,7 @@ SCENARIO = {
     "d": 1.0,                        # step coefficient: one neighbour spacing
     "model_likelihood": "gaussian",  # eqs 11-15 as named (Gaussian on the residual mean); "mean" shown too
     "runs_robust": 50,               # runs per robustness scenario (budget; common truths within a scenario)
+    "runs_lik": 50,                  # runs of the second model-likelihood reading (budget; main's first 50 truths)
 }
 
 #: alternative plausible scenarios for the robustness check, fixed with SCENARIO (one change each)
@@ -167,6 +173,17 @@ class Run:
     def x_true(self):
         return self.sim.x[:, 1:]
 
+    def head(self, n: int) -> "Run":
+        """The first ``n`` runs (per-run streams: identical to an experiment run with ``runs=n``)."""
+        from ..filters.base import FilterResult
+        from ..models.base import Simulation
+
+        sim = Simulation(self.sim.x[:n], self.sim.y[:n])
+        res = {k: FilterResult(r.x[:n], None if r.P is None else r.P[:n],
+                               {d: (v[:n] if isinstance(v, np.ndarray) else v) for d, v in r.diagnostics.items()})
+               for k, r in self.results.items()}
+        return Run(sim, res, self.seed)
+
 
 def _chunk(args):
     """Worker: runs [start, start + n) of one experiment (module level so an executor can pickle it)."""
@@ -213,6 +230,11 @@ def run(builders: dict, sc=None, runs: int | None = None, seed: int = SEEDS["mai
     """
     sc = sc or SCENARIO
     runs = sc["runs"] if runs is None else runs
+    if _ENGINE_EXECUTOR:   # package v2: the engine's runner (same streams, same chunking rule)
+        filters = {name: globals()[fn](sc, **kw) for name, (fn, kw) in builders.items()}
+        mc = run_monte_carlo(truth_system(sc), filters, sc["duration"], runs, seed, executor=executor,
+                             chunks=None if executor is None else chunks, progress=False)
+        return Run(mc.sim, mc.results, seed)
     if executor is None:
         sim, res = _chunk((sc, builders, runs, 0, seed))
         return Run(sim, res, seed)

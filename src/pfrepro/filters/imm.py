@@ -221,9 +221,13 @@ class IMMParticleFilter(Filter):
     @staticmethod
     def update_mode_probabilities(c, log_lik):
         """Eq 16: u_j proportional to Lambda_j c_j, from log Lambda (runs, r) (log domain)."""
-        with np.errstate(divide="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore"):
             a = log_lik + np.log(c)
-        a = a - np.max(a, axis=-1, keepdims=True)
+            a = np.where(np.isnan(a), -np.inf, a)
+            top = np.max(a, axis=-1, keepdims=True)
+            # every model likelihood underflowed (or is NaN): keep the predicted probabilities c
+            dead = ~np.isfinite(top)
+            a = np.where(dead, np.log(np.maximum(c, 1e-300)), a - np.where(dead, 0.0, top))
         u = np.exp(a)
         return u / u.sum(axis=-1, keepdims=True)
 
@@ -366,8 +370,11 @@ class IMMPFOR(IMMParticleFilter):
         m = (wj[:, None, :] @ flat)[:, 0]
         dev = flat - m[:, None, :]
         C = np.swapaxes(dev * wj[..., None], -1, -2) @ dev
-        scale = np.maximum(np.einsum("aii->ai", C), 1e-300)
-        C = C + np.einsum("ai,ij->aij", 1e-9 * scale, np.eye(n))               # jitter: C may be singular
+        # regularisation: the weighted covariance is singular when the weight sits on a few
+        # particles (or on copies of one); add 1e-6 of the unweighted spread of all r N particles
+        # (never degenerate: every mode's prediction adds noise) plus an absolute floor
+        spread = np.var(flat, axis=1)
+        C = C + np.einsum("ai,ij->aij", 1e-6 * spread + 1e-12, np.eye(n))
         L = np.linalg.cholesky(C)
         Linv = np.linalg.inv(L)
         z = dev @ np.swapaxes(Linv, -1, -2)
