@@ -356,3 +356,38 @@ def test_experiment_runner_chunks_are_bit_identical():
                           par.results["IMMPFOR"].diagnostics["density_evals"])
     # the truth follows the schedule: CV outside the turns, constant speed in the turns (q small)
     assert np.array_equal(serial.sim.modes[0], E.schedule(sc))
+
+
+def test_immpfor_replacement_gets_updated_probabilities(monkeypatch):
+    """Step 7 uses u(k) and mu_{i|j}(k|k) (eq 6 with the updated u), not those of step k-1."""
+    sysm = tracking_system()
+    sim = sysm.simulate(6, 2, RunStreams.from_entropy(4, 2))
+    f = IMMPFOR(sysm, 40, n_th=1.0)
+    calls = []
+    orig = IMMPFOR.replacement
+
+    def spy(self, x, w, u, M, counts, other, do=None):
+        calls.append((u.copy(), M.copy()))
+        return orig(self, x, w, u, M, counts, other, do)
+
+    monkeypatch.setattr(IMMPFOR, "replacement", spy)
+    res = f.filter(sim.y, RunStreams.from_entropy(5, 2))
+    assert len(calls) == 6
+    for k, (u, M) in enumerate(calls):
+        up = res.diagnostics["mode_probs"][:, k]
+        assert np.allclose(u, up)
+        assert np.allclose(M, mixing_probabilities(up, sysm.Pi)[1])
+
+
+def test_ess_and_resampling_rule():
+    """Eq 19: flat likelihood -> N_eff = N and no resampling; otherwise resampled == (N_eff < n_th N)."""
+    sysm = scalar_system(R=1e12)
+    sim = sysm.simulate(5, 2, RunStreams.from_entropy(1, 2))
+    res = IMMParticleFilter(sysm, 50, n_th=0.5).filter(sim.y, RunStreams.from_entropy(2, 2))
+    assert np.allclose(res.diagnostics["ess"], 50.0) and not res.diagnostics["resampled"].any()
+    sysm = scalar_system(R=0.01)
+    sim = sysm.simulate(8, 3, RunStreams.from_entropy(1, 3))
+    res = IMMParticleFilter(sysm, 50, n_th=0.5).filter(sim.y, RunStreams.from_entropy(2, 3))
+    e = res.diagnostics["ess"]
+    assert np.all((e >= 1 - 1e-9) & (e <= 50 + 1e-9)) and e.min() < 25
+    assert np.array_equal(res.diagnostics["resampled"], e < 25)
