@@ -30,7 +30,12 @@ import math
 import numpy as np
 
 from ..rng import take_runs
-from ..validation import check_positive_int, check_probability
+from ..validation import as_covariance, as_vector, check_positive_int, check_probability
+
+try:  # package v2 model contract
+    from ..models.base import require_capabilities
+except ImportError:  # pragma: no cover - before the contract existed
+    require_capabilities = None
 from .base import Filter, FilterDivergenceError, FilterResult, gaussian_loglik
 from .kalman import symmetrize
 from .particle import normalize_log_weights
@@ -90,6 +95,21 @@ def _indices_from_counts(counts):
     n_out = int(counts.reshape(rows, M)[0].sum())
     idx = np.repeat(np.tile(np.arange(M), rows), counts.ravel())
     return idx.reshape(lead + (n_out,))
+
+
+def _init_on_system(filt, system, m0, P0, mode_requirements):
+    """Filter set-up on a jump-Markov system: every mode model must meet the model contract.
+
+    (``Filter.__init__`` checks a single StateSpaceModel; an IMM's model is the system.)
+    """
+    if not (hasattr(system, "models") and hasattr(system, "Pi")):
+        raise TypeError(f"{type(filt).__name__} needs a pfrepro.models.JumpMarkovSystem, got {type(system).__name__}")
+    if require_capabilities is not None:
+        for j, m in enumerate(system.models):
+            require_capabilities(m, mode_requirements, f"{type(filt).__name__} (mode {j})")
+    filt.model = filt.system = system
+    filt.m0 = system.m0 if m0 is None else as_vector(m0, "m0", system.dim_x)
+    filt.P0 = system.P0 if P0 is None else as_covariance(P0, "P0", system.dim_x)
 
 
 def unit_ball_volume(d: int) -> float:
@@ -160,10 +180,12 @@ class IMMParticleFilter(Filter):
     name = "IMMPF"
     needs_rng = True
 
+    #: what every mode model must provide (the model contract)
+    model_requirements = ("transition_sampler", "additive_measurement")
+
     def __init__(self, system, n_particles: int, model_likelihood: str = "gaussian", n_th: float = 0.5,
                  m0=None, P0=None):
-        super().__init__(system, m0, P0)
-        self.system = system
+        _init_on_system(self, system, m0, P0, self.model_requirements)
         self.n_particles = check_positive_int(n_particles, "n_particles")
         if model_likelihood not in MODEL_LIKELIHOODS:
             raise ValueError(f"model_likelihood must be one of {MODEL_LIKELIHOODS}, got {model_likelihood!r}")
@@ -476,9 +498,10 @@ class IMMKalman(Filter):
 
     needs_rng = False
 
+    model_requirements = ()   # the mode filters check their own models
+
     def __init__(self, system, mode_filters, name: str = "IMM", m0=None, P0=None):
-        super().__init__(system, m0, P0)
-        self.system = system
+        _init_on_system(self, system, m0, P0, ())
         self.mode_filters = list(mode_filters)
         if len(self.mode_filters) != system.r:
             raise ValueError(f"mode_filters must hold one filter per mode ({system.r}), got {len(self.mode_filters)}")
