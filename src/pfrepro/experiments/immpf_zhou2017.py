@@ -35,7 +35,8 @@ _ENGINE_EXECUTOR = "executor" in _inspect.signature(run_monte_carlo).parameters
 
 __all__ = ["PAPER", "SCENARIO", "ALTERNATIVES", "SEEDS", "scenario", "truth_system", "filter_system",
            "schedule", "simulate", "immpf", "immpfor", "imm_ekf", "imm_ukf", "run", "Run", "errors",
-           "table1", "rmse_curves", "bootstrap_table", "paired", "equal_compute_N", "mode_timeline"]
+           "table1", "rmse_curves", "bootstrap_table", "paired", "equal_compute_N", "mode_timeline",
+           "lost_tracks"]
 
 #: key of this paper in ``pfrepro.published`` and the claims registry
 PAPER = "immpfor_zhou2017"
@@ -296,6 +297,11 @@ def paired(run_: Run, a: str, b: str, idx=IDX_POS):
     ea = np.sqrt(np.mean(errors(run_.x_true, run_.results[a].x, idx) ** 2, axis=1))
     eb = np.sqrt(np.mean(errors(run_.x_true, run_.results[b].x, idx) ** 2, axis=1))
     return paired_difference(ea, eb)
+
+
+def lost_tracks(run_: Run, name: str, threshold: float = 5000.0) -> int:
+    """Number of runs whose final position error exceeds ``threshold`` metres (track lost)."""
+    return int(np.sum(errors(run_.x_true, run_.results[name].x)[:, -1] > threshold))
 
 
 def equal_compute_N(res_or, N: int, r: int = 3) -> int:
