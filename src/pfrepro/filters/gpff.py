@@ -20,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from .. import flow
+from ..models.base import require_capabilities
+from ..rng import take_runs
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
 from .sigma_points import ScaledSigmaPoints, unscented_transform
@@ -51,12 +53,14 @@ class GaussianParticleFlowFilter(Filter):
     n_steps : number of lambda steps (the paper: 20, i.e. Delta lambda = 0.05).
     schedule : "uniform" (the paper) or "exponential" (ratio ``ratio``).
     integrator : "euler" (the paper), "midpoint", "rk4", or "exact" (linear models only).
-    field : "eq41" -- f = B h(x) + u with h evaluated at every particle (eq 41, the literal
-        reading; the field is then nonlinear in x and for a quadratic h such as the UNG's
-        the exact flow can blow up in finite lambda), or "eq43" -- h(x) replaced by its
-        statistical linearisation y_hat + Pxy^T P^{-1} (x - mean) about the prior (the
-        first-order expansion (42)-(43) with J P = Pxy^T, eq 44), an affine field.
-        Identical for linear h.
+    field : "eq43" (default) -- h(x) replaced by its statistical linearisation
+        y_hat + Pxy^T P^{-1} (x - mean) about the prior (the first-order expansion
+        (42)-(43) with J P = Pxy^T, eq 44), an affine field; or "eq41" -- f = B h(x) + u
+        with h evaluated at every particle (eq 41, the literal reading; the field is then
+        nonlinear in x and for a quadratic h such as the UNG's the exact flow can blow up
+        in finite lambda: it diverges in every run on ``UNGM.zhang2016()``). The two are
+        identical for linear h (up to rounding). The default is the field the GPFF chapter
+        uses for a nonlinear h, so defaults work on every model the package ships.
     on_divergence : "raise" (default) raises ``FilterDivergenceError`` when a run's
         particles become non-finite; "drop" stops that run (its estimates become NaN)
         and records the step in ``diagnostics["diverged_at"]`` (0 = never).
@@ -65,14 +69,23 @@ class GaussianParticleFlowFilter(Filter):
         with beta = 2, exact for the mean and variance of x^2/20 under a Gaussian).
     m0, P0 : override the model's initial distribution N(m0, P0).
     return_cov : also return the particles' sample covariance.
+
+    Model contract: ``sample_transition`` (``f`` and the process noise; Q may be
+    singular or zero), ``h``, ``residual_y``, ``R``, additive measurement noise
+    y = h(x) + v; ``integrator="exact"`` also a matrix ``H``. Another model raises
+    :class:`~pfrepro.models.ModelContractError`.
+
+    ``filter(y, rng)``: ``y`` is ``(runs, T, dim_y)``, or ``(T,)`` for one scalar run,
+    or ``(T, dim_y)`` for one run when ``dim_y > 1``; ``rng`` a Generator or RunStreams.
     """
 
     name = "GPFF"
     needs_rng = True
+    model_requirements = ("transition_sampler", "additive_measurement")
 
     def __init__(self, model, n_particles: int = 100, n_steps: int = 20, schedule: str = "uniform",
                  ratio: float = 1.2, integrator: str = "euler", alpha: float = 1.0, beta: float = 2.0,
-                 kappa: float = 0.0, field: str = "eq41", on_divergence: str = "raise",
+                 kappa: float = 0.0, field: str = "eq43", on_divergence: str = "raise",
                  m0=None, P0=None, return_cov: bool = False):
         super().__init__(model, m0, P0)
         if field not in ("eq41", "eq43"):
@@ -86,8 +99,8 @@ class GaussianParticleFlowFilter(Filter):
         if integrator not in (*flow.INTEGRATORS, "exact"):
             raise ValueError(f"unknown integrator {integrator!r}; choose from "
                              f"{sorted(flow.INTEGRATORS) + ['exact']}")
-        if integrator == "exact" and not hasattr(model, "H"):
-            raise TypeError("integrator='exact' needs a linear model with a matrix H")
+        if integrator == "exact":
+            require_capabilities(model, ("measurement_matrix",), "GaussianParticleFlowFilter(integrator='exact')")
         self.integrator = integrator
         self.schedule = schedule
         self.ratio = float(ratio)
@@ -153,24 +166,28 @@ class GaussianParticleFlowFilter(Filter):
         diverged_at = np.zeros(runs, dtype=int)
         with np.errstate(all="ignore"):
             for k in range(1, T + 1):
-                x = self.model.sample_transition(x, k, rng)
-                # a cloud whose covariance overflows cannot be moved (eq 52): treat as diverged
-                ok = np.all(np.isfinite(particle_moments(x)[1].reshape(len(alive), -1)), axis=1)
-                updated = bool(ok.all())
-                if updated:
-                    x = self.update(x, y[alive, k - 1])
-                    ok = np.all(np.isfinite(x.reshape(len(alive), -1)), axis=1)
-                if not ok.all():
-                    bad = alive[~ok]
-                    if self.on_divergence == "raise":
-                        raise FilterDivergenceError(f"GPFF particles became non-finite at step {k} "
-                                                    f"in runs {bad[:10].tolist()}")
-                    diverged_at[bad] = k
-                    alive, x = alive[ok], x[ok]
-                    if alive.size == 0:
-                        break
-                    if not updated:  # the update was skipped: do it now for the healthy runs
+                # runs that diverged no longer draw; the others keep their own streams
+                x = self.model.sample_transition(x, k, take_runs(rng, alive) if len(alive) < runs else rng)
+                # a cloud whose covariance overflows cannot be moved (eq 52): treat as diverged.
+                # Each run's fate depends on its own particles only (pfrepro.rng rule 3): drop the
+                # runs that diverged in the prediction, update the others, then check them again.
+                for stage in ("prior", "update"):
+                    if stage == "prior":
+                        ok = np.all(np.isfinite(particle_moments(x)[1].reshape(len(alive), -1)), axis=1)
+                    else:
                         x = self.update(x, y[alive, k - 1])
+                        ok = np.all(np.isfinite(x.reshape(len(alive), -1)), axis=1)
+                    if not ok.all():
+                        bad = alive[~ok]
+                        if self.on_divergence == "raise":
+                            raise FilterDivergenceError(f"GPFF particles became non-finite at step {k} "
+                                                        f"in runs {bad[:10].tolist()}")
+                        diverged_at[bad] = k
+                        alive, x = alive[ok], x[ok]
+                        if alive.size == 0:
+                            break
+                if alive.size == 0:
+                    break
                 xs[alive, k - 1] = x.mean(axis=1)
                 if Ps is not None:
                     Ps[alive, k - 1] = particle_moments(x)[1]

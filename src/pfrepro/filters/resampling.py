@@ -16,11 +16,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..rng import run_stream
+from ..rng import check_rng, run_stream
 
 __all__ = ["resample", "resample_counts", "check_scheme", "multinomial_resample", "stratified_resample",
            "systematic_resample", "residual_resample", "offspring_counts", "effective_sample_size",
-           "normalize_weights", "indices_from_counts", "RESAMPLING_SCHEMES"]
+           "normalize_weights", "indices_from_counts", "resampling_counts_function", "RESAMPLING_SCHEMES"]
 
 
 def normalize_weights(weights) -> np.ndarray:
@@ -61,8 +61,7 @@ def _diff_rows(below):
 def _systematic_counts(w, rng):
     Nc = _scaled_cumulative(w)
     Nc -= rng.random((w.shape[0], 1))
-    np.ceil(Nc, out=Nc)
-    np.maximum(Nc, 0.0, out=Nc)
+    np.ceil(Nc, out=Nc)   # N C_i >= 0 and U < 1, so ceil(N C_i - U) >= 0: no clipping needed
     return _diff_rows(Nc.astype(np.intp))
 
 
@@ -122,8 +121,19 @@ def check_scheme(scheme: str) -> str:
     return scheme
 
 
+def resampling_counts_function(scheme: str):
+    """The counts function ``f(w, rng)`` of the named scheme, for a filter's inner loop: ``w``
+    must already be normalised, finite and non-negative (no validation is repeated per step)."""
+    return _COUNTS[check_scheme(scheme)]
+
+
 def resample_counts(weights, rng: np.random.Generator, scheme: str = "systematic") -> np.ndarray:
-    """Offspring counts ``(runs, N)`` (each row sums to N) by the named scheme."""
+    """Offspring counts ``(runs, N)`` (each row sums to N) by the named scheme.
+
+    ``rng`` must be a ``numpy.random.Generator`` or ``pfrepro.rng.RunStreams``
+    (``TypeError`` otherwise: no implicit seed, no global state).
+    """
+    check_rng(rng)
     return _COUNTS[check_scheme(scheme)](normalize_weights(weights), rng)
 
 
