@@ -4,6 +4,7 @@ from .cmspf import CMSParticleFilter, OracleCMSParticleFilter
 from .espf import EvolutionSamplingParticleFilter
 from .gpff import GaussianParticleFlowFilter
 from .grid import GridFilter
+from .imm import IMMKalman, IMMParticleFilter, IMMPFOR  # noqa: F401  (interacting multiple model filters)
 from .kalman import ExtendedKalmanFilter, KalmanFilter, kalman_update
 from .particle import BootstrapParticleFilter, normalize_log_weights
 from .resampling import (RESAMPLING_SCHEMES, effective_sample_size, multinomial_resample,
