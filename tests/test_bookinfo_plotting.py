@@ -65,3 +65,14 @@ def test_log_ylim_ignores_the_reference():
     with pytest.raises(ValueError):
         plotting.log_ylim_from(ax, [0.0, -1.0])
     plt.close(fig)
+
+
+def test_anchored_claims_escapes_and_anchors():
+    import pandas as pd
+
+    t = pd.DataFrame({"claim_id": ["a1", "b<2>"], "text": ["x < y", "ok"], "reproduced": [1.23456, float("nan")]})
+    out = bookinfo.anchored_claims(t, "pap").data
+    assert 'id="claim-pap-a1"' in out and 'id="claim-pap-b-2"' in out
+    assert "x &lt; y" in out and "1.235" in out and "–" in out
+    with pytest.raises(ValueError, match="id_col"):
+        bookinfo.anchored_claims(t, "pap", id_col="nope")

@@ -21,7 +21,7 @@ from importlib import metadata
 from pathlib import Path
 
 __all__ = ["book_root", "toc_files", "papers_in_book", "claim_anchor", "claim_anchor_html",
-           "claim_href", "build_info", "cpu_model"]
+           "claim_href", "anchored_claims", "build_info", "cpu_model"]
 
 
 def book_root(start: Path | None = None) -> Path:
@@ -100,6 +100,41 @@ def claim_href(paper: str, claim_id: str, docname: str, from_doc: str | None = N
     if from_doc is not None:
         target = Path(os.path.relpath(target, Path(from_doc).parent))
     return f"{target.as_posix()}#{claim_anchor(paper, claim_id)}"
+
+
+def anchored_claims(table, paper: str, id_col: str | None = None, *, float_format: str = "{:.4g}",
+                    classes: str = "pf-claims pf-text"):
+    """A chapter's verdict table as HTML with an anchor on every claim (for the scorecard's links).
+
+    ``table``: a DataFrame with one row per claim and a column of claim ids (``id`` or
+    ``claim_id``, or ``id_col``), e.g. ``pfrepro.claims.claims_table(reg)``. Each id cell becomes
+    ``<span id="claim-<paper>-<id>">id</span>``; every other cell is escaped text (floats with
+    ``float_format``, missing values as "–"). Returns an ``IPython.display.HTML``.
+    """
+    import math
+
+    from IPython.display import HTML
+
+    if id_col is None:
+        id_col = next((c for c in ("id", "claim_id") if c in table.columns), None)
+        if id_col is None:
+            raise ValueError(f"anchored_claims: no 'id' or 'claim_id' column in {list(table.columns)}")
+    elif id_col not in table.columns:
+        raise ValueError(f"anchored_claims: id_col {id_col!r} not in {list(table.columns)}")
+
+    def cell(v):
+        if v is None or (isinstance(v, float) and math.isnan(v)):
+            return "–"
+        if isinstance(v, float):
+            return html.escape(float_format.format(v))
+        return html.escape(str(v))
+
+    t = table.reset_index(drop=True).copy()
+    ids = [str(i) for i in t[id_col]]
+    for col in t.columns:
+        t[col] = [cell(v) for v in t[col]]
+    t[id_col] = [claim_anchor_html(paper, i) for i in ids]
+    return HTML(t.to_html(index=False, escape=False, classes=classes, border=0))
 
 
 def cpu_model() -> str:
