@@ -19,7 +19,9 @@ Per page it fails on
 ``table``     a table wider than the text column; a table inside a horizontal scroll box that
               itself fits the column is only reported (``scrolled``), not failed;
 ``equation``  a display equation wider than its box, or running into its equation number;
-``overflow``  the text column (or the page) scrolls horizontally.
+``overflow``  the text column (or the page) scrolls horizontally;
+``link``      a link to a page of the book, or to an anchor in one (``page.html#id``), whose
+              target does not exist (e.g. a scorecard row whose claim has no anchor).
 
 Driver: the Chrome DevTools Protocol spoken directly over ``--remote-debugging-pipe``
 (JSON messages on file descriptors 3/4), standard library only. No websocket client, no
@@ -33,15 +35,18 @@ import base64
 import fcntl
 import json
 import os
+import re
 import select
 import shutil
 import subprocess
 import sys
 import tempfile
 import time
+from html.parser import HTMLParser
 from pathlib import Path
+from urllib.parse import unquote, urlsplit
 
-KINDS = ("console", "network", "math", "tex", "image", "table", "equation", "overflow")
+KINDS = ("console", "network", "math", "tex", "image", "table", "equation", "overflow", "link")
 LOCAL_SCHEMES = ("file:", "data:", "blob:", "about:", "chrome:", "chrome-extension:", "devtools:")
 
 
@@ -351,6 +356,9 @@ PAGE_JS = r"""
 """
 
 
+_REFRESH = re.compile(r'<meta[^>]+http-equiv=["\']refresh["\'][^>]+content=["\'][^"\']*url=([^"\'>]+)', re.I)
+
+
 def console_failures(events: list[dict]) -> list[dict]:
     out = []
     for ev in events:
@@ -374,6 +382,54 @@ def console_failures(events: list[dict]) -> list[dict]:
     return out
 
 
+class _IdsAndLinks(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.ids: set[str] = set()
+        self.links: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if a.get("id"):
+            self.ids.add(a["id"])
+        if tag == "a" and a.get("name"):
+            self.ids.add(a["name"])
+        if tag == "a" and a.get("href"):
+            self.links.append(a["href"])
+
+
+def broken_links(root: Path, page: Path, _cache: dict = {}) -> list[dict]:
+    """Links from ``page`` to pages of the book (and anchors in them) that do not exist."""
+    def parse(p: Path) -> _IdsAndLinks:
+        key = p.resolve()
+        if key not in _cache:
+            parser = _IdsAndLinks()
+            parser.feed(p.read_text(encoding="utf-8", errors="replace"))
+            _cache[key] = parser
+        return _cache[key]
+
+    out = []
+    for href in parse(page).links:
+        parts = urlsplit(href)
+        if parts.scheme or parts.netloc or href.startswith(("mailto:", "javascript:")):
+            continue
+        target = (page.parent / unquote(parts.path)).resolve() if parts.path else page.resolve()
+        if parts.path and not parts.path.endswith(".html"):
+            if not target.exists():
+                out.append({"kind": "link", "what": href[:100], "detail": "file not in the build"})
+            continue
+        try:
+            target.relative_to(root.resolve())
+        except ValueError:
+            out.append({"kind": "link", "what": href[:100], "detail": "points outside the build"})
+            continue
+        if not target.is_file():
+            out.append({"kind": "link", "what": href[:100], "detail": "page not in the build"})
+        elif parts.fragment and unquote(parts.fragment) not in parse(target).ids:
+            out.append({"kind": "link", "what": href[:100], "detail": f"no anchor #{parts.fragment} in {target.name}"})
+    return out
+
+
 def pages_under(root: Path) -> list[Path]:
     skip = {"_static", "_sources", "_images", "_downloads"}
     return sorted(p for p in root.rglob("*.html") if not skip & set(p.relative_to(root).parts[:-1]))
@@ -388,11 +444,18 @@ def check(root: Path, pages: list[Path], chromium: str, width: int, height: int,
         for page in pages:
             rel = page.relative_to(root).as_posix()
             t0 = time.monotonic()
+            redirect = _REFRESH.search(page.read_text(encoding="utf-8", errors="replace")[:4000])
+            if redirect:  # index.html: a meta-refresh stub; the page it points to is checked itself
+                dest = (page.parent / unquote(urlsplit(redirect.group(1)).path))
+                fails = [] if dest.is_file() else [{"kind": "link", "what": redirect.group(1), "detail": "redirect target missing"}]
+                results[rel] = {"fails": fails, "notes": [f"redirect to {redirect.group(1)}"], "seconds": 0.0}
+                print(f"{'ok  ' if not fails else 'FAIL'} {rel:<32} {'redirect to ' + redirect.group(1)}")
+                continue
             try:
                 target, session = browser.open(page.resolve().as_uri())
                 report = browser.evaluate(session, PAGE_JS, timeout=90)
                 browser.pump(0.3)  # late console messages
-                fails = console_failures(browser.events) + report["fails"]
+                fails = console_failures(browser.events) + report["fails"] + broken_links(root, page)
                 if report["mathjax"] not in ("done", "none"):
                     fails.append({"kind": "math", "what": "MathJax", "detail": report["mathjax"]})
                 if shots is not None:

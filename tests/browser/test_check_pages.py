@@ -21,12 +21,12 @@ pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="chromium not installed
 PNG_1PX = ("data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42"
            "mNk+M9QDwADhgGAWjR9awAAAABJRU5ErkJggg==")
 HEAD = "<!doctype html><html><head><meta charset='utf-8'><title>t</title></head><body>"
-CLEAN = (HEAD + "<main style='width:600px'><p>Plain text, $5 and $6.</p>"
+CLEAN = (HEAD + "<main style='width:600px'><p id='top'>Plain text, $5 and $6. <a href='index.html#top'>up</a></p>"
          f"<img src='{PNG_1PX}' alt='dot'><table><tr><th>a</th><td>1</td></tr></table>"
          "<div style='overflow-x:auto'><table style='width:900px'><tr><td>wide but scrolled</td></tr></table></div>"
          "</main></body></html>")
 BROKEN = (HEAD + "<main style='width:600px'><p>leak $\\dot x$ here</p>"
-          "<img src='missing.png' alt='gone'>"
+          "<img src='missing.png' alt='gone'><a href='index.html#nowhere'>x</a><a href='gone.html'>y</a>"
           "<table style='width:900px'><tr><td>too wide</td></tr></table>"
           "<img src='http://example.com/x.png' alt='remote'>"
           "<script>console.error('boom')</script></main></body></html>")
@@ -49,6 +49,7 @@ def test_each_defect_is_caught(tmp_path):
     assert n["image"] == 2            # missing file + blocked remote image
     assert n["table"] == 1
     assert n["tex"] == 1
+    assert n["link"] == 2            # missing anchor + missing page
 
 
 def test_no_build_is_a_clear_error(tmp_path, capsys):
