@@ -350,7 +350,7 @@ PAGE_JS = r"""
     if (why.length) fails.push({kind: 'equation', what: label(d) + ' ' + (eq ? eq.textContent.trim().replace(/[#¶]/g, '') : ''),
                                 detail: why.join('; '), box: box(d)});
   });
-  notes.push(`${nEq} display equations, ${mathEls.length} math spans`);
+  notes.push(`${nEq} display equations, ${mathEls.length} math spans, column ${Math.round(colWidth)}px`);
   return {mathjax, fails, notes, column: Math.round(colWidth), title: document.title};
 })()
 """
