@@ -222,12 +222,19 @@ class Browser:
 
     def screenshot(self, session: str, path: Path, clip: dict | None = None,
                    max_height: int = 12000) -> None:
+        # grow the window to the whole page (captureBeyondViewport alone re-lays out some
+        # themes), shoot, and restore the reader's window
+        h = min(max_height, int(self.evaluate(session, "document.documentElement.scrollHeight")))
+        metrics = {"width": self.width, "deviceScaleFactor": 1, "mobile": False}
+        self.call("Emulation.setDeviceMetricsOverride", {**metrics, "height": h}, session)
+        self.evaluate(session, "new Promise(r => requestAnimationFrame(() => setTimeout(r, 200)))")
         if clip is None:
-            h = min(max_height, int(self.evaluate(session, "document.documentElement.scrollHeight")))
             clip = {"x": 0, "y": 0, "width": self.width, "height": h}
         clip = {**clip, "scale": 1}
-        data = self.call("Page.captureScreenshot", {"format": "png", "clip": clip,
-                                                    "captureBeyondViewport": True}, session)["data"]
+        try:
+            data = self.call("Page.captureScreenshot", {"format": "png", "clip": clip}, session)["data"]
+        finally:
+            self.call("Emulation.setDeviceMetricsOverride", {**metrics, "height": self.height}, session)
         path.write_bytes(base64.b64decode(data))
 
 
