@@ -6,3 +6,4 @@ from .ungm import UNGM
 
 __all__ = ["Simulation", "StateSpaceModel", "UNGM", "LinearGaussianModel", "CWPA",
            "van_loan_discretize", "BearingsOnly", "wrap_angle"]
+from .parameterized import FixedParameterModel, ParameterizedModel  # noqa: E402,F401  (dual estimation: DPF chapter)
