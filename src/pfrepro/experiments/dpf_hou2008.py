@@ -27,7 +27,7 @@ from ..montecarlo import filter_streams, truth_streams
 
 __all__ = ["PAPER", "SEED_51", "SEED_52", "S51", "S52", "ASSUMPTIONS", "assumptions_table", "model_51",
            "model_52", "simulate_51", "simulate_52", "dpf_51", "dekf_51", "liu_west_51", "grid_51",
-           "run_51", "run_fig5", "run_readings_51", "run_cap_sensitivity", "run_dekf_sensitivity",
+           "run_51", "run_fig5", "run_dpf_sensitivity", "run_dekf_sensitivity",
            "run_52", "rmse_eq14", "rmse_usual", "mean_se", "coverage", "crb_theta_52"]
 
 PAPER = "dpf_hou2008"
@@ -44,7 +44,7 @@ S51 = dict(
     n_x=500, n_theta=500,
     cap=500.0,          # = n_theta: the Beta's pseudo-count may not exceed the draws it is fitted from
     theta0=0.5,         # the uniform prior's mean: DPF's θ̂_0 and DEKF's start (same prior information)
-    sens_runs=30,       # runs of the sensitivity sweeps (cap, weight readings)
+    sens_runs=30,       # runs of the sweeps (Fig. 5 guesses, weight readings, caps): budget
     caps=(50.0, 500.0, 5000.0, None),
     guesses=(0.2, 0.5, 0.7),
     lw_delta=0.99,      # Liu & West's discount factor, the upper end of their 0.95-0.99
@@ -62,7 +62,7 @@ S52 = dict(
     theta0=3e-5,          # the classic filter start, far from θ = 1e-3
     P_theta0=1e-4,        # the classic initial variance of θ (DEKF)
     truth_substeps=64,    # truth: RK4 with 64 substeps per second
-    filter_substeps=8,    # filters: 8 substeps (integration error < 0.01 ft over 60 s; see the chapter)
+    filter_substeps=4,    # filters: 4 substeps (integration error ~0.01 ft over 60 s, 1e-4 of the noise sd; see the chapter)
     roughening=0.2,       # Gordon et al. (1993) roughening of the state PF: Q = 0 would collapse it
     literal_runs=10,
 )
@@ -94,9 +94,10 @@ ASSUMPTIONS = [
     ("5.2 10⁶, 4·10⁶", "initial covariance P_0, no process noise", "the classic problem; printed as process noise"),
     ("5.2 θ", "truth 1e-3, start 3e-5 (DEKF P_θ0 = 1e-4), range [0, 2e-3]", "the classic problem"),
     ("5.2 horizon", "60 s, 1 s sampling", "the classic problem (KalmTool)"),
-    ("5.2 integration", "RK4, 64 substeps (truth), 8 (filters)", "8-substep error < 0.01 ft against 100 ft noise"),
+    ("5.2 integration", "RK4, 64 substeps (truth), 4 (filters)", "4-substep error ≈ 0.01 ft against 100 ft noise; halves the cost"),
     ("5.2 state PF", "roughening K = 0.2 (Gordon et al. 1993)", "with Q = 0 a bootstrap PF collapses to one particle"),
-    ("5.2 DEKF noise", "Q^θ = 0 (static θ), θ̂ not clipped", "the classic set-up"),
+    ("5.2 DEKF noise", "Q^θ = 0 (static θ)", "the classic set-up"),
+    ("DEKF projection", "θ̂ clipped to [r_l, r_u]", "the same prior information as the DPF's Beta; unprojected as a sensitivity row"),
 ]
 
 
@@ -143,11 +144,12 @@ def dpf_51(model=None, **over):
     return DualParticleFilter(model or model_51(), **kw)
 
 
-def dekf_51(model=None, theta0=None, q_rel=None):
+def dekf_51(model=None, theta0=None, q_rel=None, clip=True):
     P0 = (S51["bounds"][1] - S51["bounds"][0]) ** 2 / 12.0
     q_rel = S51["dekf_q_rel"] if q_rel is None else q_rel
     return DualExtendedKalmanFilter(model or model_51(), S51["theta0"] if theta0 is None else theta0, P0,
-                                    q0=q_rel * P0, anneal=S51["dekf_anneal"], q_min=S51["dekf_floor_rel"] * P0 * (q_rel > 0))
+                                    q0=q_rel * P0, anneal=S51["dekf_anneal"],
+                                    q_min=S51["dekf_floor_rel"] * P0 * (q_rel > 0), clip_to_bounds=clip)
 
 
 def liu_west_51(model=None):
@@ -192,36 +194,27 @@ def run_51(executor=None) -> Run:
     return _run(filters, sim, SEED_51, executor)
 
 
-def run_fig5(main: Run | None = None, executor=None) -> dict:
-    """Fig. 5: DPF and DEKF with initial guesses 0.2 / 0.5 / 0.7 on the same truths and the same
-    filter streams (common random numbers); ``main`` (a :func:`run_51` result, whose guess is
-    0.5) is reused for 0.5. Returns {guess: Run}."""
-    m = model_51()
-    sim = simulate_51() if main is None else main.sim
-    out = {}
-    for g0 in S51["guesses"]:
-        if main is not None and g0 == S51["theta0"]:
-            out[g0] = Run(sim=sim, results={k: main.results[k] for k in ("DPF", "DEKF")},
-                          seconds={k: main.seconds[k] for k in ("DPF", "DEKF")},
-                          filters={k: main.filters[k] for k in ("DPF", "DEKF")})
-            continue
-        filters = {"DPF": dpf_51(m, theta0=g0), "DEKF": dekf_51(m, theta0=g0)}
-        out[g0] = _run(filters, sim, SEED_51, executor)
-    return out
-
-
-def run_readings_51(executor=None) -> Run:
-    """The three readings of the parameter weight (sens_runs runs; same filter streams)."""
+def run_fig5(executor=None) -> dict:
+    """Fig. 5: DPF and DEKF with initial guesses 0.2 / 0.5 / 0.7 on the first ``sens_runs`` runs,
+    with the same truths and the same filter streams for every guess (common random numbers).
+    Returns {guess: Run}."""
     m = model_51()
     sim = simulate_51(S51["sens_runs"])
-    filters = {f"DPF ({w})": dpf_51(m, weight=w) for w in ("predictive", "plugin", "literal")}
-    return _run(filters, sim, SEED_51, executor)
+    return {g0: _run({"DPF": dpf_51(m, theta0=g0), "DEKF": dekf_51(m, theta0=g0)}, sim, SEED_51, executor)
+            for g0 in S51["guesses"]}
 
 
-def run_cap_sensitivity(executor=None) -> Run:
+def run_dpf_sensitivity(executor=None) -> Run:
+    """One sweep on the first ``sens_runs`` runs: the three readings of the parameter weight
+    (cap N_θ) and the Beta caps (predictive weight). "DPF" is the working setting; every variant
+    uses its own named stream."""
     m = model_51()
     sim = simulate_51(S51["sens_runs"])
-    filters = {f"cap {c:g}" if c else "no cap": dpf_51(m, cap=c) for c in S51["caps"]}
+    filters = {"DPF": dpf_51(m), "plugin weight": dpf_51(m, weight="plugin"),
+               "literal weight": dpf_51(m, weight="literal")}
+    for c in S51["caps"]:
+        if c != S51["cap"]:
+            filters[f"cap {c:g}" if c else "no cap"] = dpf_51(m, cap=c)
     return _run(filters, sim, SEED_51, executor)
 
 
@@ -229,6 +222,7 @@ def run_dekf_sensitivity(executor=None) -> Run:
     m = model_51()
     sim = simulate_51()
     filters = {f"q0 = {q:g} P0": dekf_51(m, q_rel=q) for q in S51["dekf_q_rels"]}
+    filters["unprojected"] = dekf_51(m, clip=False)
     return _run(filters, sim, SEED_51, executor)
 
 
@@ -250,7 +244,7 @@ def run_52(reading="feet", runs=None, executor=None) -> Run:
     filters = {
         "DPF": DualParticleFilter(m, S52["n_x"], S52["n_theta"], cap=S52["cap"], theta0=S52["theta0"],
                                   roughening=S52["roughening"]),
-        "DEKF": DualExtendedKalmanFilter(m, S52["theta0"], S52["P_theta0"]),
+        "DEKF": DualExtendedKalmanFilter(m, S52["theta0"], S52["P_theta0"], clip_to_bounds=True),
     }
     return _run(filters, sim, SEED_52, executor)
 
@@ -285,3 +279,118 @@ def to_metres(v, component):
 def paired(a, b):
     """(mean, se) of a - b over runs."""
     return paired_difference(a, b)
+
+
+# --------------------------------------------------------------------------- summaries (tables of the chapter)
+def theta_interval(run: Run, name: str):
+    """(lo, median, hi) of each filter's own 95 % interval of θ: (3, runs, T)."""
+    res, f = run.results[name], run.filters[name]
+    if "theta_quantiles" in res.diagnostics:
+        return res.diagnostics["theta_quantiles"]
+    return f.theta_quantiles(res, (0.025, 0.5, 0.975))
+
+
+def errors_51(run: Run, name: str, runs=None):
+    """State and θ errors (runs, T) of filter ``name`` (first ``runs`` runs)."""
+    res = run.results[name]
+    n = res.x.shape[0] if runs is None else runs
+    ex = res.x[:n, :, 0] - run.sim.x[:n, 1:, 0]
+    et = res.diagnostics["theta"][:n] - S51["theta_true"]
+    return ex, et
+
+
+def rmse_table_51(run: Run, names, runs=None) -> pd.DataFrame:
+    """Per-run eq-(14) and usual RMSEs of x and θ, mean ± SE over runs."""
+    rows = []
+    for n in names:
+        ex, et = errors_51(run, n, runs)
+        row = {"filter": n, "runs": ex.shape[0]}
+        for lab, e in (("x", ex), ("θ", et)):
+            for kind, fn in (("eq14", rmse_eq14), ("usual", rmse_usual)):
+                m, se = mean_se(fn(e))
+                row[f"{kind} {lab}"], row[f"{kind} {lab} se"] = m, se
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("filter")
+
+
+def coverage_table_51(run: Run, names, runs=None) -> pd.DataFrame:
+    """Coverage of the true θ by each method's 95 % interval: at T, and averaged over k = 11..T."""
+    rows = []
+    for n in names:
+        q = theta_interval(run, n)
+        k = q.shape[-1] if runs is None else None
+        nr = q.shape[1] if runs is None else runs
+        c = coverage(q[0, :nr], q[2, :nr], S51["theta_true"])
+        cT, cT_se = mean_se(c[:, -1].astype(float))
+        cavg = c[:, 10:].mean()
+        width = float(np.mean(q[2, :nr, -1] - q[0, :nr, -1]))
+        rows.append({"method": n, "runs": nr, "coverage at T": cT, "se": cT_se,
+                     "coverage k>10": cavg, "mean width at T": width})
+    return pd.DataFrame(rows).set_index("method")
+
+
+def sensitivity_table(run: Run, runs=None) -> pd.DataFrame:
+    """x and θ RMSE (usual, mean ± SE), coverage at T, and refit-guard counts, per filter of a sweep."""
+    rows = []
+    for n, res in run.results.items():
+        ex, et = errors_51(run, n, runs)
+        mx, sx = mean_se(rmse_usual(ex))
+        mt, st = mean_se(rmse_usual(et))
+        row = {"variant": n, "RMSE x": mx, "se x": sx, "RMSE θ": mt, "se θ": st}
+        try:
+            q = theta_interval(run, n)
+            row["coverage at T"] = float(coverage(q[0, :, -1], q[2, :, -1], S51["theta_true"]).mean())
+        except Exception:  # noqa: BLE001 - a filter without intervals
+            row["coverage at T"] = np.nan
+        d = res.diagnostics
+        if "alpha" in d:
+            row["median α+β at T"] = float(np.median(d["alpha"][:, -1] + d["beta"][:, -1]))
+            row["capped steps %"] = 100.0 * d["n_capped"] / d["alpha"].size
+            row["guard steps %"] = 100.0 * (d["n_too_wide"] + d["n_zero_var"]) / d["alpha"].size
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("variant")
+
+
+def rmse_over_time_52(run: Run, name: str):
+    """RMSE over runs at each time of altitude, velocity (ft, ft/s) and θ (1/ft): (3, T)."""
+    res = run.results[name]
+    e = res.x - run.sim.x[:, 1:]
+    et = res.diagnostics["theta"] - run.filters[name].model.theta_true[0]
+    return np.stack([np.sqrt(np.mean(e[..., 0] ** 2, 0)), np.sqrt(np.mean(e[..., 1] ** 2, 0)),
+                     np.sqrt(np.mean(et**2, 0))])
+
+
+def per_run_rmse_52(run: Run, name: str, window=None):
+    """Per-run RMSE over time (or over ``window`` = (k0, k1), 1-based inclusive) of the three quantities."""
+    res = run.results[name]
+    sl = slice(None) if window is None else slice(window[0] - 1, window[1])
+    e = (res.x - run.sim.x[:, 1:])[:, sl]
+    et = (res.diagnostics["theta"] - run.filters[name].model.theta_true[0])[:, sl]
+    return [rmse_usual(e[..., 0]), rmse_usual(e[..., 1]), rmse_usual(et)]
+
+
+def integration_error_52(substeps=(2, 4, 8, 16, 64)):
+    """Max |x_k(n substeps) − x_k(1024 substeps)| over the 60 s truth trajectory, per substep count."""
+    ref_m = model_52("feet", 1024)
+    x_ref = [ref_m.x0[None]]
+    for k in range(1, S52["T"] + 1):
+        x_ref.append(ref_m.f(x_ref[-1], k, ref_m.theta_true[None]))
+    x_ref = np.concatenate(x_ref)
+    out = {}
+    for n in substeps:
+        m = model_52("feet", n)
+        x = [m.x0[None]]
+        for k in range(1, S52["T"] + 1):
+            x.append(m.f(x[-1], k, m.theta_true[None]))
+        d = np.abs(np.concatenate(x) - x_ref)
+        out[n] = (float(d[:, 0].max()), float(d[:, 1].max()))
+    return pd.DataFrame(out, index=["max |Δ altitude| (ft)", "max |Δ velocity| (ft/s)"]).T.rename_axis("substeps")
+
+
+def truth_trajectory_52(reading="feet"):
+    """Noise-free truth x_0..x_T of the re-entry problem (64 substeps)."""
+    m = model_52(reading, S52["truth_substeps"])
+    x = [m.x0[None]]
+    for k in range(1, S52["T"] + 1):
+        x.append(m.f(x[-1], k, m.theta_true[None]))
+    return np.concatenate(x)
