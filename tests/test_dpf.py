@@ -320,3 +320,19 @@ def test_bad_inputs_are_refused():
         m.simulate(3, 1, np.random.default_rng(0), theta=[0.1, 0.2])
     with pytest.raises(ValueError, match="n_theta"):
         ThetaGridReference(m, n_theta=3)
+
+
+def test_dpf_first_parameter_step_matches_exact_one_observation_posterior():
+    """k = 1 from a point prior x_0 = m0: p(z_1 | θ) = N(z_1; θ m0 + c, Q + R) exactly, so the
+    refitted Beta's mean is the weighted mean of the draws and must match the quadrature posterior
+    mean of θ (uniform prior) within Monte Carlo error. Pins that step 3 predicts from x̂_{k-1}
+    (not x̂_k) and starts from the uniform Beta(1, 1)."""
+    m = LinearTheta(Q=0.3, R=0.2, m0=4.0, P0=1e-10, c=0.5)
+    z = np.array([[[3.1]], [[1.2]]])
+    f = DualParticleFilter(m, 50, 40000, cap=None)
+    r = f.filter(z[:, :1], np.random.default_rng(8))
+    tg = np.linspace(0, 1, 20001)
+    for i in range(2):
+        lik = np.exp(-0.5 * (z[i, 0, 0] - tg * 4.0 - 0.5) ** 2 / 0.5)
+        post_mean = np.sum(tg * lik) / np.sum(lik)
+        assert r.diagnostics["theta"][i, 0] == pytest.approx(post_mean, abs=0.006)

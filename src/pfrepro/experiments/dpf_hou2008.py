@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..claims import paired_difference
 from ..filters.dual_ekf import DualExtendedKalmanFilter
 from ..filters.dual_pf import DualParticleFilter
 from ..filters.liu_west import LiuWestFilter
@@ -44,12 +43,12 @@ S51 = dict(
     n_x=500, n_theta=500,
     cap=500.0,          # = n_theta: the Beta's pseudo-count may not exceed the draws it is fitted from
     theta0=0.5,         # the uniform prior's mean: DPF's θ̂_0 and DEKF's start (same prior information)
-    sens_runs=30,       # runs of the sweeps (Fig. 5 guesses, weight readings, caps): budget
+    sens_runs=30,       # runs of the sweeps (weight readings, caps): budget
     caps=(50.0, 500.0, 5000.0, None),
     guesses=(0.2, 0.5, 0.7),
     lw_delta=0.99,      # Liu & West's discount factor, the upper end of their 0.95-0.99
     lw_n=500,           # 2 likelihoods per particle and step: 2 x 500 = 1000 = N_x + N_theta of the DPF
-    grid_runs=20, grid_n_theta=81, grid_x_bounds=(-30.0, 30.0), grid_n_x=241,
+    grid_runs=40, grid_n_theta=81, grid_x_bounds=(-30.0, 30.0), grid_n_x=241,
     dekf_q_rel=1e-3, dekf_anneal=0.995, dekf_floor_rel=1e-6,
     dekf_q_rels=(0.0, 1e-4, 1e-3, 1e-2),
 )
@@ -87,8 +86,9 @@ ASSUMPTIONS = [
      "Q^θ_k = max(1e-3 P_θ0 · 0.995^k, 1e-6 P_θ0): ReBEL-style annealing, fixed before any run"),
     ("DEKF start (5.1)", "θ̂_0 = 0.5, P_θ0 = 1/12", "the uniform prior's mean and variance"),
     ("Liu-West", "δ = 0.99, N = 500, auxiliary form", "2N = 1000 likelihoods per step, as the DPF's N_x + N_θ"),
-    ("Exact θ posterior", "81 θ nodes × 241 x nodes on [-30, 30], first 20 runs",
-     "cubic interpolation of the log-evidence; cost limits it to 20 of the 100 runs"),
+    ("Exact θ posterior", "81 θ nodes × 241 x nodes on [-30, 30], first 40 runs",
+     "cubic interpolation of the log-evidence; cost limits it to 40 of the 100 runs"),
+    ("Sweeps (weight readings, caps)", "first 30 runs", "budget of the chapter"),
     ("5.2 units", "feet (Athans et al. 1968)", "γ, noise variance and θ are foot values; plots in metres"),
     ("5.2 drag", "−θ x2² exp(−γ x1)", "the classic problem; the paper's eq (16) drops the square"),
     ("5.2 10⁶, 4·10⁶", "initial covariance P_0, no process noise", "the classic problem; printed as process noise"),
@@ -97,6 +97,7 @@ ASSUMPTIONS = [
     ("5.2 integration", "RK4, 64 substeps (truth), 4 (filters)", "4-substep error ≈ 0.01 ft against 100 ft noise; halves the cost"),
     ("5.2 state PF", "roughening K = 0.2 (Gordon et al. 1993)", "with Q = 0 a bootstrap PF collapses to one particle"),
     ("5.2 DEKF noise", "Q^θ = 0 (static θ)", "the classic set-up"),
+    ("5.2 Liu-West", "N = 2000, δ = 0.99, θ_0 ~ U[0, 2e-3]", "4000 likelihoods per step, as the DPF's 2000 + 2000"),
     ("DEKF projection", "θ̂ clipped to [r_l, r_u]", "the same prior information as the DPF's Beta; unprojected as a sensitivity row"),
 ]
 
@@ -171,14 +172,19 @@ class Run:
     filters: dict = field(default_factory=dict)
 
 
-def _run(filters: dict, sim, seed, executor=None) -> Run:
-    runs = sim.y.shape[0]
+def _run(filters: dict, sim, seed, executor=None, runs_of: dict | None = None) -> Run:
+    """Run every filter on the same truths; filter ``name`` draws from ``filter_streams(seed, name)``.
+
+    ``runs_of[name]`` restricts a filter to the first runs (the exact reference). ``executor`` is
+    accepted for the package-v2 interface (``run_monte_carlo(..., executor=)``); the runs are
+    processed here in one batched call per filter.
+    """
+    runs_of = runs_of or {}
     res, sec = {}, {}
     for name, f in filters.items():
         t0 = time.perf_counter()
-        y = sim.y[: f._runs] if hasattr(f, "_runs") else sim.y
-        n = y.shape[0]
-        rng = filter_streams(seed, name, n) if f.needs_rng else None
+        y = sim.y[: runs_of[name]] if name in runs_of else sim.y
+        rng = filter_streams(seed, name, y.shape[0]) if f.needs_rng else None
         res[name] = f.filter(y, rng)
         sec[name] = time.perf_counter() - t0
     return Run(sim=sim, results=res, seconds=sec, filters=filters)
@@ -188,20 +194,25 @@ def run_51(executor=None) -> Run:
     """Sec 5.1 at paper scale: DPF, DEKF, Liu-West (equal likelihood count) and the exact θ posterior."""
     m = model_51()
     sim = simulate_51()
-    g = grid_51(m)
-    g._runs = S51["grid_runs"]
-    filters = {"DPF": dpf_51(m), "DEKF": dekf_51(m), "Liu-West": liu_west_51(m), "exact": g}
-    return _run(filters, sim, SEED_51, executor)
+    filters = {"DPF": dpf_51(m), "DEKF": dekf_51(m), "Liu-West": liu_west_51(m), "exact": grid_51(m)}
+    return _run(filters, sim, SEED_51, executor, runs_of={"exact": S51["grid_runs"]})
 
 
-def run_fig5(executor=None) -> dict:
-    """Fig. 5: DPF and DEKF with initial guesses 0.2 / 0.5 / 0.7 on the first ``sens_runs`` runs,
-    with the same truths and the same filter streams for every guess (common random numbers).
-    Returns {guess: Run}."""
+def run_fig5(main: Run | None = None, executor=None) -> dict:
+    """Fig. 5: DPF and DEKF with initial guesses 0.2 / 0.5 / 0.7 on all runs, with the same truths and
+    the same filter streams for every guess (common random numbers). ``main`` (a :func:`run_51`
+    result, whose guess is 0.5) is reused for 0.5: it is the same computation. Returns {guess: Run}."""
     m = model_51()
-    sim = simulate_51(S51["sens_runs"])
-    return {g0: _run({"DPF": dpf_51(m, theta0=g0), "DEKF": dekf_51(m, theta0=g0)}, sim, SEED_51, executor)
-            for g0 in S51["guesses"]}
+    sim = simulate_51() if main is None else main.sim
+    out = {}
+    for g0 in S51["guesses"]:
+        if main is not None and g0 == S51["theta0"]:
+            keep = ("DPF", "DEKF")
+            out[g0] = Run(sim=sim, results={k: main.results[k] for k in keep},
+                          seconds={k: main.seconds[k] for k in keep}, filters={k: main.filters[k] for k in keep})
+        else:
+            out[g0] = _run({"DPF": dpf_51(m, theta0=g0), "DEKF": dekf_51(m, theta0=g0)}, sim, SEED_51, executor)
+    return out
 
 
 def run_dpf_sensitivity(executor=None) -> Run:
@@ -237,7 +248,7 @@ def simulate_52(runs=None, reading="feet"):
 
 
 def run_52(reading="feet", runs=None, executor=None) -> Run:
-    """Sec 5.2: DPF (2000 + 2000 particles) and DEKF on the re-entry problem."""
+    """Sec 5.2: DPF (2000 + 2000 particles), DEKF and Liu-West (2000 joint particles) on the re-entry problem."""
     runs = (S52["runs"] if reading == "feet" else S52["literal_runs"]) if runs is None else runs
     m = model_52(reading)
     sim = simulate_52(runs, reading)
@@ -245,6 +256,8 @@ def run_52(reading="feet", runs=None, executor=None) -> Run:
         "DPF": DualParticleFilter(m, S52["n_x"], S52["n_theta"], cap=S52["cap"], theta0=S52["theta0"],
                                   roughening=S52["roughening"]),
         "DEKF": DualExtendedKalmanFilter(m, S52["theta0"], S52["P_theta0"], clip_to_bounds=True),
+        # joint (not dual) reference at the DPF's likelihood count: 2 x 2000 = 2000 + 2000
+        "Liu-West": LiuWestFilter(m, S52["n_x"], delta=S51["lw_delta"]),
     }
     return _run(filters, sim, SEED_52, executor)
 
@@ -275,10 +288,6 @@ def to_metres(v, component):
     """Feet -> metres for altitude (0) and velocity (1); θ (2) in 1/ft -> 1/m."""
     return v * FT if component in (0, 1) else v / FT
 
-
-def paired(a, b):
-    """(mean, se) of a - b over runs."""
-    return paired_difference(a, b)
 
 
 # --------------------------------------------------------------------------- summaries (tables of the chapter)
