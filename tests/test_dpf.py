@@ -336,3 +336,16 @@ def test_dpf_first_parameter_step_matches_exact_one_observation_posterior():
         lik = np.exp(-0.5 * (z[i, 0, 0] - tg * 4.0 - 0.5) ** 2 / 0.5)
         post_mean = np.sum(tg * lik) / np.sum(lik)
         assert r.diagnostics["theta"][i, 0] == pytest.approx(post_mean, abs=0.006)
+
+
+def test_theta_grid_coarse_grid_with_spline_matches_a_fine_grid_on_ungm():
+    """The chapter's 81-node θ grid relies on interpolating the log-evidence: a coarse grid must
+    give the fine grid's posterior mean and interval to a small fraction of the posterior sd."""
+    m = UNGMTheta()
+    sim = m.simulate(40, 3, truth_streams(21, 3))
+    kw = dict(x_bounds=(-30.0, 30.0), n_grid=241)
+    coarse = ThetaGridReference(m, n_theta=81, **kw).filter(sim.y).diagnostics
+    fine = ThetaGridReference(m, n_theta=321, **kw).filter(sim.y).diagnostics
+    sd = np.sqrt(fine["theta_var"][:, -1])
+    assert np.all(np.abs(coarse["theta"][:, -1] - fine["theta"][:, -1]) < 0.05 * sd)
+    assert np.all(np.abs(coarse["theta_quantiles"][:, :, -1] - fine["theta_quantiles"][:, :, -1]) < 0.1 * sd)
