@@ -293,10 +293,7 @@ def to_metres(v, component):
 # --------------------------------------------------------------------------- summaries (tables of the chapter)
 def theta_interval(run: Run, name: str):
     """(lo, median, hi) of each filter's own 95 % interval of θ: (3, runs, T)."""
-    res, f = run.results[name], run.filters[name]
-    if "theta_quantiles" in res.diagnostics:
-        return res.diagnostics["theta_quantiles"]
-    return f.theta_quantiles(res, (0.025, 0.5, 0.975))
+    return run.filters[name].theta_quantiles(run.results[name], (0.025, 0.5, 0.975))
 
 
 def errors_51(run: Run, name: str, runs=None):
@@ -354,8 +351,8 @@ def sensitivity_table(run: Run, runs=None) -> pd.DataFrame:
         d = res.diagnostics
         if "alpha" in d:
             row["median α+β at T"] = float(np.median(d["alpha"][:, -1] + d["beta"][:, -1]))
-            row["capped steps %"] = 100.0 * d["n_capped"] / d["alpha"].size
-            row["guard steps %"] = 100.0 * (d["n_too_wide"] + d["n_zero_var"]) / d["alpha"].size
+            row["capped steps %"] = 100.0 * d["n_capped"].sum() / d["alpha"].size
+            row["guard steps %"] = 100.0 * (d["n_too_wide"] + d["n_zero_var"]).sum() / d["alpha"].size
         rows.append(row)
     return pd.DataFrame(rows).set_index("variant")
 

@@ -259,15 +259,16 @@ class DualParticleFilter(Filter):
             x_hat, P_hat = x_new, P_new
         return FilterResult(xs, Ps, diagnostics={
             "theta": th, "theta_var": th_var, "alpha": alphas, "beta": betas, "fit_status": status,
-            "n_too_wide": int((status == FIT_TOO_WIDE).sum()), "n_zero_var": int((status == FIT_ZERO_VAR).sum()),
-            "n_capped": int((status == FIT_CAPPED).sum()), "ess_x": ess_x, "ess_theta": ess_t,
+            # per-run counts (runs axis first, so chunked Monte Carlo results concatenate)
+            "n_too_wide": (status == FIT_TOO_WIDE).sum(axis=1), "n_zero_var": (status == FIT_ZERO_VAR).sum(axis=1),
+            "n_capped": (status == FIT_CAPPED).sum(axis=1), "ess_x": ess_x, "ess_theta": ess_t,
             "collapsed_x": coll_x, "collapsed_theta": coll_t,
-            "likelihood_evaluations_per_step": Nx + Nt, "bounds": (lo, hi),
+            "likelihood_evaluations_per_step": Nx + Nt,
         })
 
     def theta_quantiles(self, result: FilterResult, q):
         """Quantiles ``q`` of the fitted Beta laws, on [r_l, r_u]: shape (len(q), runs, T)."""
-        lo, hi = result.diagnostics["bounds"]
+        lo, hi = self.model.bounds
         a, b = result.diagnostics["alpha"], result.diagnostics["beta"]
         return np.stack([lo + (hi - lo) * special.betaincinv(a, b, qq) for qq in np.atleast_1d(q)])
 

@@ -71,6 +71,7 @@ class LiuWestFilter(Filter):
 
     def __init__(self, model, n_particles: int, delta: float = 0.99, resampling: str = "systematic",
                  quantiles=(0.025, 0.5, 0.975)):
+        """``quantiles``: levels of θ's weighted quantiles stored per step (diagnostics)."""
         check_parameterized(model)
         super().__init__(model)
         self.n_particles = check_positive_int(n_particles, "n_particles")
@@ -91,7 +92,7 @@ class LiuWestFilter(Filter):
         xs = np.empty((runs, T, n))
         th = np.empty((runs, T))
         th_var = np.empty((runs, T))
-        thq = np.empty((len(self.quantiles), runs, T))
+        thq = np.empty((runs, T, len(self.quantiles)))
         ess = np.empty((runs, T))
         n_unique = np.empty((runs, T))
         coll = np.zeros((runs, T), bool)
@@ -119,11 +120,17 @@ class LiuWestFilter(Filter):
             th[:, k - 1] = np.einsum("rn,rn->r", w, theta)
             d = theta - th[:, k - 1, None]
             th_var[:, k - 1] = np.einsum("rn,rn->r", w, d * d)
-            thq[:, :, k - 1] = weighted_quantiles(w, theta, self.quantiles)
+            thq[:, k - 1] = weighted_quantiles(w, theta, self.quantiles).T
             ess[:, k - 1] = 1.0 / np.sum(w * w, axis=1)
             n_unique[:, k - 1] = 1 + np.count_nonzero(np.diff(j, axis=1), axis=1)  # j is sorted per run
         return FilterResult(xs, None, diagnostics={
-            "theta": th, "theta_var": th_var, "theta_quantiles": thq, "quantile_levels": self.quantiles,
+            "theta": th, "theta_var": th_var, "theta_quantiles": thq,   # (runs, T, len(quantiles))
             "ess": ess, "n_unique_ancestors": n_unique, "collapsed": coll,
             "likelihood_evaluations_per_step": 2 * N,
         })
+
+    def theta_quantiles(self, result: FilterResult, q=None):
+        """Weighted quantiles of the θ particles at the levels given at construction: (len(q), runs, T)."""
+        if q is not None and tuple(np.atleast_1d(q)) != self.quantiles:
+            raise ValueError(f"this filter stored the quantiles {self.quantiles}; got q = {q}")
+        return np.moveaxis(result.diagnostics["theta_quantiles"], -1, 0)

@@ -153,7 +153,14 @@ class ThetaGridReference(Filter):
         wpost /= wpost.sum(-1, keepdims=True)
         x_mean = np.einsum("rtj,rtj->rt", wpost, xmean_theta)[..., None]
         return FilterResult(x_mean, None, diagnostics={
-            "theta": mean, "theta_var": var, "theta_quantiles": qs, "quantile_levels": (0.025, 0.5, 0.975),
-            "log_evidence": logev, "theta_grid": self.theta, "lost_mass": lost,
-            "x_mean_given_theta": xmean_theta,
+            "theta": mean, "theta_var": var, "theta_quantiles": np.moveaxis(qs, 0, -1),  # (runs, T, 3)
+            "log_evidence": logev, "lost_mass": lost, "x_mean_given_theta": xmean_theta,
         })
+
+    quantile_levels = (0.025, 0.5, 0.975)
+
+    def theta_quantiles(self, result: FilterResult, q=None):
+        """The exact posterior's 2.5 / 50 / 97.5 % quantiles of θ: (3, runs, T)."""
+        if q is not None and tuple(np.atleast_1d(q)) != self.quantile_levels:
+            raise ValueError(f"the reference stores the quantiles {self.quantile_levels}; got q = {q}")
+        return np.moveaxis(result.diagnostics["theta_quantiles"], -1, 0)
