@@ -349,3 +349,30 @@ def test_theta_grid_coarse_grid_with_spline_matches_a_fine_grid_on_ungm():
     sd = np.sqrt(fine["theta_var"][:, -1])
     assert np.all(np.abs(coarse["theta"][:, -1] - fine["theta"][:, -1]) < 0.05 * sd)
     assert np.all(np.abs(coarse["theta_quantiles"][:, -1] - fine["theta_quantiles"][:, -1]) < 0.1 * sd[:, None])
+
+
+def test_roughening_jitter_has_gordons_standard_deviation():
+    from pfrepro.filters.dual_pf import roughen
+    rng = np.random.default_rng(4)
+    N, d = 40000, 2
+    x = np.zeros((2, N, d))
+    x[0, :2, 0] = [0.0, 10.0]          # run 0: range 10 in component 0, 0 in component 1
+    x[1, :2, 1] = [-3.0, 1.0]          # run 1: range 4 in component 1
+    out = roughen(x, 0.2, rng)
+    want = 0.2 * np.array([[10.0, 0.0], [0.0, 4.0]]) * N ** (-1.0 / d)
+    got = (out - x).std(axis=1)
+    np.testing.assert_allclose(got, want, rtol=0.02)
+
+
+def test_liu_west_without_parameter_move_is_an_exact_auxiliary_pf():
+    """δ = 1 (a = 1, h = 0) and a parameter known to 1e-6: Liu-West's two-stage weights must give
+    the Kalman filter's posterior mean (a wrong second-stage weight double-counts the likelihood)."""
+    m = LinearTheta(theta_true=0.7, bounds=(0.7 - 1e-6, 0.7 + 1e-6), Q=1.0, R=1.0, m0=0.0, P0=4.0, c=1.0)
+    sim = m.simulate(3, 1, np.random.default_rng(9))
+    r = LiuWestFilter(m, 100_000, delta=1.0).filter(sim.y, np.random.default_rng(10))
+    x, P = 0.0, 4.0
+    for k in range(3):
+        xm, Pm = 0.7 * x + 1.0, 0.49 * P + 1.0
+        K = Pm / (Pm + 1.0)
+        x, P = xm + K * (sim.y[0, k, 0] - xm), (1 - K) * Pm
+        assert r.x[0, k, 0] == pytest.approx(x, abs=5 * np.sqrt(P / 100_000) + 2e-3)

@@ -60,7 +60,7 @@ from .base import Filter, FilterDivergenceError, FilterResult
 from .particle import normalize_log_weights
 from .resampling import check_scheme, resample_counts
 
-__all__ = ["DualParticleFilter", "beta_moment_fit", "beta_moments", "weighted_mean_var",
+__all__ = ["DualParticleFilter", "beta_moment_fit", "beta_moments", "weighted_mean_var", "roughen",
            "PARAMETER_WEIGHTS", "check_parameterized"]
 
 PARAMETER_WEIGHTS = ("predictive", "plugin", "literal")
@@ -137,6 +137,16 @@ def weighted_mean_var(w, theta):
     m = np.einsum("rn,rn->r", w, theta)
     d = theta - m[:, None]
     return m, np.einsum("rn,rn->r", w, d * d)
+
+
+def roughen(x, K: float, rng):
+    """Gordon, Salmond & Smith's (1993) roughening: x + N(0, diag(σ_j²)), σ_j = K E_j N^{-1/d}.
+
+    ``x`` (runs, N, d); E_j is the range (max − min) of component j in each run.
+    """
+    runs, N, d = x.shape
+    sd = K * (x.max(axis=1) - x.min(axis=1)) * N ** (-1.0 / d)      # (runs, d)
+    return x + rng.standard_normal((runs, N, d)) * sd[:, None, :]
 
 
 def _gauss_logpdf(nu, S):
@@ -238,9 +248,7 @@ class DualParticleFilter(Filter):
             counts = resample_counts(w, rng, self.resampling)
             x = np.repeat(x.reshape(runs * Nx, n), counts.ravel(), axis=0).reshape(runs, Nx, n)
             if self.roughening is not None:
-                E = x.max(axis=1) - x.min(axis=1)                      # (runs, n)
-                sd = self.roughening * E * Nx ** (-1.0 / n)
-                x = x + rng.standard_normal((runs, Nx, n)) * sd[:, None, :]
+                x = roughen(x, self.roughening, rng)
             # (3) parameter filter: draw from Beta(α_{k-1}, β_{k-1}), weight, refit (eq 7)
             phi = rng.beta(alpha[:, None], beta[:, None], size=(runs, Nt))
             theta = lo + width * phi
