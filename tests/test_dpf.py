@@ -376,3 +376,17 @@ def test_liu_west_without_parameter_move_is_an_exact_auxiliary_pf():
         K = Pm / (Pm + 1.0)
         x, P = xm + K * (sim.y[0, k, 0] - xm), (1 - K) * Pm
         assert r.x[0, k, 0] == pytest.approx(x, abs=5 * np.sqrt(P / 100_000) + 2e-3)
+
+
+def test_theta_grid_equals_the_grid_filter_at_each_theta_and_fixed_parameter_model_runs_filters():
+    from pfrepro.filters.grid import GridFilter
+    from pfrepro.filters.particle import BootstrapParticleFilter
+
+    m = UNGMTheta()
+    sim = m.simulate(15, 2, truth_streams(3, 2))
+    ref = ThetaGridReference(m, n_theta=5, x_bounds=(-30, 30), n_grid=241).filter(sim.y).diagnostics
+    for j, t in enumerate(np.linspace(0, 1, 5)):
+        gf = GridFilter(m.at([t]), bounds=(-30, 30), n_grid=241).filter(sim.y)
+        np.testing.assert_allclose(ref["x_mean_given_theta"][:, :, j], gf.x[..., 0], atol=1e-10)
+    pf = BootstrapParticleFilter(m.at([0.5]), 200).filter(sim.y, np.random.default_rng(0))
+    assert pf.x.shape == (2, 15, 1) and np.all(np.isfinite(pf.x))
