@@ -85,6 +85,8 @@ ASSUMPTIONS = [
     ("DEKF", "Wan & Nelson dual EKF, recurrent derivative without ∂K/∂θ",
      "Q^θ_k = max(1e-3 P_θ0 · 0.995^k, 1e-6 P_θ0): ReBEL-style annealing, fixed before any run"),
     ("DEKF start (5.1)", "θ̂_0 = 0.5, P_θ0 = 1/12", "the uniform prior's mean and variance"),
+    ("DEKF parameter update", "noise of the 'measurement' z_k = h(x⁻(θ)) is the innovation covariance S",
+     "prediction-error form: the innovation, not z_k alone, carries the state uncertainty"),
     ("Liu-West", "δ = 0.99, N = 500, auxiliary form", "2N = 1000 likelihoods per step, as the DPF's N_x + N_θ"),
     ("Exact θ posterior", "81 θ nodes × 241 x nodes on [-30, 30], first 40 runs",
      "cubic interpolation of the log-evidence; cost limits it to 40 of the 100 runs"),
