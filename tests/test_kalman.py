@@ -134,5 +134,5 @@ def test_kalman_update_scalar_by_hand():
 
 
 def test_kf_rejects_nonlinear_model():
-    with pytest.raises(TypeError, match="linear model"):
+    with pytest.raises(TypeError, match="linear dynamics"):
         KalmanFilter(UNGM.zhang2016())

@@ -163,5 +163,5 @@ def test_sigma_point_parameter_validation():
 def test_safe_cholesky_jitters_semidefinite_and_rejects_indefinite():
     L = safe_cholesky(np.array([[1.0, 1.0], [1.0, 1.0]]))  # PSD, singular: jitter rescues it
     np.testing.assert_allclose(L @ L.T, [[1.0, 1.0], [1.0, 1.0]], atol=1e-5)
-    with pytest.raises(np.linalg.LinAlgError, match="not positive definite"):
+    with pytest.raises(np.linalg.LinAlgError, match="P is not positive semi-definite"):
         safe_cholesky(np.array([[1.0, 0.0], [0.0, -1.0]]), name="P")

@@ -2,7 +2,8 @@
 
 Subpackages and modules
 -----------------------
-models      state-space models (UNGM family, CWPA, bearings-only tracking)
+models      state-space models (UNGM family, CWPA, bearings-only tracking, stochastic
+            volatility) and the model contract (which model capabilities each filter uses)
 filters     KF, EKF, UKF, bootstrap PF + resampling, grid (point-mass) filter
 metrics     the papers' error measures with Monte Carlo standard errors
 montecarlo  batched Monte Carlo runner with per-filter random streams and timings

@@ -64,9 +64,25 @@ class McSummary:
         return self.mean - z * self.se, self.mean + z * self.se
 
 
-def mc_summary(values) -> McSummary:
-    """Summarise per-run values; the standard error is std / sqrt(n)."""
+def mc_summary(values, nan_policy: str = "raise") -> McSummary:
+    """Summarise per-run values; the standard error is std / sqrt(n).
+
+    ``nan_policy``: ``"raise"`` (default) refuses NaN values with a ``ValueError``
+    naming how many there are (a diverged run must not disappear into a NaN mean);
+    ``"omit"`` summarises the finite values only (``n`` counts them). Infinite
+    values are refused either way.
+    """
+    if nan_policy not in ("raise", "omit"):
+        raise ValueError(f"nan_policy must be 'raise' or 'omit', got {nan_policy!r}")
     v = np.asarray(values, float).ravel()
+    nan = np.isnan(v)
+    if nan.any():
+        if nan_policy == "raise":
+            raise ValueError(f"values contain {int(nan.sum())} NaN of {v.size} (e.g. diverged runs); "
+                             "drop them explicitly or pass nan_policy='omit'")
+        v = v[~nan]
+    if np.isinf(v).any():
+        raise ValueError(f"values contain {int(np.isinf(v).sum())} infinite entries")
     if v.size == 0:
         raise ValueError("no values to summarise")
     std = float(v.std(ddof=1)) if v.size > 1 else float("nan")

@@ -37,9 +37,15 @@ class GaussianNoise:
         self.mean = np.zeros(self.dim) if mean is None else as_vector(mean, "mean", self.dim)
         self._nonzero_mean = bool(np.any(self.mean != 0))
         self.is_zero = not np.any(self.cov)
+        # singular: as_covariance's own test (smallest eigenvalue <= 1e-14 of the largest
+        # entry), or a Cholesky factor that fails or is numerically rank-deficient. A rank-1
+        # G G^T often *has* a Cholesky factor with a 1e-8 pivot, whose draws would leave the
+        # range of cov: the eigenvalue test catches it.
+        scale = max(float(np.max(np.abs(self.cov))), np.finfo(float).tiny)
         try:
             self._chol = np.linalg.cholesky(self.cov)
-            self.is_singular = bool(np.min(np.diag(self._chol)) <= 1e-12 * np.sqrt(np.max(np.diag(self.cov))))
+            self.is_singular = bool(np.min(np.diag(self._chol)) <= 1e-12 * np.sqrt(np.max(np.diag(self.cov)))
+                                    or np.linalg.eigvalsh(self.cov).min() <= 1e-14 * scale)
         except np.linalg.LinAlgError:
             self.is_singular = True
         if self.is_singular:

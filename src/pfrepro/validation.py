@@ -12,6 +12,9 @@ __all__ = [
     "as_vector",
     "as_covariance",
     "as_measurements",
+    "as_matrix",
+    "as_finite_float",
+    "MEASUREMENT_SHAPES",
     "check_positive_int",
     "check_probability",
 ]
@@ -60,32 +63,81 @@ def as_covariance(value, name: str, dim: int | None = None, *, allow_singular: b
     return 0.5 * (arr + arr.T)
 
 
+#: The accepted shapes of measurements, as every filter's docstring and error message says.
+MEASUREMENT_SHAPES = ("(runs, T, dim_y) always; (T,) for one run of scalar measurements (dim_y == 1); "
+                      "(T, dim_y) for one run only when dim_y > 1")
+
+
 def as_measurements(y, dim_y: int, name: str = "y") -> np.ndarray:
     """Return measurements as a finite ``(runs, T, dim_y)`` float array.
 
-    Accepts ``(T,)`` (scalar measurements, one run), ``(T, dim_y)`` (one run) or
-    ``(runs, T, dim_y)``; for ``dim_y == 1`` also ``(runs, T)``. Ambiguous 2-D
-    input is read as ``(T, dim_y)`` when its last axis equals ``dim_y``.
+    Accepted shapes (nothing else, so no shape is read two ways):
+
+    * ``(runs, T, dim_y)`` -- always (``runs >= 1``, ``T >= 1``);
+    * ``(T,)`` -- one run of scalar measurements, only when ``dim_y == 1``;
+    * ``(T, dim_y)`` -- one run, only when ``dim_y > 1``.
+
+    A 2-D array with ``dim_y == 1`` is refused: ``(5, 1)`` could be five runs of
+    one step or one run of five steps. Pass ``y[None]``/``y[..., None]`` to say
+    which. Empty input (``runs == 0`` or ``T == 0``) and NaN/inf are refused.
     """
     arr = np.asarray(y, dtype=float)
+    hint = f"accepted shapes: {MEASUREMENT_SHAPES}"
     if arr.ndim == 1:
         if dim_y != 1:
-            raise ValueError(f"{name} of shape {arr.shape} is 1-D but the model has dim_y = {dim_y}")
+            raise ValueError(f"{name} of shape {arr.shape} is 1-D but the model has dim_y = {dim_y}; {hint}")
         arr = arr[None, :, None]
     elif arr.ndim == 2:
-        if arr.shape[1] == dim_y:
-            arr = arr[None]
-        elif dim_y == 1:
-            arr = arr[..., None]
-        else:
-            raise ValueError(f"{name} of shape {arr.shape} does not end in dim_y = {dim_y}")
+        if dim_y == 1:
+            raise ValueError(
+                f"{name} of shape {arr.shape} is ambiguous for a model with dim_y = 1: it could be "
+                f"(runs, T) or (T, dim_y); pass (runs, T, 1) (e.g. {name}[..., None] for runs x T, "
+                f"{name}[None] for one run of T steps) or a 1-D (T,) array for one run")
+        if arr.shape[1] != dim_y:
+            raise ValueError(f"{name} of shape {arr.shape} does not end in dim_y = {dim_y}; {hint}")
+        arr = arr[None]
     elif arr.ndim != 3 or arr.shape[2] != dim_y:
-        raise ValueError(f"{name} must have shape (runs, T, {dim_y}), got {arr.shape}")
+        raise ValueError(f"{name} must have shape (runs, T, {dim_y}), got {arr.shape}; {hint}")
+    if arr.shape[0] < 1:
+        raise ValueError(f"{name} holds no runs (shape {arr.shape}); at least one run is needed")
     if arr.shape[1] < 1:
-        raise ValueError(f"{name} holds no time steps")
+        raise ValueError(f"{name} holds no time steps (shape {arr.shape})")
     if not np.all(np.isfinite(arr)):
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise ValueError(f"{name} contains NaN or infinite measurements (first at run {bad[0]}, step {bad[1]})")
+    return arr
+
+
+def as_finite_float(value, name: str, *, positive: bool = False, nonnegative: bool = False) -> float:
+    """Return ``value`` as a finite float (optionally > 0 or >= 0), else raise naming ``name``."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a real number, got {value!r}") from None
+    if not np.isfinite(v):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    if positive and not v > 0:
+        raise ValueError(f"{name} must be positive, got {value!r}")
+    if nonnegative and not v >= 0:
+        raise ValueError(f"{name} must be >= 0, got {value!r}")
+    return v
+
+
+def as_matrix(value, name: str, shape: tuple | None = None) -> np.ndarray:
+    """Return ``value`` as a finite 2-D float array (scalars read as 1x1), optionally of ``shape``.
+
+    ``None`` in ``shape`` leaves that axis free.
+    """
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim < 2:
+        arr = np.atleast_2d(arr)
+    if arr.ndim != 2:
+        raise ValueError(f"{name} must be a matrix, got an array of shape {arr.shape}")
+    if shape is not None and any(s is not None and s != a for s, a in zip(shape, arr.shape)):
+        want = ", ".join("n" if s is None else str(s) for s in shape)
+        raise ValueError(f"{name} must have shape ({want}), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} contains NaN or infinite entries:\n{arr}")
     return arr
 
 

@@ -353,7 +353,7 @@ def run_cwpa(noise: str, runs=RUNS, T=80, time_per_run=True) -> MonteCarloResult
     Both filters are given R = the measurement noise's covariance (the mixture's own
     covariance in the mixture case). Also runs GPFF with the exact-in-lambda map."""
     model = CWPA.zhang2016(noise)
-    filters = {"KF": KalmanFilter(model), "GPFF": _gpff(model, 100),
+    filters = {"KF": KalmanFilter(model), "GPFF": _gpff(model, 100, field="eq41"),
                "GPFF (exact map)": _gpff(model, 100, integrator="exact")}
     return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS[f"cwpa_{noise}"],
                            time_per_run=time_per_run)
@@ -369,7 +369,7 @@ def cwpa_r_sensitivity(mc_mixture: MonteCarloResult) -> pd.DataFrame:
     rows = []
     for label, R in choices.items():
         model = CWPA(R=R)
-        res = run_monte_carlo(model, {"KF": KalmanFilter(model), "GPFF": _gpff(model, 100)}, T=mc_mixture.sim.T,
+        res = run_monte_carlo(model, {"KF": KalmanFilter(model), "GPFF": _gpff(model, 100, field="eq41")}, T=mc_mixture.sim.T,
                               runs=mc_mixture.sim.runs, seed=SEEDS["cwpa_mixture"], sim=mc_mixture.sim)
         k, g = res.mse("KF"), res.mse("GPFF")
         s = mc_summary(g - k)

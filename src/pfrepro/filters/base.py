@@ -5,10 +5,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..models.base import ModelContractError, require_capabilities
 from ..rng import check_rng
-from ..validation import as_covariance, as_measurements, as_vector
+from ..validation import MEASUREMENT_SHAPES, as_covariance, as_measurements, as_vector
 
-__all__ = ["FilterResult", "Filter", "GaussianFilter", "FilterDivergenceError", "gaussian_loglik"]
+__all__ = ["FilterResult", "Filter", "GaussianFilter", "FilterDivergenceError", "ModelContractError",
+           "gaussian_loglik", "MEASUREMENT_SHAPES"]
 
 
 class FilterDivergenceError(FloatingPointError):
@@ -42,15 +44,27 @@ class FilterResult:
 class Filter:
     """Base class: a filter is built from a model plus settings, then run on measurements.
 
-    ``filter(y, rng)`` takes measurements ``(runs, T, dim_y)`` (or one run) and
-    returns a :class:`FilterResult`; all runs are processed in one call.
-    Deterministic filters ignore ``rng``.
+    ``filter(y, rng)`` takes measurements ``y`` and returns a :class:`FilterResult`;
+    all runs are processed in one call. Accepted shapes of ``y`` (see
+    :func:`pfrepro.validation.as_measurements`): ``(runs, T, dim_y)`` always;
+    ``(T,)`` for one run of scalar measurements (``dim_y == 1``); ``(T, dim_y)``
+    for one run only when ``dim_y > 1`` (a 2-D ``y`` with ``dim_y == 1`` is
+    ambiguous and refused). Stochastic filters need ``rng``, a
+    ``numpy.random.Generator`` or ``pfrepro.rng.RunStreams``; deterministic
+    filters ignore it.
+
+    ``model_requirements`` lists the model capabilities (keys of
+    :data:`pfrepro.models.CAPABILITIES`) the filter uses; the constructor raises
+    :class:`~pfrepro.models.ModelContractError` when the model lacks one.
     """
 
     name = "filter"
     needs_rng = False
+    #: model capabilities this filter calls (the model contract, ``pfrepro.models.base``)
+    model_requirements: tuple = ("transition_sampler", "likelihood")
 
     def __init__(self, model, m0=None, P0=None):
+        require_capabilities(model, self.model_requirements, type(self).__name__)
         self.model = model
         # the filter's initial distribution N(m0, P0); defaults to the model's
         self.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)

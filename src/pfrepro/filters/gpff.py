@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import flow
+from ..models.base import require_capabilities
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
 from .sigma_points import ScaledSigmaPoints, unscented_transform
@@ -51,12 +52,14 @@ class GaussianParticleFlowFilter(Filter):
     n_steps : number of lambda steps (the paper: 20, i.e. Delta lambda = 0.05).
     schedule : "uniform" (the paper) or "exponential" (ratio ``ratio``).
     integrator : "euler" (the paper), "midpoint", "rk4", or "exact" (linear models only).
-    field : "eq41" -- f = B h(x) + u with h evaluated at every particle (eq 41, the literal
-        reading; the field is then nonlinear in x and for a quadratic h such as the UNG's
-        the exact flow can blow up in finite lambda), or "eq43" -- h(x) replaced by its
-        statistical linearisation y_hat + Pxy^T P^{-1} (x - mean) about the prior (the
-        first-order expansion (42)-(43) with J P = Pxy^T, eq 44), an affine field.
-        Identical for linear h.
+    field : "eq43" (default) -- h(x) replaced by its statistical linearisation
+        y_hat + Pxy^T P^{-1} (x - mean) about the prior (the first-order expansion
+        (42)-(43) with J P = Pxy^T, eq 44), an affine field; or "eq41" -- f = B h(x) + u
+        with h evaluated at every particle (eq 41, the literal reading; the field is then
+        nonlinear in x and for a quadratic h such as the UNG's the exact flow can blow up
+        in finite lambda: it diverges in every run on ``UNGM.zhang2016()``). The two are
+        identical for linear h (up to rounding). The default is the field the GPFF chapter
+        uses for a nonlinear h, so defaults work on every model the package ships.
     on_divergence : "raise" (default) raises ``FilterDivergenceError`` when a run's
         particles become non-finite; "drop" stops that run (its estimates become NaN)
         and records the step in ``diagnostics["diverged_at"]`` (0 = never).
@@ -65,14 +68,23 @@ class GaussianParticleFlowFilter(Filter):
         with beta = 2, exact for the mean and variance of x^2/20 under a Gaussian).
     m0, P0 : override the model's initial distribution N(m0, P0).
     return_cov : also return the particles' sample covariance.
+
+    Model contract: ``sample_transition`` (``f`` and the process noise; Q may be
+    singular or zero), ``h``, ``residual_y``, ``R``, additive measurement noise
+    y = h(x) + v; ``integrator="exact"`` also a matrix ``H``. Another model raises
+    :class:`~pfrepro.models.ModelContractError`.
+
+    ``filter(y, rng)``: ``y`` is ``(runs, T, dim_y)``, or ``(T,)`` for one scalar run,
+    or ``(T, dim_y)`` for one run when ``dim_y > 1``; ``rng`` a Generator or RunStreams.
     """
 
     name = "GPFF"
     needs_rng = True
+    model_requirements = ("transition_sampler", "additive_measurement")
 
     def __init__(self, model, n_particles: int = 100, n_steps: int = 20, schedule: str = "uniform",
                  ratio: float = 1.2, integrator: str = "euler", alpha: float = 1.0, beta: float = 2.0,
-                 kappa: float = 0.0, field: str = "eq41", on_divergence: str = "raise",
+                 kappa: float = 0.0, field: str = "eq43", on_divergence: str = "raise",
                  m0=None, P0=None, return_cov: bool = False):
         super().__init__(model, m0, P0)
         if field not in ("eq41", "eq43"):
@@ -86,8 +98,8 @@ class GaussianParticleFlowFilter(Filter):
         if integrator not in (*flow.INTEGRATORS, "exact"):
             raise ValueError(f"unknown integrator {integrator!r}; choose from "
                              f"{sorted(flow.INTEGRATORS) + ['exact']}")
-        if integrator == "exact" and not hasattr(model, "H"):
-            raise TypeError("integrator='exact' needs a linear model with a matrix H")
+        if integrator == "exact":
+            require_capabilities(model, ("measurement_matrix",), "GaussianParticleFlowFilter(integrator='exact')")
         self.integrator = integrator
         self.schedule = schedule
         self.ratio = float(ratio)

@@ -32,18 +32,37 @@ class GridFilter(Filter):
     bounds : (lo, hi) of the grid; must contain essentially all posterior mass.
         Mass pushed outside is lost and reported in ``diagnostics["lost_mass"]``.
     n_grid : number of grid nodes M.
+    m0, P0 : override the model's prior N(m0, P0); validated like the model's
+        (finite m0; P0 > 0, a scalar or a 1x1 matrix).
+
+    Model contract: ``dim_x == 1``, ``f``, a transition *density* (Gaussian process
+    noise with Q > 0: a singular/zero Q has none) and ``log_likelihood`` (any
+    measurement model, additive or not). Another model raises
+    :class:`~pfrepro.models.ModelContractError`.
+
+    ``filter(y)``: ``y`` is ``(runs, T, dim_y)``, or ``(T,)`` for one scalar run, or
+    ``(T, dim_y)`` for one run when ``dim_y > 1``.
+
+    Diagnostics: ``lost_mass`` (runs,) predictive mass pushed off the grid;
+    ``final_edge_mass`` (runs,); ``collapsed`` (runs, T) steps where the likelihood
+    underflowed to zero (or was NaN) at every node with predictive mass, e.g. an outlier
+    measurement: the measurement is then ignored (posterior = prediction), as the particle
+    filters do on weight collapse; ``n_collapsed`` their number; ``log_domain_steps``
+    (runs, T) steps normalised in the log domain because the direct product underflowed.
     """
 
     name = "Grid"
+    model_requirements = ("scalar_state", "transition_density", "likelihood")
 
     def __init__(self, model, bounds=(-60.0, 60.0), n_grid: int = 6001, m0=None, P0=None):
-        super().__init__(model)
-        if model.dim_x != 1:
-            raise ValueError("GridFilter is for scalar models (dim_x == 1)")
+        super().__init__(model, m0, P0)
         if not isinstance(model.process_noise, GaussianNoise):
             raise TypeError("GridFilter needs Gaussian process noise")
-        lo, hi = map(float, bounds)
-        if not hi > lo:
+        try:
+            lo, hi = map(float, bounds)
+        except (TypeError, ValueError):
+            raise ValueError(f"bounds must be a pair (lo, hi) of numbers, got {bounds!r}") from None
+        if not (np.isfinite(lo) and np.isfinite(hi)) or not hi > lo:
             raise ValueError(f"bounds must satisfy lo < hi, got {bounds}")
         self.n_grid = check_positive_int(n_grid, "n_grid")
         if self.n_grid < 3:
@@ -61,8 +80,6 @@ class GridFilter(Filter):
         self._half = half
         self._nfft = sfft.next_fast_len(self.n_grid + 2 * half, real=True)
         self._kernel_f = sfft.rfft(self.kernel, n=self._nfft)
-        self.m0 = float(model.m0[0] if m0 is None else m0)
-        self.P0 = float(model.P0[0, 0] if P0 is None else P0)
 
     def _move_matrix(self, k):
         """Sparse (M, M) matrix sending the mass at g_i to f(g_i, k), split linearly."""
@@ -90,26 +107,58 @@ class GridFilter(Filter):
         y = self._prepare(y, rng)
         runs, T, _ = y.shape
         g = self.grid
-        logp0 = -0.5 * (g - self.m0) ** 2 / self.P0
+        logp0 = -0.5 * (g - self.m0[0]) ** 2 / self.P0[0, 0]
         p = np.exp(logp0 - logp0.max())
         p = np.broadcast_to(p / p.sum(), (runs, self.n_grid)).copy()
         means = np.empty((runs, T, 1))
         covs = np.empty((runs, T, 1, 1))
         lost = np.zeros(runs)
+        collapsed = np.zeros((runs, T), dtype=bool)
+        log_domain = np.zeros((runs, T), dtype=bool)
         gx = g[None, :, None]
         for k in range(1, T + 1):
             moved = p @ self._move_matrix(k).T
             pred = self._convolve(moved)
             lost += 1.0 - pred.sum(axis=1)
-            loglik = self.model.log_likelihood(y[:, k - 1], np.broadcast_to(gx, (runs, self.n_grid, 1)))
-            loglik -= loglik.max(axis=1, keepdims=True)
-            post = pred * np.exp(loglik)
-            s = post.sum(axis=1, keepdims=True)
-            if np.any(s <= 0):
-                raise FloatingPointError(f"grid posterior vanished at step {k}: widen bounds or refine grid")
+            with np.errstate(over="ignore"):  # an outlier's -inf is handled below and reported
+                loglik = self.model.log_likelihood(y[:, k - 1], np.broadcast_to(gx, (runs, self.n_grid, 1)))
+            with np.errstate(invalid="ignore", over="ignore"):
+                post = pred * np.exp(loglik - loglik.max(axis=1, keepdims=True))
+                s = post.sum(axis=1, keepdims=True)
+            bad = ~(s[:, 0] > 0) | ~np.isfinite(s[:, 0])   # catches NaN as well as 0
+            if bad.any():
+                post[bad], coll = self._log_domain_posterior(pred[bad], loglik[bad], k)
+                s[bad] = 1.0
+                log_domain[bad, k - 1] = True
+                collapsed[np.flatnonzero(bad)[coll], k - 1] = True
             p = post / s
             mean = p @ g
             means[:, k - 1, 0] = mean
             covs[:, k - 1, 0, 0] = p @ (g * g) - mean**2
         edge = p[:, :5].sum(axis=1) + p[:, -5:].sum(axis=1)
-        return FilterResult(means, covs, diagnostics={"lost_mass": lost, "final_edge_mass": edge})
+        return FilterResult(means, covs, diagnostics={
+            "lost_mass": lost, "final_edge_mass": edge, "collapsed": collapsed,
+            "n_collapsed": int(collapsed.sum()), "log_domain_steps": log_domain})
+
+    @staticmethod
+    def _log_domain_posterior(pred, loglik, k):
+        """Normalised posterior from predictive masses and log-likelihoods, in the log domain.
+
+        Used for the rows where the direct product ``pred * exp(loglik - max)``
+        underflowed or produced NaN (an outlier: the likelihood peaks where the
+        prediction has no mass, or overflows to -inf everywhere). Returns
+        ``(post, collapsed)``: a row whose likelihood is -inf/NaN at every node with
+        predictive mass ignores the measurement (post = prediction) and is flagged.
+        """
+        ll = np.where(np.isnan(loglik), -np.inf, loglik)
+        with np.errstate(divide="ignore"):
+            lp = np.log(pred) + ll
+        m = lp.max(axis=1, keepdims=True)
+        collapsed = ~np.isfinite(m[:, 0])
+        mass = pred.sum(axis=1)
+        if np.any(~(mass > 0) & collapsed):
+            raise FloatingPointError(f"grid predictive density vanished at step {k}: widen bounds or refine grid")
+        with np.errstate(invalid="ignore"):
+            post = np.exp(lp - m)
+        post[collapsed] = pred[collapsed]
+        return post / post.sum(axis=1, keepdims=True), collapsed

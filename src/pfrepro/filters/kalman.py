@@ -41,15 +41,19 @@ class KalmanFilter(GaussianFilter):
 
     Exact (the posterior mean and covariance) when the model's noises are Gaussian;
     for mixture measurement noise it uses the mixture's covariance ``model.R``.
+    ``Q`` may be singular or zero (P stays positive definite because P0 and R are).
+
+    Model contract: ``F``, ``H`` (matrices), ``Q``, ``R``, additive measurement
+    noise; another model raises :class:`~pfrepro.models.ModelContractError`.
+
+    ``filter(y)``: ``y`` is ``(runs, T, dim_y)``, or ``(T,)`` for one scalar run, or
+    ``(T, dim_y)`` for one run when ``dim_y > 1``. Returns ``x`` (runs, T, dim_x),
+    ``P`` (runs, T, dim_x, dim_x) and ``diagnostics["log_likelihood"]`` (runs, T),
+    ``diagnostics["log_evidence"]`` (runs,).
     """
 
     name = "KF"
-
-    def __init__(self, model, m0=None, P0=None):
-        for attr in ("F", "H"):
-            if not hasattr(model, attr):
-                raise TypeError("KalmanFilter needs a linear model with matrices F and H")
-        super().__init__(model, m0, P0)
+    model_requirements = ("linear", "additive_measurement")
 
     def predict(self, x, P, k=None):
         F = self.model.F
@@ -70,9 +74,15 @@ class ExtendedKalmanFilter(GaussianFilter):
     Update:  H = dh/dx at x-, K = P- H^T (H P- H^T + R)^{-1},
              x = x- + K (y - h(x-)), Joseph-form P.
     (Li et al. 2012, eqs 9-11, state exactly this.)
+
+    Model contract: ``f``, ``jacobian_f``, ``h``, ``jacobian_h``, ``residual_y``, ``Q``,
+    ``R``, additive measurement noise y = h(x) + v (else
+    :class:`~pfrepro.models.ModelContractError`). ``Q`` may be singular or zero.
+    ``y`` shapes and diagnostics as for :class:`KalmanFilter`.
     """
 
     name = "EKF"
+    model_requirements = ("additive_measurement", "jacobian_h", "f", "jacobian_f")
 
     def predict(self, x, P, k):
         F = self.model.jacobian_f(x, k)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..rng import run_stream
+from ..rng import check_rng, run_stream
 
 __all__ = ["resample", "resample_counts", "check_scheme", "multinomial_resample", "stratified_resample",
            "systematic_resample", "residual_resample", "offspring_counts", "effective_sample_size",
@@ -123,7 +123,12 @@ def check_scheme(scheme: str) -> str:
 
 
 def resample_counts(weights, rng: np.random.Generator, scheme: str = "systematic") -> np.ndarray:
-    """Offspring counts ``(runs, N)`` (each row sums to N) by the named scheme."""
+    """Offspring counts ``(runs, N)`` (each row sums to N) by the named scheme.
+
+    ``rng`` must be a ``numpy.random.Generator`` or ``pfrepro.rng.RunStreams``
+    (``TypeError`` otherwise: no implicit seed, no global state).
+    """
+    check_rng(rng)
     return _COUNTS[check_scheme(scheme)](normalize_weights(weights), rng)
 
 

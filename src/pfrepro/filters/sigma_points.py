@@ -16,10 +16,14 @@ __all__ = ["ScaledSigmaPoints", "unscented_transform", "safe_cholesky"]
 
 
 def safe_cholesky(A, name="covariance"):
-    """Batched lower Cholesky factor; symmetrises and adds a small jitter if needed.
+    """Batched matrix square root L with L L^T = A; robust to singular A.
 
-    A covariance that stays non-positive-definite after jitter up to 1e-6 of its
-    scale raises ``numpy.linalg.LinAlgError`` naming it.
+    The lower Cholesky factor (symmetrised A), with a small jitter if needed. A
+    covariance that is positive *semi*-definite but still not factorisable after a
+    jitter of 1e-6 of its scale (rank-deficient, e.g. zero) gets the symmetric
+    square root V sqrt(max(lam, 0)) V^T, which is as good for sigma points. One with
+    an eigenvalue below -1e-8 of its scale (or NaN) raises
+    ``numpy.linalg.LinAlgError`` naming it.
     """
     A = 0.5 * (A + np.swapaxes(A, -1, -2))
     try:
@@ -33,7 +37,14 @@ def safe_cholesky(A, name="covariance"):
             return np.linalg.cholesky(A + rel * scale * eye)
         except np.linalg.LinAlgError:
             continue
-    raise np.linalg.LinAlgError(f"{name} is not positive definite (even after jitter)")
+    if not np.all(np.isfinite(A)):
+        raise np.linalg.LinAlgError(f"{name} contains NaN or infinite entries")
+    lam, V = np.linalg.eigh(A)
+    tol = 1e-8 * np.maximum(scale[..., 0, 0], np.finfo(float).tiny)
+    if np.any(lam.min(axis=-1) < -tol):
+        raise np.linalg.LinAlgError(f"{name} is not positive semi-definite (smallest eigenvalue "
+                                    f"{lam.min():.3g})")
+    return (V * np.sqrt(np.clip(lam, 0.0, None))[..., None, :]) @ np.swapaxes(V, -1, -2)
 
 
 class ScaledSigmaPoints:

@@ -22,9 +22,19 @@ class UnscentedKalmanFilter(GaussianFilter):
     also what filterpy's ``UnscentedKalmanFilter`` does (its ``predict`` ends by
     redrawing ``sigmas_f`` from N(x-, P-); checked against filterpy 2.0.0).
     ``redraw=False`` reuses the propagated points f(X_{k-1}) for the update.
+
+    Model contract: ``f``, ``h``, ``residual_y``, ``Q``, ``R``, additive measurement
+    noise y = h(x) + v (else :class:`~pfrepro.models.ModelContractError`). ``Q`` may
+    be singular or zero; sigma points use a robust square root of P
+    (:func:`~pfrepro.filters.sigma_points.safe_cholesky`).
+
+    ``filter(y)``: ``y`` is ``(runs, T, dim_y)``, or ``(T,)`` for one scalar run, or
+    ``(T, dim_y)`` for one run when ``dim_y > 1``; returns ``x``, ``P`` and the
+    log-likelihood diagnostics of :class:`~pfrepro.filters.GaussianFilter`.
     """
 
     name = "UKF"
+    model_requirements = ("f", "additive_measurement")
 
     def __init__(self, model, alpha=1.0, beta=2.0, kappa=0.0, redraw=True, m0=None, P0=None):
         super().__init__(model, m0, P0)

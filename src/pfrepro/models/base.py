@@ -1,8 +1,8 @@
-"""State-space model interface shared by every model and filter.
+"""State-space model interface shared by every model and filter, and the model contract.
 
 A model describes
 
-    x_k = f(x_{k-1}, k) + w_{k-1},    w ~ process_noise   (covariance Q)
+    x_k = f(x_{k-1}, k) + w_{k-1},    w ~ process_noise   (covariance Q, may be singular or 0)
     y_k = h(x_k) + v_k,               v ~ measurement_noise (covariance R)
 
 for k = 1..T, with the truth starting at ``x0`` and the filters starting from
@@ -13,6 +13,58 @@ batch of runs ``(runs, dim_x)`` or a particle cloud ``(runs, N, dim_x)``.
 This follows the separation used by N. Chopin's ``particles`` package: the
 model knows how to simulate and evaluate densities; filters know nothing about
 a particular model beyond this interface.
+
+Model contract
+--------------
+Which parts of a model each filter uses. A filter checks its needs when it is
+built and raises :class:`ModelContractError` (a ``TypeError``) naming the filter,
+the model and the missing capability, instead of running on placeholders.
+Whether ``f``, ``h`` or a Jacobian exists is decided by whether the model's class
+*overrides* the base-class method (the methods are never called to find out).
+
+=====================  ============================================================
+filter                 model methods / attributes it calls
+=====================  ============================================================
+KalmanFilter           ``F``, ``H`` (matrices), ``Q``, ``R``; additive measurement noise
+ExtendedKalmanFilter   ``f``, ``jacobian_f``, ``h``, ``jacobian_h``, ``residual_y``,
+(and variants)         ``Q``, ``R``; additive measurement noise
+UnscentedKalmanFilter  ``f``, ``h``, ``residual_y``, ``Q``, ``R``; additive measurement noise
+GaussianParticleFlow-  ``sample_transition`` (hence ``f`` and the process noise),
+Filter                 ``h``, ``residual_y``, ``R``; additive measurement noise;
+                       ``integrator="exact"`` also ``H``
+BootstrapParticle-     ``sample_transition``, ``log_likelihood`` only
+Filter
+CMSParticleFilter      ``sample_transition``, ``log_likelihood`` only
+EvolutionSampling-     ``f``, ``Q`` (Gaussian, positive definite: it evaluates the
+ParticleFilter         transition density), ``log_likelihood``
+GridFilter             ``dim_x == 1``, ``f``, a transition *density* (Gaussian process
+                       noise with non-singular ``Q``), ``log_likelihood``
+=====================  ============================================================
+
+Every filter also reads ``dim_x``, ``dim_y``, ``m0`` and ``P0`` (its prior, unless
+overridden). ``simulate`` uses ``x0``/``truth_init``, ``sample_transition`` and
+``sample_measurement``.
+
+Models whose measurement is not ``y = h(x) + v``
+    set the class attribute ``additive_measurement_noise = False`` and override
+    :meth:`StateSpaceModel.log_likelihood` (the density p(y | x)) and
+    :meth:`StateSpaceModel.sample_measurement` (a draw y ~ p(y | x), which
+    :meth:`StateSpaceModel.simulate` calls). ``measurement_noise`` then describes
+    the model's own noise variable (e.g. the e of y = exp(x/2) e) and ``h``/``R``
+    mean nothing to a Gaussian filter, so KF/EKF/UKF/GPFF refuse the model while
+    the particle filters and the grid filter accept it. See
+    :class:`pfrepro.models.StochasticVolatility` for a complete example.
+
+Models whose transition is not ``f(x) + w``
+    override :meth:`StateSpaceModel.sample_transition` (a particle filter then
+    needs nothing else); do not override ``f`` unless it is the transition mean
+    a Gaussian filter may use.
+
+Singular and zero process noise
+    ``Q`` may be positive *semi*-definite (``Q = G Qc G^T`` of lower rank) or zero
+    (deterministic dynamics, no draw at all). Simulation, the KF/EKF/UKF, the
+    bootstrap PF, CMS-PF and GPFF accept it; the grid filter and ESPF need a
+    transition density and refuse it.
 """
 from __future__ import annotations
 
@@ -24,7 +76,12 @@ from ..noise import GaussianNoise
 from ..rng import check_rng
 from ..validation import as_covariance, as_vector, check_positive_int
 
-__all__ = ["StateSpaceModel", "Simulation"]
+__all__ = ["StateSpaceModel", "Simulation", "ModelContractError", "CAPABILITIES", "has_capability",
+           "missing_capabilities", "require_capabilities"]
+
+
+class ModelContractError(TypeError):
+    """A filter was given a model that lacks something the filter needs (see the module docstring)."""
 
 
 @dataclass(frozen=True)
@@ -74,6 +131,9 @@ class StateSpaceModel:
     """
 
     name = "state-space model"
+    #: False for a model whose measurement is not y = h(x) + v; it then overrides
+    #: ``log_likelihood`` and ``sample_measurement`` (see the module docstring).
+    additive_measurement_noise = True
 
     def __init__(self, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, truth_init="fixed"):
         self.dim_x = check_positive_int(dim_x, "dim_x")
@@ -160,8 +220,104 @@ class StateSpaceModel:
         x[:, 0] = self.x0 if self.truth_init == "fixed" else self.sample_initial(rng, runs)
         for k in range(1, T + 1):
             x[:, k] = self.sample_transition(x[:, k - 1], k, rng)
-            y[:, k - 1] = self.h(x[:, k]) + self.measurement_noise.sample(rng, runs)
+            y[:, k - 1] = self.sample_measurement(x[:, k], rng)
         return Simulation(x=x, y=y)
+
+    def sample_measurement(self, x: np.ndarray, rng) -> np.ndarray:
+        """Draw y ~ p(y | x) for every state in the batch ``x`` (runs first); ``(..., dim_y)``.
+
+        The default is ``h(x) + v``; a model with non-additive measurement noise
+        overrides it (and :meth:`log_likelihood`). :meth:`simulate` calls it.
+        """
+        out = self.measurement_noise.sample(rng, x.shape[:-1])
+        out += self.h(x)
+        return out
+
+    # -- the contract ------------------------------------------------------------------
+    def implements(self, method: str) -> bool:
+        """True when the model's class overrides the base-class ``method`` (``"f"``, ``"h"``, ...)."""
+        return getattr(type(self), method, None) is not getattr(StateSpaceModel, method, None)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(dim_x={self.dim_x}, dim_y={self.dim_y})"
+
+
+def _is_matrix(model, name):
+    return isinstance(getattr(model, name, None), np.ndarray) and getattr(model, name).ndim == 2
+
+
+def _has_density(model):
+    noise = getattr(model, "process_noise", None)
+    return isinstance(noise, GaussianNoise) and not noise.is_singular
+
+
+def _density_lack(model):
+    if not model.implements("f"):
+        return "does not implement f"
+    if not isinstance(getattr(model, "process_noise", None), GaussianNoise):
+        return "has non-Gaussian process noise"
+    lam = np.linalg.eigvalsh(model.Q).min()
+    return (f"has a singular process-noise covariance Q (smallest eigenvalue {lam:.3g}), "
+            "so x_k | x_k-1 has no density")
+
+
+#: capability -> (test on the model, what a filter needs, what the model lacks (text or callable))
+CAPABILITIES = {
+    "f": (lambda m: m.implements("f"), "a transition mean f(x, k)", "does not implement f"),
+    "jacobian_f": (lambda m: m.implements("jacobian_f"), "jacobian_f", "does not implement jacobian_f"),
+    "h": (lambda m: m.implements("h"), "a measurement function h(x)", "does not implement h"),
+    "jacobian_h": (lambda m: m.implements("jacobian_h"), "jacobian_h", "does not implement jacobian_h"),
+    "additive_measurement": (
+        lambda m: bool(getattr(m, "additive_measurement_noise", False)) and m.implements("h"),
+        "additive measurement noise y = h(x) + v",
+        lambda m: ("has non-additive measurement noise" if not getattr(m, "additive_measurement_noise", False)
+                   else "does not implement h")),
+    "linear": (lambda m: _is_matrix(m, "F") and _is_matrix(m, "H"),
+               "linear dynamics and measurements (matrices F and H)", "has no matrices F and H"),
+    "measurement_matrix": (lambda m: _is_matrix(m, "H"), "a measurement matrix H", "has no matrix H"),
+    "transition_sampler": (lambda m: m.implements("f") or m.implements("sample_transition"),
+                           "a transition sampler (f or sample_transition)",
+                           "implements neither f nor sample_transition"),
+    "likelihood": (lambda m: m.implements("log_likelihood")
+                   or (bool(getattr(m, "additive_measurement_noise", False)) and m.implements("h")),
+                   "a likelihood p(y | x) (log_likelihood, or h with additive noise)",
+                   "has no log_likelihood"),
+    "transition_density": (lambda m: m.implements("f") and _has_density(m),
+                           "a transition density (f and Gaussian process noise with non-singular Q)",
+                           lambda m: _density_lack(m)),
+    "scalar_state": (lambda m: m.dim_x == 1, "a scalar state (dim_x == 1)", "has dim_x != 1"),
+}
+
+
+def has_capability(model, capability: str) -> bool:
+    """Whether ``model`` provides ``capability`` (a key of :data:`CAPABILITIES`)."""
+    if capability not in CAPABILITIES:
+        raise ValueError(f"unknown model capability {capability!r}; choose from {sorted(CAPABILITIES)}")
+    return bool(CAPABILITIES[capability][0](model))
+
+
+def missing_capabilities(model, capabilities) -> list:
+    """The subset of ``capabilities`` that ``model`` lacks, in the order given."""
+    return [c for c in capabilities if not has_capability(model, c)]
+
+
+def require_capabilities(model, capabilities, who: str) -> None:
+    """Raise :class:`ModelContractError` unless ``model`` has every capability.
+
+    The message names ``who`` (the filter), what it needs, the model, and what
+    the model lacks, e.g. "ExtendedKalmanFilter needs a model with additive
+    measurement noise y = h(x) + v and jacobian_h; StochasticVolatility has
+    non-additive measurement noise".
+    """
+    if not isinstance(model, StateSpaceModel):
+        raise ModelContractError(f"{who} needs a pfrepro.models.StateSpaceModel, got {type(model).__name__}")
+    missing = missing_capabilities(model, capabilities)
+    if missing:
+        needs = [CAPABILITIES[c][1] for c in capabilities]
+        lacks = [CAPABILITIES[c][2] for c in missing]
+        lacks = [t(model) if callable(t) else t for t in lacks]
+        if model.dim_x != 1 and "scalar_state" in missing:
+            lacks[missing.index("scalar_state")] = f"has dim_x = {model.dim_x}"
+        need_txt = needs[0] if len(needs) == 1 else ", ".join(needs[:-1]) + " and " + needs[-1]
+        raise ModelContractError(f"{who} needs a model with {need_txt}; "
+                                 f"{type(model).__name__} {'; it '.join(lacks)}")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..validation import as_finite_float, as_matrix
 from .base import StateSpaceModel
 
 __all__ = ["BearingsOnly", "wrap_angle"]
@@ -28,8 +29,9 @@ class BearingsOnly(StateSpaceModel):
     def __init__(self, dt=0.1, q=0.1, sensors=((-10.0, -10.0), (10.0, -10.0)), sigma_theta=0.05,
                  measurement_noise=None, x0=(0.0, 36.0, 0.2, -1.0), m0=(-6.0, 17.0, 0.0, 0.0),
                  P0=(25.0, 25.0, 1.0, 1.0), truth_init="fixed"):
-        self.dt = float(dt)
-        self.sensors = np.atleast_2d(np.asarray(sensors, float))
+        self.dt = dt = as_finite_float(dt, "dt", positive=True)
+        q = as_finite_float(q, "q", nonnegative=True)
+        self.sensors = as_matrix(sensors, "sensors", (None, 2))  # one (s_x, s_y) row per sensor
         ns = self.sensors.shape[0]
         I2 = np.eye(2)
         self.F = np.block([[I2, dt * I2], [np.zeros((2, 2)), I2]])
@@ -37,6 +39,8 @@ class BearingsOnly(StateSpaceModel):
         P0 = np.asarray(P0, float)
         if P0.ndim == 1:  # the paper prints P0 as a vector: read it as a diagonal
             P0 = np.diag(P0)
+        if measurement_noise is None:
+            sigma_theta = as_finite_float(sigma_theta, "sigma_theta", positive=True)
         noise = measurement_noise if measurement_noise is not None else sigma_theta**2 * np.eye(ns)
         super().__init__(4, ns, Q, noise, x0, m0, P0, truth_init=truth_init)
 

@@ -9,6 +9,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from ..noise import GaussianMixtureNoise
+from ..validation import as_finite_float, as_matrix
 from .base import StateSpaceModel
 
 __all__ = ["LinearGaussianModel", "CWPA", "van_loan_discretize"]
@@ -42,13 +43,11 @@ class LinearGaussianModel(StateSpaceModel):
     name = "linear-Gaussian"
 
     def __init__(self, F, H, Q, R, x0, m0=None, P0=None, truth_init="fixed"):
-        self.F = np.atleast_2d(np.asarray(F, float))
-        self.H = np.atleast_2d(np.asarray(H, float))
+        self.F = as_matrix(F, "F")
         nx = self.F.shape[0]
         if self.F.shape != (nx, nx):
-            raise ValueError(f"F must be square, got {self.F.shape}")
-        if self.H.shape[1] != nx:
-            raise ValueError(f"H must have {nx} columns, got {self.H.shape}")
+            raise ValueError(f"F must be square, got shape {self.F.shape}")
+        self.H = as_matrix(H, "H", (None, nx))
         m0 = x0 if m0 is None else m0
         P0 = np.eye(nx) if P0 is None else P0
         super().__init__(nx, self.H.shape[0], Q, R, x0, m0, P0, truth_init=truth_init)
@@ -79,6 +78,8 @@ class CWPA(LinearGaussianModel):
 
     def __init__(self, dt=0.1, qc=0.1, R=None, measurement_noise=None, x0=None,
                  P0=None, m0=None, truth_init="fixed"):
+        dt = as_finite_float(dt, "dt", positive=True)
+        qc = as_finite_float(qc, "qc", nonnegative=True)
         F_c = np.zeros((6, 6))
         F_c[:4, 2:] = np.eye(4)
         L = np.zeros((6, 2))

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..validation import as_finite_float
 from .base import StateSpaceModel
 
 __all__ = ["UNGM"]
@@ -33,9 +34,13 @@ class UNGM(StateSpaceModel):
     def __init__(self, alpha=0.5, beta=25.0, gamma=8.0, omega=1.2, time_offset=1,
                  Q=1.0, R=1.0, x0=0.1, m0=None, P0=1.0, obs_coeff=1.0 / 20.0,
                  measurement_noise=None, truth_init="fixed"):
-        self.alpha, self.beta, self.gamma = float(alpha), float(beta), float(gamma)
-        self.omega, self.time_offset = float(omega), int(time_offset)
-        self.obs_coeff = float(obs_coeff)
+        self.alpha, self.beta = as_finite_float(alpha, "alpha"), as_finite_float(beta, "beta")
+        self.gamma, self.omega = as_finite_float(gamma, "gamma"), as_finite_float(omega, "omega")
+        off = as_finite_float(time_offset, "time_offset")
+        if not off.is_integer():
+            raise ValueError(f"time_offset must be an integer, got {time_offset!r}")
+        self.time_offset = int(off)
+        self.obs_coeff = as_finite_float(obs_coeff, "obs_coeff")
         m0 = x0 if m0 is None else m0
         super().__init__(1, 1, Q, R if measurement_noise is None else measurement_noise,
                          [x0], [m0], P0, truth_init=truth_init)
