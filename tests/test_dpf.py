@@ -390,3 +390,28 @@ def test_theta_grid_equals_the_grid_filter_at_each_theta_and_fixed_parameter_mod
         np.testing.assert_allclose(ref["x_mean_given_theta"][:, :, j], gf.x[..., 0], atol=1e-10)
     pf = BootstrapParticleFilter(m.at([0.5]), 200).filter(sim.y, np.random.default_rng(0))
     assert pf.x.shape == (2, 15, 1) and np.all(np.isfinite(pf.x))
+
+
+def test_dual_filters_check_the_model_contract():
+    from pfrepro.models import ModelContractError
+    from pfrepro.models.parameterized import ParameterizedModel
+
+    class NoJacobians(ParameterizedModel):
+        def __init__(self):
+            super().__init__(1, 1, 1, 1.0, 1.0, [0.0], [0.0], 1.0, [0.5], (0.0, 1.0))
+
+        def f(self, x, k, theta):
+            return theta * x
+
+        def h(self, x):
+            return x
+
+    m = NoJacobians()
+    with pytest.raises(ModelContractError, match="jacobian_f_theta"):
+        DualExtendedKalmanFilter(m, 0.5, 0.1)
+    with pytest.raises(ModelContractError, match="jacobian"):
+        DualParticleFilter(m, 10, 10)                       # predictive weight linearises f and h
+    DualParticleFilter(m, 10, 10, weight="plugin")          # the plug-in weight needs f and h only
+    LiuWestFilter(m, 10)
+    with pytest.raises(ModelContractError, match="ParameterizedModel"):
+        LiuWestFilter(UNGMTheta().at([0.5]), 10)

@@ -33,7 +33,7 @@ import numpy as np
 from ..models.parameterized import as_theta
 from ..validation import as_covariance
 from .base import Filter, FilterResult, gaussian_loglik
-from .dual_pf import check_parameterized
+from .dual_pf import init_parameterized_filter
 
 __all__ = ["DualExtendedKalmanFilter"]
 
@@ -52,8 +52,8 @@ class DualExtendedKalmanFilter(Filter):
 
     def __init__(self, model, theta0, P_theta0, q0: float = 0.0, anneal: float = 1.0, q_min: float = 0.0,
                  clip_to_bounds: bool = False, m0=None, P0=None):
-        check_parameterized(model, scalar_theta=False)
-        super().__init__(model, m0, P0)
+        init_parameterized_filter(self, model, type(self).__name__, m0, P0, scalar_theta=False,
+                                  needs=("f", "h", "jacobian_f", "jacobian_f_theta", "jacobian_h"))
         self.theta0 = as_theta(theta0, model.dim_theta, "theta0").reshape(model.dim_theta)
         self.P_theta0 = as_covariance(P_theta0, "P_theta0", model.dim_theta, allow_singular=True)
         for name, v in (("q0", q0), ("q_min", q_min)):

@@ -54,14 +54,15 @@ from __future__ import annotations
 import numpy as np
 from scipy import special
 
+from ..models.base import ModelContractError
 from ..models.parameterized import ParameterizedModel, as_theta
-from ..validation import check_positive_int
+from ..validation import as_covariance, as_vector, check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
 from .particle import normalize_log_weights
 from .resampling import check_scheme, resample_counts
 
 __all__ = ["DualParticleFilter", "beta_moment_fit", "beta_moments", "weighted_mean_var", "roughen",
-           "PARAMETER_WEIGHTS", "check_parameterized"]
+           "PARAMETER_WEIGHTS", "check_parameterized", "init_parameterized_filter"]
 
 PARAMETER_WEIGHTS = ("predictive", "plugin", "literal")
 #: status codes of :func:`beta_moment_fit`
@@ -71,12 +72,31 @@ NU_HARD_MAX = 1e12
 _MU_EPS = 1e-12
 
 
-def check_parameterized(model, scalar_theta: bool = True):
+def check_parameterized(model, who: str, scalar_theta: bool = True, needs=("f", "h")):
+    """The dual-estimation filters' model contract: a ParameterizedModel implementing ``needs``.
+
+    Raises :class:`~pfrepro.models.ModelContractError` (a ``TypeError``) naming the filter and
+    what the model lacks.
+    """
     if not isinstance(model, ParameterizedModel):
-        raise TypeError(f"model must be a ParameterizedModel, got {type(model).__name__}")
+        raise ModelContractError(f"{who} needs a pfrepro.models.ParameterizedModel (a model with an unknown "
+                                 f"parameter θ), got {type(model).__name__}")
+    lacks = [m for m in needs if getattr(type(model), m, None) is getattr(ParameterizedModel, m)]
+    if lacks:
+        raise ModelContractError(f"{who} needs a model implementing {', '.join(needs)}; "
+                                 f"{type(model).__name__} does not implement {', '.join(lacks)}")
     if scalar_theta and model.dim_theta != 1:
-        raise ValueError(f"this filter estimates a scalar parameter; model has dim_theta = {model.dim_theta}")
+        raise ValueError(f"{who} estimates a scalar parameter; model has dim_theta = {model.dim_theta}")
     return model
+
+
+def init_parameterized_filter(filt, model, who: str, m0=None, P0=None, scalar_theta=True, needs=("f", "h")):
+    """What ``Filter.__init__`` does for a StateSpaceModel, for a ParameterizedModel: the contract
+    check, the model and the prior N(m0, P0) (default: the model's)."""
+    check_parameterized(model, who, scalar_theta, needs)
+    filt.model = model
+    filt.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)
+    filt.P0 = model.P0 if P0 is None else as_covariance(P0, "P0", model.dim_x)
 
 
 def beta_moments(alpha, beta):
@@ -168,8 +188,9 @@ class DualParticleFilter(Filter):
 
     def __init__(self, model, n_x: int, n_theta: int, weight: str = "predictive", cap=None,
                  theta0=None, roughening=None, resampling: str = "systematic", nu_min: float = 2.0):
-        check_parameterized(model)
-        super().__init__(model)
+        init_parameterized_filter(self, model, type(self).__name__,
+                                  needs=("f", "h") if weight == "plugin" or weight == "literal"
+                                  else ("f", "h", "jacobian_f", "jacobian_h"))
         self.n_x = check_positive_int(n_x, "n_x")
         self.n_theta = check_positive_int(n_theta, "n_theta")
         if weight not in PARAMETER_WEIGHTS:

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
-from .dual_pf import check_parameterized
+from .dual_pf import init_parameterized_filter
 from .particle import normalize_log_weights
 from .resampling import check_scheme, resample_counts
 
@@ -72,8 +72,7 @@ class LiuWestFilter(Filter):
     def __init__(self, model, n_particles: int, delta: float = 0.99, resampling: str = "systematic",
                  quantiles=(0.025, 0.5, 0.975)):
         """``quantiles``: levels of θ's weighted quantiles stored per step (diagnostics)."""
-        check_parameterized(model)
-        super().__init__(model)
+        init_parameterized_filter(self, model, type(self).__name__)
         self.n_particles = check_positive_int(n_particles, "n_particles")
         self.a = liu_west_a(delta)
         self.delta = float(delta)

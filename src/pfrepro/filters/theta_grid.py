@@ -24,7 +24,7 @@ from scipy.interpolate import CubicSpline
 
 from ..validation import check_positive_int
 from .base import Filter, FilterResult
-from .dual_pf import check_parameterized
+from .dual_pf import init_parameterized_filter
 
 __all__ = ["ThetaGridReference", "posterior_summary"]
 
@@ -70,8 +70,7 @@ class ThetaGridReference(Filter):
     name = "exact θ posterior (grid)"
 
     def __init__(self, model, n_theta: int = 101, x_bounds=(-40.0, 40.0), n_grid: int = 321, n_fine: int = 2001):
-        check_parameterized(model)
-        super().__init__(model)
+        init_parameterized_filter(self, model, type(self).__name__)
         if model.dim_x != 1 or model.dim_y != 1:
             raise ValueError("ThetaGridReference is for scalar models (dim_x = dim_y = 1)")
         q = float(np.sqrt(model.Q[0, 0]))
