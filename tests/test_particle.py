@@ -7,6 +7,7 @@ from scipy.stats import multivariate_normal
 
 from conftest import random_linear_model
 from pfrepro.filters import RESAMPLING_SCHEMES, BootstrapParticleFilter, KalmanFilter, normalize_log_weights
+from pfrepro.filters.particle import WeightCollapseWarning
 from pfrepro.models import LinearGaussianModel
 
 NS = (100, 1000, 10000)
@@ -146,7 +147,7 @@ def test_collapse_is_reported_not_crashing():
     y[0, 1] = 1e6
     # run 1: the squared residual overflows, every log-weight is -inf: a genuine collapse
     y[1, 2] = 1e200
-    with np.errstate(over="ignore"):
+    with pytest.warns(WeightCollapseWarning, match="1 of 12 run-steps"):
         res = BootstrapParticleFilter(model, 50).filter(y, rng=np.random.default_rng(0))
     assert np.all(np.isfinite(res.x))
     coll = res.diagnostics["collapsed"]

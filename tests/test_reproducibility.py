@@ -7,7 +7,7 @@ import pytest
 from pfrepro.filters import RESAMPLING_SCHEMES, BootstrapParticleFilter, KalmanFilter, UnscentedKalmanFilter
 from pfrepro.metrics import mse, rmse
 from pfrepro.models import CWPA, UNGM, BearingsOnly
-from pfrepro.montecarlo import filter_rng, run_monte_carlo, truth_rng
+from pfrepro.montecarlo import filter_rng, filter_streams, run_monte_carlo, truth_rng, truth_streams
 
 
 @pytest.mark.parametrize("model", [UNGM.zhang2016(), BearingsOnly.zhang2016(), CWPA.zhang2016("mixture"),
@@ -61,11 +61,11 @@ def test_run_monte_carlo_same_seed_identical():
     np.testing.assert_array_equal(a.sim.y, b.sim.y)
     for name in a.results:
         np.testing.assert_array_equal(a.results[name].x, b.results[name].x)
-    # the truth is the truth_rng(seed) stream
-    np.testing.assert_array_equal(a.sim.y, model.simulate(12, 3, truth_rng(42)).y)
-    # and each filter ran on its own named stream
+    # the truth is the truth_streams(seed, runs) per-run streams
+    np.testing.assert_array_equal(a.sim.y, model.simulate(12, 3, truth_streams(42, 3)).y)
+    # and each filter ran on its own named per-run streams
     np.testing.assert_array_equal(a.results["PF"].x,
-                                  _filters(model)["PF"].filter(a.sim.y, rng=filter_rng(42, "PF")).x)
+                                  _filters(model)["PF"].filter(a.sim.y, rng=filter_streams(42, "PF", 3)).x)
     c = run_monte_carlo(model, _filters(model), T=12, runs=3, seed=43)
     assert not np.array_equal(a.sim.y, c.sim.y)
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from .validation import check_positive_int
+from .rng import RunStreams, check_rng
 
 __all__ = ["logistic_sequence", "chebyshev_sequence", "gaussian_sequence", "ChaosCarrier",
            "CARRIERS", "DEFAULT_BURN_IN", "EDGE"]
@@ -164,11 +165,14 @@ class ChaosCarrier:
         return {"randn": (-np.inf, np.inf), "logistic": (0.0, 1.0), "chebyshev": (-1.0, 1.0)}[self.kind]
 
     def generate(self, T: int, shape, rng: np.random.Generator) -> np.ndarray:
+        """``(T, *shape)`` carrier values; with per-run streams (:class:`~pfrepro.rng.RunStreams`)
+        ``shape[0]`` is the number of runs and run i's chains come from run i's stream."""
         T = check_positive_int(T, "T")
         shape = tuple(int(s) for s in np.atleast_1d(shape))
-        if not isinstance(rng, np.random.Generator):
-            raise TypeError(f"rng must be a numpy.random.Generator, got {rng!r}")
+        check_rng(rng)
         if self.kind == "randn":
+            if isinstance(rng, RunStreams):  # runs axis first in the draw (pfrepro.rng rule 1)
+                return np.ascontiguousarray(np.moveaxis(rng.standard_normal(shape[:1] + (T,) + shape[1:]), 1, 0))
             return rng.standard_normal((T,) + shape)
         # initial values uniform on (0.01, 0.99) of the interval: away from its end points
         # (pre-fixed points such as 0.5 have probability zero under a continuous draw)

@@ -1,12 +1,24 @@
 """Monte Carlo runner: model + filters + settings + seed -> estimates, errors, timings.
 
-Randomness is split by name, not by order: the truth uses the stream
-``SeedSequence([seed, 0])`` and each filter ``SeedSequence([seed, 1, crc32(name)])``,
-so adding a filter to an experiment never changes the numbers of the others.
+Randomness is split by name, not by order, and by run: run i of the truth draws from
+``SeedSequence([seed, 0], spawn_key=(i,))`` and run i of the filter called ``name`` from
+``SeedSequence([seed, 1, crc32(name)], spawn_key=(i,))`` (:func:`truth_streams`,
+:func:`filter_streams`). So adding a filter never changes the numbers of the others,
+growing an experiment from 100 to 200 runs keeps the first 100 bit-identical, and any
+split of the runs over processes or machines (``executor=``) gives the same numbers.
+
+Parallel work: :func:`run_monte_carlo` and :func:`map_runs` accept any
+``concurrent.futures.Executor`` (a ``ProcessPoolExecutor``, or a dask.distributed
+``Client.get_executor()``); the runs are cut into contiguous chunks, each chunk builds
+the streams of its own runs (``start=``), and the chunks' results are concatenated
+in run order -- bit-identical to the serial call.
 """
 from __future__ import annotations
 
 import gc
+import math
+import os
+import sys
 import time
 import zlib
 from dataclasses import dataclass, field
@@ -19,8 +31,8 @@ from .models.base import Simulation
 from .rng import RunStreams
 from .validation import check_positive_int
 
-__all__ = ["MonteCarloResult", "run_monte_carlo", "filter_rng", "truth_rng", "truth_streams", "filter_streams",
-           "time_single_run", "time_filters"]
+__all__ = ["MonteCarloResult", "run_monte_carlo", "map_runs", "run_chunks", "filter_rng", "truth_rng",
+           "truth_streams", "filter_streams", "time_single_run", "time_filters", "progress_enabled"]
 
 
 def truth_rng(seed: int) -> np.random.Generator:
@@ -116,28 +128,221 @@ class MonteCarloResult:
         return rmse(self.x_true, self.results[name].x)
 
 
-def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, time_per_run: bool = False,
-                    timing_repeats: int = 3, sim: Simulation | None = None) -> MonteCarloResult:
-    """Simulate ``runs`` runs of ``model`` and run every filter on the same data in one batched call each.
+# -- progress ------------------------------------------------------------------------------
+def progress_enabled(progress=None) -> bool:
+    """Whether to show a progress bar: ``True``/``False`` force it; ``None`` (auto) shows one
+    only when stderr is a terminal and the ``CI`` environment variable is not set
+    (so the book build and CI stay silent)."""
+    if progress is not None:
+        return bool(progress)
+    if os.environ.get("CI"):
+        return False
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError):
+        return False
+
+
+class _NoBar:
+    def update(self, n=1):
+        pass
+
+    def set_postfix_str(self, s):
+        pass
+
+    def close(self):
+        pass
+
+
+def _bar(progress, total: int, desc: str):
+    if not progress_enabled(progress) or total <= 0:
+        return _NoBar()
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=desc, unit="chunk", leave=False)
+
+
+# -- chunks and executors ------------------------------------------------------------------
+def _n_workers(executor) -> int:
+    """Best guess of the number of workers behind ``executor`` (for the default chunking)."""
+    n = getattr(executor, "_max_workers", None)          # concurrent.futures pools
+    if n:
+        return int(n)
+    client = getattr(executor, "_client", None)           # dask.distributed ClientExecutor
+    if client is not None:
+        try:
+            return max(1, int(sum(client.nthreads().values())))
+        except Exception:  # pragma: no cover - a client that cannot answer
+            pass
+    return os.cpu_count() or 1
+
+
+def run_chunks(runs: int, executor=None, chunks: int | None = None) -> list[tuple[int, int]]:
+    """Contiguous chunks ``(start, size)`` covering runs ``0 .. runs - 1``.
+
+    Serial (``executor=None``): one chunk of all runs (the fastest batched call).
+    With an executor: ``chunks`` chunks (default two per worker, for load balance),
+    never more than ``runs``. The split changes no number (per-run streams).
+    """
+    runs = check_positive_int(runs, "runs")
+    if chunks is None:
+        chunks = 1 if executor is None else 2 * _n_workers(executor)
+    chunks = min(check_positive_int(chunks, "chunks"), runs)
+    size = math.ceil(runs / chunks)
+    return [(s, min(size, runs - s)) for s in range(0, runs, size)]
+
+
+def _concat(parts: list):
+    """Concatenate per-chunk results along the runs axis (arrays, FilterResult, Simulation,
+    tuples, lists and dicts of those). Scalars must agree across chunks, except the counts
+    in :data:`_SUMMED_KEYS`, which are added."""
+    first = parts[0]
+    if len(parts) == 1:
+        return first
+    if isinstance(first, np.ndarray):
+        return np.concatenate(parts, axis=0)
+    if isinstance(first, FilterResult):
+        return FilterResult(_concat([p.x for p in parts]),
+                            None if first.P is None else _concat([p.P for p in parts]),
+                            _concat_dict([p.diagnostics for p in parts]))
+    if isinstance(first, Simulation):
+        return Simulation(_concat([p.x for p in parts]), _concat([p.y for p in parts]))
+    if isinstance(first, dict):
+        return _concat_dict(parts)
+    if isinstance(first, (tuple, list)):
+        return type(first)(_concat(list(col)) for col in zip(*parts))
+    raise TypeError(f"cannot concatenate chunk results of type {type(first).__name__}; "
+                    "return arrays (runs axis first), FilterResults, or tuples/dicts of them")
+
+
+#: diagnostics that count events over runs: a chunked call adds them up
+_SUMMED_KEYS = frozenset({"n_collapsed", "n_diverged"})
+
+
+def _concat_dict(parts: list[dict]) -> dict:
+    out = {}
+    for key in parts[0]:
+        vals = [p[key] for p in parts]
+        if key in _SUMMED_KEYS:
+            out[key] = type(vals[0])(sum(vals))
+        elif isinstance(vals[0], (np.ndarray, FilterResult, Simulation, dict, tuple, list)) \
+                and np.ndim(vals[0]) != 0:
+            out[key] = _concat(vals)
+        elif all(np.array_equal(v, vals[0]) for v in vals[1:]):
+            out[key] = vals[0]
+        else:
+            raise ValueError(f"chunks disagree on the scalar {key!r}: {vals}; it cannot be combined")
+    return out
+
+
+def _gather(futures: list, bar) -> list:
+    out = []
+    try:
+        for f in futures:
+            out.append(f.result())
+            bar.update(1)
+    except BaseException:
+        for f in futures:
+            f.cancel()
+        raise
+    return out
+
+
+def map_runs(fn, runs: int, executor=None, *, chunks: int | None = None, progress=None, desc: str = "runs"):
+    """Apply ``fn(start, size)`` to contiguous chunks of the runs and concatenate the results.
+
+    ``fn(start, size)`` must compute runs ``start .. start + size - 1`` only (drawing from
+    streams built with ``start=``, e.g. :func:`truth_streams` / :func:`filter_streams`)
+    and return an array with the runs axis first, a ``FilterResult``, a ``Simulation``,
+    or a tuple/list/dict of those; the chunks' results are concatenated in run order.
+    With an ``executor`` the chunks run in parallel (``fn`` must be picklable: a
+    module-level function or a ``functools.partial`` of one); the result is bit-identical
+    to ``executor=None``. This is the helper for heavy batched work that is not a plain
+    :func:`run_monte_carlo` call.
+    """
+    parts = run_chunks(runs, executor, chunks)
+    bar = _bar(progress, len(parts) if len(parts) > 1 else 0, desc)
+    try:
+        if executor is None:
+            res = []
+            for start, size in parts:
+                res.append(fn(start, size))
+                bar.update(1)
+        else:
+            res = _gather([executor.submit(fn, start, size) for start, size in parts], bar)
+    finally:
+        bar.close()
+    return _concat(res)
+
+
+def _simulate_chunk(model, T: int, seed: int, start: int, size: int) -> Simulation:
+    return model.simulate(T, size, truth_streams(seed, size, start))
+
+
+def _filter_chunk(filt, name: str, y, seed: int, start: int) -> tuple[FilterResult, float]:
+    t0 = time.perf_counter()
+    res = filt.filter(y, rng=filter_streams(seed, name, y.shape[0], start))
+    return res, time.perf_counter() - t0
+
+
+def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, executor=None, progress=None,
+                    chunks: int | None = None, time_per_run: bool = False, timing_repeats: int = 3,
+                    sim: Simulation | None = None) -> MonteCarloResult:
+    """Simulate ``runs`` runs of ``model`` and run every filter on the same data, batched over runs.
+
+    Random streams: run i's truth from ``truth_streams(seed, ...)``, run i of filter ``name``
+    from ``filter_streams(seed, name, ...)``; run i's numbers depend on ``seed``, ``name``
+    and i only (not on ``runs``, ``executor`` or ``chunks``).
 
     Parameters
     ----------
     filters : mapping name -> filter object (anything with ``filter(y, rng)``).
+    executor : None (serial: one batched call per filter) or any
+        ``concurrent.futures.Executor`` -- a ``ProcessPoolExecutor``, or a dask.distributed
+        ``Client.get_executor()``. The runs are cut into ``chunks`` contiguous chunks (default
+        two per worker), the truth and every (filter, chunk) become tasks, and the results are
+        concatenated in run order: bit-identical to the serial call. Models and filters must
+        be picklable.
+    progress : None (auto: a ``tqdm`` bar only when stderr is a terminal and ``CI`` is unset),
+        True or False.
     time_per_run : also measure each filter's wall time on a single run
         (median of ``timing_repeats``, interleaved across the filters: :func:`time_filters`),
-        the figure the papers' timing tables report.
+        the figure the papers' timing tables report. Always serial, in this process, after
+        every parallel task has finished (never while the pool is working).
     sim : reuse an existing simulation instead of simulating (``T``/``runs`` must match).
+
+    ``batch_seconds[name]`` is the wall time of the filter's batched call (serial), or the sum
+    of its chunks' wall times in the workers (with an executor).
     """
     T = check_positive_int(T, "T")
     runs = check_positive_int(runs, "runs")
-    if sim is None:
-        sim = model.simulate(T, runs, truth_rng(seed))
-    elif sim.y.shape[:2] != (runs, T):
+    if sim is not None and sim.y.shape[:2] != (runs, T):
         raise ValueError(f"sim has shape {sim.y.shape[:2]}, expected (runs, T) = {(runs, T)}")
+    parts = run_chunks(runs, executor, chunks)
+    n_tasks = len(filters) * len(parts) + (sim is None) * len(parts)
+    bar = _bar(progress, n_tasks, "Monte Carlo")
     results, batch = {}, {}
-    for name, filt in filters.items():
-        t0 = time.perf_counter()
-        results[name] = filt.filter(sim.y, rng=filter_rng(seed, name))
-        batch[name] = time.perf_counter() - t0
+    try:
+        if executor is None:
+            if sim is None:
+                sim = _simulate_chunk(model, T, seed, 0, runs)
+                bar.update(1)
+            for name, filt in filters.items():
+                bar.set_postfix_str(name)
+                results[name], batch[name] = _filter_chunk(filt, name, sim.y, seed, 0)
+                bar.update(1)
+        else:
+            if sim is None:
+                sim = _concat(_gather([executor.submit(_simulate_chunk, model, T, seed, s, n)
+                                       for s, n in parts], bar))
+            futures = {name: [executor.submit(_filter_chunk, filt, name, sim.y[s:s + n], seed, s)
+                              for s, n in parts] for name, filt in filters.items()}
+            for name, fs in futures.items():
+                bar.set_postfix_str(name)
+                out = _gather(fs, bar)
+                results[name] = _concat([r for r, _ in out])
+                batch[name] = float(sum(t for _, t in out))
+    finally:
+        bar.close()
     per_run = time_filters(filters, sim.y[:1], seed, timing_repeats) if time_per_run else {}
     return MonteCarloResult(sim=sim, results=results, batch_seconds=batch, seconds_per_run=per_run, seed=seed)

@@ -48,6 +48,10 @@ class RunStreams:
             if not isinstance(g, np.random.Generator):
                 raise TypeError(f"RunStreams holds numpy.random.Generator objects, got {g!r}")
         self._gens = gens
+        # bound methods, looked up once: the per-run loops below are the whole cost of
+        # per-run streams at small N (one call per run and draw)
+        self._standard_normal = [g.standard_normal for g in gens]
+        self._random = [g.random for g in gens]
 
     @classmethod
     def from_entropy(cls, entropy, runs: int, start: int = 0) -> "RunStreams":
@@ -107,17 +111,22 @@ class RunStreams:
         return out
 
     def standard_normal(self, size=None, dtype=np.float64):
-        size = self._size(size, "standard_normal")
-        out = np.empty(size, dtype=dtype)
-        for i, g in enumerate(self._gens):
-            g.standard_normal(dtype=dtype, out=out[i])
-        return out
+        return self._fill(self._standard_normal, self._size(size, "standard_normal"), dtype)
 
     def random(self, size=None, dtype=np.float64):
-        size = self._size(size, "random")
+        return self._fill(self._random, self._size(size, "random"), dtype)
+
+    @staticmethod
+    def _fill(methods, size, dtype):
+        """One array ``size``; run i's slice filled in place (``out=``) by ``methods[i]``."""
         out = np.empty(size, dtype=dtype)
-        for i, g in enumerate(self._gens):
-            g.random(dtype=dtype, out=out[i])
+        rows = out.reshape(size[0], -1)       # a view: each row is run i's contiguous slice
+        if np.dtype(dtype) == np.float64:
+            for draw, row in zip(methods, rows):
+                draw(out=row)
+        else:
+            for draw, row in zip(methods, rows):
+                draw(dtype=dtype, out=row)
         return out
 
     def normal(self, loc=0.0, scale=1.0, size=None):

@@ -19,7 +19,7 @@ from ..filters import (BootstrapParticleFilter, CMSParticleFilter, EvolutionSamp
                        ExtendedKalmanFilter, GridFilter, OracleCMSParticleFilter, UnscentedKalmanFilter)
 from ..metrics import mc_summary, rmse
 from ..models import UNGM
-from ..montecarlo import filter_rng, run_monte_carlo, time_filters, truth_rng
+from ..montecarlo import filter_streams, run_monte_carlo, time_filters, truth_streams
 
 __all__ = ["PAPER", "T", "SEEDS", "ASSUMPTIONS", "model", "cms", "pf", "grid", "ekf", "ukf", "espf",
            "table1", "table2", "fig2_run", "fig3", "table3", "one_step", "fig6", "sensitivity",
@@ -121,18 +121,18 @@ class _OfflineCarrierCMS:
 
 
 # -- Table 1 -------------------------------------------------------------------------------
-def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table1"]):
+def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table1"], *, executor=None):
     """Per-run RMSE of PF and CMS-PF (20 runs, each N), plus PF(2N) and the grid reference.
 
     One set of 20 trajectories is shared by every N (common random numbers).
     Returns ``(per_run, grid_rmse)``: ``per_run`` has columns (N, filter).
     """
     m = model(sigma_v, sigma_w2)
-    sim = m.simulate(T, runs, truth_rng(seed))
+    sim = m.simulate(T, runs, truth_streams(seed, runs))
     cols = {}
     for N in Ns:
         fs = {f"PF N={N}": pf(m, N), f"CMS-PF N={N}": cms(m, N), f"PF N={2 * N}": pf(m, 2 * N)}
-        res = run_monte_carlo(m, fs, T, runs, seed, sim=sim)
+        res = run_monte_carlo(m, fs, T, runs, seed, sim=sim, executor=executor)
         cols[(N, "PF")] = res.rmse(f"PF N={N}")
         cols[(N, "CMS-PF")] = res.rmse(f"CMS-PF N={N}")
         cols[(N, "PF (2N)")] = res.rmse(f"PF N={2 * N}")
@@ -144,7 +144,7 @@ def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, see
 
 # -- Table 2 -------------------------------------------------------------------------------
 def table2(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table2"],
-           timing_repeats: int = 7):
+           timing_repeats: int = 7, *, executor=None):
     """RMSE over 50 runs and time per run of EKF, UKF, PF, ESPF, CMS-PF (+ references).
 
     Time: median wall time of one 50-step run, every filter timed in the same
@@ -155,8 +155,8 @@ def table2(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=
     m = model(sigma_v, sigma_w2)
     fs = {"EKF": ekf(m), "UKF": ukf(m), "PF": pf(m, N), "ESPF": espf(m, N), "CMS-PF": cms(m, N),
           "PF (2N)": pf(m, 2 * N), "Grid (exact)": grid(m)}
-    res = run_monte_carlo(m, fs, T, runs, seed)
-    orc = oracle(m, N).filter(res.sim.y, filter_rng(seed, "Oracle CMS-PF"), x_true=res.sim.x)
+    res = run_monte_carlo(m, fs, T, runs, seed, executor=executor)
+    orc = oracle(m, N).filter(res.sim.y, filter_streams(seed, "Oracle CMS-PF", runs), x_true=res.sim.x)
     rows = {}
     for name in fs:
         rows[name] = summarise(res.rmse(name))
@@ -184,15 +184,16 @@ def fig2_run(N: int = 200, sigma_v: float = 1.0, seed=SEEDS["fig2"]):
 
 
 # -- Fig. 3 --------------------------------------------------------------------------------
-def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["fig3"], timing_repeats=9):
+def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["fig3"], timing_repeats=9,
+         *, executor=None):
     """RMSE and time per run of CMS-PF (and PF) against N, sigma_v = 10."""
     runs = ASSUMPTIONS["runs_fig3"] if runs is None else runs
     m = model(sigma_v)
-    sim = m.simulate(T, runs, truth_rng(seed))
+    sim = m.simulate(T, runs, truth_streams(seed, runs))
     out, timed = [], {}
     for N in Ns:
         fs = {"CMS-PF": cms(m, N), "PF": pf(m, N)}
-        res = run_monte_carlo(m, fs, T, runs, seed, sim=sim)
+        res = run_monte_carlo(m, fs, T, runs, seed, sim=sim, executor=executor)
         timed[("CMS-PF", N)] = _OfflineCarrierCMS(fs["CMS-PF"], T, seed)
         timed[("PF", N)] = fs["PF"]
         c, p = summarise(res.rmse("CMS-PF")), summarise(res.rmse("PF"))
@@ -211,7 +212,8 @@ def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["
 TABLE3_COLUMNS = ("EKF", "UKF", "CMS1-PF", "CMSR1-PF", "CMS2-PF", "CMSR2-PF", "CMS3-PF", "CMSR3-PF")
 
 
-def table3(runs: int = 20, N: int | None = None, sigma_v: float = 10.0, sigma_w2=None, seed=SEEDS["table3"]):
+def table3(runs: int = 20, N: int | None = None, sigma_v: float = 10.0, sigma_w2=None, seed=SEEDS["table3"],
+           *, executor=None):
     """Per-run RMSE, sigma_v = 10: EKF, UKF and CMS-PF with randn (1), eq-1 (2), eq-6 (3)
     carriers, without (CMS) and with (CMSR, N_eff < N_th) resampling; + PF and grid."""
     N = ASSUMPTIONS["N_table2"] if N is None else N
@@ -222,7 +224,7 @@ def table3(runs: int = 20, N: int | None = None, sigma_v: float = 10.0, sigma_w2
         fs[f"CMSR{i}-PF"] = cms(m, N, carrier=car, n_th=ASSUMPTIONS["n_th"])
     fs["PF"] = pf(m, N)
     fs["Grid (exact)"] = grid(m)
-    res = run_monte_carlo(m, fs, T, runs, seed)
+    res = run_monte_carlo(m, fs, T, runs, seed, executor=executor)
     per_run = pd.DataFrame({k: res.rmse(k) for k in fs}, index=pd.RangeIndex(1, runs + 1, name="run"))
     return per_run, res
 
@@ -236,9 +238,9 @@ def one_step(carrier: str, k: int = 20, N: int = 200, sigma_v: float = 1.0, seed
     mapping (plain SIS) and with mapping. Returns a dict of arrays for one run.
     """
     m = model(sigma_v)
-    sim = m.simulate(T, 1, truth_rng(seed))
+    sim = m.simulate(T, 1, truth_streams(seed, 1))
     f = cms(m, N, carrier=carrier)
-    rng = filter_rng(seed, f"figs45 {carrier}")
+    rng = filter_streams(seed, f"figs45 {carrier}", 1)
     r = f.carrier.generate(T, (1, N, 1), rng)
     x = f.sample_prior(rng, (1, N))
     logw = np.full((1, N), -np.log(N))
@@ -249,9 +251,9 @@ def one_step(carrier: str, k: int = 20, N: int = 200, sigma_v: float = 1.0, seed
         if np.round(1.0 / np.sum(w * w)) < f.n_th * N:
             idx = np.repeat(np.arange(N), np.random.default_rng(j).multinomial(N, w[0]))
             x, logw = x[:, idx], np.full((1, N), -np.log(N))
-    state = rng.bit_generator.state
+    state = rng[0].bit_generator.state
     plain = f.step(x, logw, sim.y[:, k - 1], k, r[k - 1], rng, use_map=False)
-    rng.bit_generator.state = state
+    rng[0].bit_generator.state = state
     mapped = f.step(x, logw, sim.y[:, k - 1], k, r[k - 1], rng)
     return {"x_prev": x[0, :, 0], "logw_prev": logw[0], "lw_pred": logw[0] + mapped.ll_pred[0], "x_true": sim.x[0, k, 0], "x_pred": mapped.x_pred[0, :, 0],
             "x_map": mapped.x_map[0, :, 0], "ll_pred": mapped.ll_pred[0], "ll_map": mapped.ll_map[0],
@@ -280,11 +282,12 @@ def fig6(alphas=(0.05, 0.2, 0.5, 0.8, 2.0), k: int = 20, N: int = 200, seed=SEED
 
 
 # -- sensitivity -----------------------------------------------------------------------------
-def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed=SEEDS["sensitivity"]):
+def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed=SEEDS["sensitivity"],
+                *, executor=None):
     """Mean RMSE of CMS-PF when one assumption at a time is varied over its reasonable range."""
     N = ASSUMPTIONS["N_table2"] if N is None else N
     m = model(sigma_v)
-    sim = m.simulate(T, runs, truth_rng(seed))
+    sim = m.simulate(T, runs, truth_streams(seed, runs))
     grids = {
         "eta": (0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 1.0, 1.5),
         "big_fraction": (0.005, 0.02, 0.05, 0.1, 0.25, 0.5),
@@ -294,16 +297,18 @@ def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed
     rows = []
     for par, values in grids.items():
         for v in values:
-            res = run_monte_carlo(m, {"CMS-PF": cms(m, N, **{par: v})}, T, runs, seed, sim=sim)
+            res = run_monte_carlo(m, {"CMS-PF": cms(m, N, **{par: v})}, T, runs, seed, sim=sim,
+                                  executor=executor)
             s = summarise(res.rmse("CMS-PF"))
             rows.append({"parameter": par, "value": v, "RMSE": s["mean"], "se": s["se"],
                          "chosen": v == ASSUMPTIONS[par]})
-    ref = run_monte_carlo(m, {"PF": pf(m, N), "Grid (exact)": grid(m)}, T, runs, seed, sim=sim)
+    ref = run_monte_carlo(m, {"PF": pf(m, N), "Grid (exact)": grid(m)}, T, runs, seed, sim=sim, executor=executor)
     return pd.DataFrame(rows), {k: summarise(ref.rmse(k)) for k in ("PF", "Grid (exact)")}
 
 
 # -- consistency (improper weights) ------------------------------------------------------------
-def consistency(Ns=(50, 200, 1000, 4000), runs: int = 50, sigma_v: float = 1.0, seed=SEEDS["consistency"]):
+def consistency(Ns=(50, 200, 1000, 4000), runs: int = 50, sigma_v: float = 1.0, seed=SEEDS["consistency"],
+                *, executor=None):
     """Distance of PF and CMS-PF estimates from the exact posterior mean, and their spread.
 
     ``dist``: RMS over runs and steps of (x_hat - E[x_k | y_1:k]) with the grid's
@@ -311,12 +316,12 @@ def consistency(Ns=(50, 200, 1000, 4000), runs: int = 50, sigma_v: float = 1.0, 
     mean reported posterior variance over the grid's posterior variance.
     """
     m = model(sigma_v)
-    sim = m.simulate(T, runs, truth_rng(seed))
+    sim = m.simulate(T, runs, truth_streams(seed, runs))
     g = grid(m).filter(sim.y)
     rows = []
     for N in Ns:
         fs = {"PF": BootstrapParticleFilter(m, N, return_cov=True), "CMS-PF": cms(m, N)}
-        res = run_monte_carlo(m, fs, T, runs, seed, sim=sim)
+        res = run_monte_carlo(m, fs, T, runs, seed, sim=sim, executor=executor)
         for name in fs:
             r = res.results[name]
             d = r.x - g.x

@@ -36,7 +36,7 @@ from ..filters.ekf_variants import PreviousEstimateJacobianEKF
 from ..metrics import mc_summary, rmse, rmse_over_time
 from ..models import UNGM
 from ..models.base import Simulation
-from ..montecarlo import MonteCarloResult, run_monte_carlo, time_filters, time_single_run, truth_rng
+from ..montecarlo import MonteCarloResult, run_monte_carlo, time_filters, time_single_run, truth_streams
 from ..validation import check_positive_int
 
 __all__ = [
@@ -133,20 +133,24 @@ def make_filters(model, include=("EKF", "PF", "Exact"), *, n_particles: int = N_
 
 def simulate(which: int, runs: int, seed: int) -> Simulation:
     """Truth and measurements for ``runs`` runs of model ``which`` (independent of P0)."""
-    return make_model(which).simulate(T, check_positive_int(runs, "runs"), truth_rng(seed))
+    runs = check_positive_int(runs, "runs")
+    return make_model(which).simulate(T, runs, truth_streams(seed, runs))
 
 
 def run(which: int, runs: int, seed: int, include=("EKF", "PF", "Exact"), *, P0: float = P0_DEFAULT,
         n_particles: int = N_PARTICLES, resampling: str = RESAMPLING_DEFAULT,
-        sim: Simulation | None = None, time_per_run: bool = False) -> MonteCarloResult:
+        sim: Simulation | None = None, time_per_run: bool = False, executor=None) -> MonteCarloResult:
     """Run the filters ``include`` on ``runs`` runs of model ``which`` (all on the same data).
 
-    Random streams: truth from ``truth_rng(seed)``, each filter from ``filter_rng(seed, name)``.
+    Random streams: truth from ``truth_streams(seed, runs)``, each filter from
+    ``filter_streams(seed, name, runs)`` (per run). ``executor``: see
+    :func:`pfrepro.montecarlo.run_monte_carlo` (the per-run timing stays serial).
     If the exact grid filter is included, its lost probability mass is checked.
     """
     model = make_model(which, P0)
     filters = make_filters(model, include, n_particles=n_particles, resampling=resampling)
-    res = run_monte_carlo(model, filters, T, runs, seed, sim=sim, time_per_run=time_per_run)
+    res = run_monte_carlo(model, filters, T, runs, seed, sim=sim, time_per_run=time_per_run,
+                          executor=executor)
     if "Exact" in res.results:
         lost = float(np.max(np.abs(res.results["Exact"].diagnostics["lost_mass"])))
         if lost > MAX_LOST_MASS:
@@ -237,7 +241,7 @@ def statistic_readings(res: MonteCarloResult, names) -> pd.DataFrame:
 # sensitivity to the unstated choices
 # --------------------------------------------------------------------------------------
 def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING_SWEEP,
-                ekf_variants=("EKF", "EKF-prev")) -> pd.DataFrame:
+                ekf_variants=("EKF", "EKF-prev"), executor=None) -> pd.DataFrame:
     """Table 1 cells and verdicts under every reasonable choice the paper leaves open.
 
     ``sims`` maps model number -> the Table 1 simulation (every setting sees the same data,
@@ -267,10 +271,12 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
     for which, sim in sims.items():
         runs = sim.runs
         for P0 in P0_values:
-            add("P0", P0, which, run(which, runs, seed, ("EKF", "PF", "Exact"), P0=P0, sim=sim))
+            add("P0", P0, which, run(which, runs, seed, ("EKF", "PF", "Exact"), P0=P0, sim=sim,
+                                   executor=executor))
         for scheme in schemes:
-            add("resampling", scheme, which, run(which, runs, seed, ("EKF", "PF"), resampling=scheme, sim=sim))
-        res = run(which, runs, seed, tuple(ekf_variants) + ("PF",), sim=sim)
+            add("resampling", scheme, which, run(which, runs, seed, ("EKF", "PF"), resampling=scheme, sim=sim,
+                                           executor=executor))
+        res = run(which, runs, seed, tuple(ekf_variants) + ("PF",), sim=sim, executor=executor)
         for ek in ekf_variants:
             add("EKF linearisation", FILTER_LABELS[ek], which, res, ekf_name=ek)
     return pd.DataFrame(rows)

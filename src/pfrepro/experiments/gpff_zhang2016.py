@@ -19,6 +19,8 @@ residuals; MSE std = sample std (ddof = 1) of the per-run MSE over the 100 runs.
 """
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
@@ -30,7 +32,8 @@ from ..filters import (BootstrapParticleFilter, ExtendedKalmanFilter, GaussianPa
 from ..filters.gpff import particle_moments
 from ..metrics import mc_summary, mse, mse_per_component
 from ..models import CWPA, UNGM, BearingsOnly
-from ..montecarlo import MonteCarloResult, run_monte_carlo, truth_rng
+from ..montecarlo import MonteCarloResult, map_runs, run_monte_carlo, truth_streams
+from ..rng import RunStreams
 
 __all__ = ["PAPER", "RUNS", "SEEDS", "UT", "N_LAMBDA", "TIMING_REPEATS", "random_linear_problem", "equivalence_table",
            "interior_checks", "fokker_planck_check", "printed_vs_corrected_linear",
@@ -347,7 +350,7 @@ def _gpff(model, N, **kw):
     return GaussianParticleFlowFilter(model, n_particles=N, n_steps=N_LAMBDA, **UT, **kw)
 
 
-def run_cwpa(noise: str, runs=RUNS, T=80, time_per_run=True) -> MonteCarloResult:
+def run_cwpa(noise: str, runs=RUNS, T=80, time_per_run=True, *, executor=None) -> MonteCarloResult:
     """Sec 5.1: KF vs GPFF(100) on the CWPA model; ``noise`` is "gaussian" or "mixture".
 
     Both filters are given R = the measurement noise's covariance (the mixture's own
@@ -356,10 +359,10 @@ def run_cwpa(noise: str, runs=RUNS, T=80, time_per_run=True) -> MonteCarloResult
     filters = {"KF": KalmanFilter(model), "GPFF": _gpff(model, 100, field="eq41"),
                "GPFF (exact map)": _gpff(model, 100, integrator="exact")}
     return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS[f"cwpa_{noise}"],
-                           time_per_run=time_per_run)
+                           time_per_run=time_per_run, executor=executor)
 
 
-def cwpa_r_sensitivity(mc_mixture: MonteCarloResult) -> pd.DataFrame:
+def cwpa_r_sensitivity(mc_mixture: MonteCarloResult, *, executor=None) -> pd.DataFrame:
     """The mixture data filtered by KF and GPFF given other R's (the paper does not say which)."""
     R1 = np.array([[0.6, 0.25], [0.25, 0.7]])
     noise = CWPA.zhang2016("mixture").measurement_noise
@@ -369,8 +372,9 @@ def cwpa_r_sensitivity(mc_mixture: MonteCarloResult) -> pd.DataFrame:
     rows = []
     for label, R in choices.items():
         model = CWPA(R=R)
-        res = run_monte_carlo(model, {"KF": KalmanFilter(model), "GPFF": _gpff(model, 100, field="eq41")}, T=mc_mixture.sim.T,
-                              runs=mc_mixture.sim.runs, seed=SEEDS["cwpa_mixture"], sim=mc_mixture.sim)
+        res = run_monte_carlo(model, {"KF": KalmanFilter(model), "GPFF": _gpff(model, 100, field="eq41")},
+                              T=mc_mixture.sim.T, runs=mc_mixture.sim.runs, seed=SEEDS["cwpa_mixture"],
+                              sim=mc_mixture.sim, executor=executor)
         k, g = res.mse("KF"), res.mse("GPFF")
         s = mc_summary(g - k)
         rows.append({"R given to KF and GPFF": label, "KF MSE": k.mean(), "GPFF MSE": g.mean(),
@@ -381,7 +385,7 @@ def cwpa_r_sensitivity(mc_mixture: MonteCarloResult) -> pd.DataFrame:
 UNG_LABELS = ["EKF", "UKF", "PF(100)", "PF(500)", "PF(1000)", "GPFF(100)", "GPFF(500)", "GPFF(1000)"]
 
 
-def run_ung(runs=RUNS, T=500, time_per_run=True) -> MonteCarloResult:
+def run_ung(runs=RUNS, T=500, time_per_run=True, *, executor=None) -> MonteCarloResult:
     """Sec 5.2 / Table 1: UNG with Q = R = 1, x0 = 0.1, P0 = 0.1, T = 500.
 
     GPFF(N) here is the eq (43) (statistically linearised) field: the literal eq (41) field
@@ -396,13 +400,13 @@ def run_ung(runs=RUNS, T=500, time_per_run=True) -> MonteCarloResult:
     filters["GPFF(100) eq41"] = _gpff(model, 100, field="eq41", on_divergence="drop")
     filters["Grid (exact)"] = GridFilter(model, bounds=(-40.0, 40.0), n_grid=1601)
     return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS["ung"], time_per_run=time_per_run,
-                           timing_repeats=TIMING_REPEATS)
+                           timing_repeats=TIMING_REPEATS, executor=executor)
 
 
 BOT_LABELS = ["EKF", "UKF", "PF(500)", "PF(1000)", "PF(4000)", "GPFF(100)"]
 
 
-def run_bot(runs=RUNS, T=200, time_per_run=True) -> MonteCarloResult:
+def run_bot(runs=RUNS, T=200, time_per_run=True, *, executor=None) -> MonteCarloResult:
     """Sec 5.3 / Table 2: two-sensor bearings-only tracking, T = 200; GPFF(100) is the
     literal eq (41) field (it does not diverge here); "GPFF(100) eq43" for comparison."""
     model = BearingsOnly.zhang2016()
@@ -412,7 +416,7 @@ def run_bot(runs=RUNS, T=200, time_per_run=True) -> MonteCarloResult:
     filters["GPFF(100)"] = _gpff(model, 100, field="eq41", on_divergence="drop")
     filters["GPFF(100) eq43"] = _gpff(model, 100, field="eq43", on_divergence="drop")
     return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS["bot"], time_per_run=time_per_run,
-                           timing_repeats=TIMING_REPEATS)
+                           timing_repeats=TIMING_REPEATS, executor=executor)
 
 
 def table1(mc: MonteCarloResult, reference="GPFF(100)") -> pd.DataFrame:
@@ -475,8 +479,14 @@ def cost_ratios(mc: MonteCarloResult, pairs) -> pd.DataFrame:
                          for a, b in pairs]).set_index("ratio")
 
 
+def _filter_runs(filt, y, entropy, start, size):
+    """``filt`` on runs ``start .. start + size - 1`` of ``y`` with the per-run streams of ``entropy``
+    (a chunk for :func:`pfrepro.montecarlo.map_runs`)."""
+    return filt.filter(y[start:start + size], rng=RunStreams.from_entropy(entropy, size, start)).x
+
+
 def schedule_sweep(which: str, runs=RUNS, sim=None,
-                   integrators=("euler", "midpoint", "rk4")) -> pd.DataFrame:
+                   integrators=("euler", "midpoint", "rk4"), *, executor=None) -> pd.DataFrame:
     """GPFF(100) with uniform/exponential lambda steps and Euler/midpoint/RK4 integrators.
 
     ``which`` = "ung" (eq 43 field, T = 500) or "bot" (eq 41 field, T = 200). Same data
@@ -487,13 +497,13 @@ def schedule_sweep(which: str, runs=RUNS, sim=None,
         model, T, field, seed = BearingsOnly.zhang2016(), 200, "eq41", SEEDS["sweep_bot"]
     else:
         raise ValueError("which must be 'ung' or 'bot'")
-    sim = model.simulate(T, runs, truth_rng(seed)) if sim is None else sim
+    sim = model.simulate(T, runs, truth_streams(seed, runs)) if sim is None else sim
     rows = []
     for sched in ("uniform", "exponential"):
         for meth in integrators:
             f = _gpff(model, 100, field=field, schedule=sched, integrator=meth, on_divergence="drop")
-            res = f.filter(sim.y, rng=np.random.default_rng([seed, 7]))
-            v = mse(sim.x[:, 1:], res.x)
+            x_hat = map_runs(partial(_filter_runs, f, sim.y, [seed, 7]), sim.runs, executor)
+            v = mse(sim.x[:, 1:], x_hat)
             ok = np.isfinite(v)
             s = mc_summary(v[ok])
             rows.append({"schedule": sched, "integrator": meth, "MSE mean": s.mean, "SE": s.se,

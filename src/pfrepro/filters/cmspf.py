@@ -44,7 +44,7 @@ from ..chaos import ChaosCarrier
 from ..rng import take_runs
 from ..validation import check_positive_int, check_probability
 from .base import Filter, FilterDivergenceError, FilterResult
-from .particle import normalize_log_weights
+from .particle import normalize_log_weights, warn_collapse
 from .resampling import check_scheme, resample_counts
 
 __all__ = ["CMSParticleFilter", "OracleCMSParticleFilter", "CMSStep", "map_particles",
@@ -131,6 +131,7 @@ class CMSStep:
     x: np.ndarray
     logw: np.ndarray
     estimate: np.ndarray
+    collapsed: np.ndarray | None = None
 
 
 class CMSParticleFilter(Filter):
@@ -152,7 +153,9 @@ class CMSParticleFilter(Filter):
 
     Diagnostics: ``ess`` (runs, T) after selection, ``resampled`` (runs, T),
     ``map_share`` (runs, T) fraction of the kept particles that are map particles,
-    ``likelihood_evaluations`` per run (2 N T).
+    ``likelihood_evaluations`` per run (2 N T), ``collapsed`` (runs, T) / ``n_collapsed``: steps
+    where every weight underflowed (weights reset to uniform; reported by one
+    :class:`~pfrepro.filters.particle.WeightCollapseWarning` per call).
     """
 
     name = "CMS-PF"
@@ -187,12 +190,12 @@ class CMSParticleFilter(Filter):
         ll1 = self.model.log_likelihood(y_k, x1)
         if not use_map:
             lw = logw_prev + ll1
-            w, _, _ = normalize_log_weights(lw)
+            w, _, coll = normalize_log_weights(lw)
             with np.errstate(divide="ignore"):
                 logw = np.log(w)
             est = (w[:, None, :] @ x1)[:, 0]
             return CMSStep(x1, ll1, x1[:, :0], ll1[:, :0], np.broadcast_to(np.arange(N), ll1.shape),
-                           x1, logw, est)
+                           x1, logw, est, coll)
         centre = None if x_true_k is None else x_true_k
         x2, lw2_prev, _ = map_particles(x1, logw_prev + ll1, logw_prev, r, self.eta, self.n_big, centre)
         ll2 = self.model.log_likelihood(y_k, x2)
@@ -202,11 +205,11 @@ class CMSParticleFilter(Filter):
         sel = select_top_likelihood(llc, N, sort=False)
         x = np.take_along_axis(xc, sel[..., None], axis=1)
         lw = np.take_along_axis(lwc_prev, sel, axis=1) + np.take_along_axis(llc, sel, axis=1)
-        w, _, _ = normalize_log_weights(lw)
+        w, _, coll = normalize_log_weights(lw)
         with np.errstate(divide="ignore"):
             logw = np.log(w)
         est = (w[:, None, :] @ x)[:, 0]
-        return CMSStep(x1, ll1, x2, ll2, sel, x, logw, est)
+        return CMSStep(x1, ll1, x2, ll2, sel, x, logw, est, coll)
 
     # -- the filter ------------------------------------------------------------------------
     def _run(self, y, rng, x_true=None, r=None) -> FilterResult:
@@ -228,12 +231,28 @@ class CMSParticleFilter(Filter):
         ess = np.empty((runs, T))
         resampled = np.zeros((runs, T), dtype=bool)
         map_share = np.empty((runs, T))
+        collapsed = np.zeros((runs, T), dtype=bool)
+        # likelihoods far in the tails over/underflow: handled in the log domain and recorded as
+        # collapse (reported once below), so numpy's RuntimeWarnings are silenced at the source
+        with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
+            self._loop(y, rng, x_true, carrier, x, logw, xs, Ps, ess, resampled, map_share, collapsed)
+        n_collapsed = int(collapsed.sum())
+        if n_collapsed:
+            warn_collapse(self.name, n_collapsed, runs, T)
+        return FilterResult(xs, Ps, diagnostics={
+            "ess": ess, "resampled": resampled, "map_share": map_share, "collapsed": collapsed,
+            "n_collapsed": n_collapsed, "likelihood_evaluations": 2 * N * T, "n_big": self.n_big})
+
+    def _loop(self, y, rng, x_true, carrier, x, logw, xs, Ps, ess, resampled, map_share, collapsed):
+        runs, T, _ = y.shape
+        N, n = self.n_particles, self.model.dim_x
         for k in range(1, T + 1):
             if not np.all(np.isfinite(x)):
                 raise FilterDivergenceError(f"{self.name} particles became non-finite at step {k}")
             xt = None if x_true is None else x_true[:, k]
             st = self.step(x, logw, y[:, k - 1], k, carrier[k - 1], rng, x_true_k=xt)
             x, logw = st.x, st.logw
+            collapsed[:, k - 1] = st.collapsed
             w = np.exp(logw)
             xs[:, k - 1] = st.estimate
             d = x - st.estimate[:, None, :]
@@ -250,9 +269,6 @@ class CMSParticleFilter(Filter):
                 logw = logw.copy()
                 logw[sel] = -np.log(N)
             resampled[:, k - 1] = do
-        return FilterResult(xs, Ps, diagnostics={
-            "ess": ess, "resampled": resampled, "map_share": map_share,
-            "likelihood_evaluations": 2 * N * T, "n_big": self.n_big})
 
     def filter(self, y, rng: np.random.Generator | None = None, *, r=None) -> FilterResult:
         """Run on ``y`` (runs, T, dim_y). ``r``: optional carrier computed offline

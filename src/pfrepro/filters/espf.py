@@ -34,7 +34,7 @@ import numpy as np
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
 from .cmspf import select_top_likelihood
-from .particle import normalize_log_weights
+from .particle import normalize_log_weights, warn_collapse
 from .resampling import check_scheme, resample
 
 __all__ = ["EvolutionSamplingParticleFilter", "sbx_children"]
@@ -73,11 +73,15 @@ class EvolutionSamplingParticleFilter(Filter):
     resampling : scheme for step 1.
     m0, P0 : override the model's prior.
 
-    Diagnostics: ``acceptance`` (runs, T) MCMC acceptance rates, ``origin_share``
-    (runs, T, 3) fractions of kept particles from (resampled, MCMC, SBX).
+    Diagnostics: ``collapsed`` (runs, T) / ``n_collapsed`` weight collapses (one
+    :class:`~pfrepro.filters.particle.WeightCollapseWarning` per call), ``acceptance``
+    (runs, T) MCMC acceptance rates, ``origin_share`` (runs, T, 3) fractions of kept
+    particles from (resampled, MCMC, SBX).
     """
 
     name = "ESPF (reconstruction)"
+    # its MH move evaluates the transition density N(x; f(x_prev), Q): Q must be non-singular
+    model_requirements = ("transition_density", "likelihood")
     needs_rng = True
 
     def __init__(self, model, n_particles: int, mcmc_scale: float = 1.0, sbx_eta: float = 2.0,
@@ -107,13 +111,28 @@ class EvolutionSamplingParticleFilter(Filter):
         xs = np.empty((runs, T, n))
         acc_rate = np.empty((runs, T))
         origin = np.empty((runs, T, 3))
-        npair = N // 2
-        rows = np.arange(runs)[:, None]
 
         def log_trans(v, m):
             d = v - m
             return -0.5 * np.einsum("...i,ij,...j->...", d, Qi, d)
 
+        collapsed = np.zeros((runs, T), dtype=bool)
+        # likelihoods far in the tails over/underflow: handled in the log domain and recorded as
+        # collapse (reported once below), so numpy's RuntimeWarnings are silenced at the source
+        with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
+            self._loop(y, rng, x, xs, acc_rate, origin, collapsed, log_trans, Lq)
+        n_collapsed = int(collapsed.sum())
+        if n_collapsed:
+            warn_collapse(self.name, n_collapsed, runs, T)
+        return FilterResult(xs, None, diagnostics={"acceptance": acc_rate, "origin_share": origin,
+                                                   "collapsed": collapsed, "n_collapsed": n_collapsed,
+                                                   "likelihood_evaluations": 3 * N * T})
+
+    def _loop(self, y, rng, x, xs, acc_rate, origin, collapsed, log_trans, Lq):
+        runs, T, _ = y.shape
+        N, n = self.n_particles, self.model.dim_x
+        npair = N // 2
+        rows = np.arange(runs)[:, None]
         for k in range(1, T + 1):
             if not np.all(np.isfinite(x)):
                 raise FilterDivergenceError(f"ESPF particles became non-finite at step {k}")
@@ -121,7 +140,7 @@ class EvolutionSamplingParticleFilter(Filter):
             m = self.model.f(x, k)                                       # predicted means
             xp = m + rng.standard_normal((runs, N, n)) @ Lq.T
             ll = self.model.log_likelihood(yk, xp)
-            w, _, _ = normalize_log_weights(ll)
+            w, _, collapsed[:, k - 1] = normalize_log_weights(ll)
             a = resample(w, rng, self.resampling)                        # ancestors (runs, N)
             xr, mr, llr = xp[rows, a], m[rows, a], ll[rows, a]
             # MCMC move (random-walk MH, target p(z|x) N(x; m, Q))
@@ -151,8 +170,6 @@ class EvolutionSamplingParticleFilter(Filter):
             xs[:, k - 1] = x.mean(axis=1)
             origin[:, k - 1] = np.stack([(sel < N).mean(1), ((sel >= N) & (sel < 2 * N)).mean(1),
                                          (sel >= 2 * N).mean(1)], axis=1)
-        return FilterResult(xs, None, diagnostics={"acceptance": acc_rate, "origin_share": origin,
-                                                   "likelihood_evaluations": 3 * N * T})
 
     def __repr__(self) -> str:
         return (f"EvolutionSamplingParticleFilter(N={self.n_particles}, mcmc_scale={self.mcmc_scale}, "

@@ -21,6 +21,7 @@ import numpy as np
 
 from .. import flow
 from ..models.base import require_capabilities
+from ..rng import take_runs
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
 from .sigma_points import ScaledSigmaPoints, unscented_transform
@@ -165,24 +166,28 @@ class GaussianParticleFlowFilter(Filter):
         diverged_at = np.zeros(runs, dtype=int)
         with np.errstate(all="ignore"):
             for k in range(1, T + 1):
-                x = self.model.sample_transition(x, k, rng)
-                # a cloud whose covariance overflows cannot be moved (eq 52): treat as diverged
-                ok = np.all(np.isfinite(particle_moments(x)[1].reshape(len(alive), -1)), axis=1)
-                updated = bool(ok.all())
-                if updated:
-                    x = self.update(x, y[alive, k - 1])
-                    ok = np.all(np.isfinite(x.reshape(len(alive), -1)), axis=1)
-                if not ok.all():
-                    bad = alive[~ok]
-                    if self.on_divergence == "raise":
-                        raise FilterDivergenceError(f"GPFF particles became non-finite at step {k} "
-                                                    f"in runs {bad[:10].tolist()}")
-                    diverged_at[bad] = k
-                    alive, x = alive[ok], x[ok]
-                    if alive.size == 0:
-                        break
-                    if not updated:  # the update was skipped: do it now for the healthy runs
+                # runs that diverged no longer draw; the others keep their own streams
+                x = self.model.sample_transition(x, k, take_runs(rng, alive) if len(alive) < runs else rng)
+                # a cloud whose covariance overflows cannot be moved (eq 52): treat as diverged.
+                # Each run's fate depends on its own particles only (pfrepro.rng rule 3): drop the
+                # runs that diverged in the prediction, update the others, then check them again.
+                for stage in ("prior", "update"):
+                    if stage == "prior":
+                        ok = np.all(np.isfinite(particle_moments(x)[1].reshape(len(alive), -1)), axis=1)
+                    else:
                         x = self.update(x, y[alive, k - 1])
+                        ok = np.all(np.isfinite(x.reshape(len(alive), -1)), axis=1)
+                    if not ok.all():
+                        bad = alive[~ok]
+                        if self.on_divergence == "raise":
+                            raise FilterDivergenceError(f"GPFF particles became non-finite at step {k} "
+                                                        f"in runs {bad[:10].tolist()}")
+                        diverged_at[bad] = k
+                        alive, x = alive[ok], x[ok]
+                        if alive.size == 0:
+                            break
+                if alive.size == 0:
+                    break
                 xs[alive, k - 1] = x.mean(axis=1)
                 if Ps is not None:
                     Ps[alive, k - 1] = particle_moments(x)[1]

@@ -5,14 +5,16 @@ Monte Carlo runs; the only Python loop is over time.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from ..validation import check_positive_int, check_probability
 from ..rng import take_runs
 from .base import Filter, FilterResult
-from .resampling import check_scheme, resample_counts
+from .resampling import check_scheme, resampling_counts_function
 
-__all__ = ["BootstrapParticleFilter", "normalize_log_weights"]
+__all__ = ["BootstrapParticleFilter", "normalize_log_weights", "WeightCollapseWarning", "warn_collapse"]
 
 
 def normalize_log_weights(logw):
@@ -37,6 +39,37 @@ def normalize_log_weights(logw):
     log_sum = (m + np.log(s))[:, 0]
     log_sum[collapsed] = -np.inf
     return w, log_sum, collapsed
+
+
+def _normalize_into(logw, w):
+    """Normalise log-weights ``logw`` (runs, N) into ``w`` (in place); return log sum exp per run.
+
+    The fast path (every run has a finite maximum) is five NumPy calls; a run whose
+    log-weights are all -inf or NaN (weight collapse) gets uniform weights and
+    log-sum -inf, NaN log-weights count as -inf, as in :func:`normalize_log_weights`.
+    """
+    m = logw.max(axis=1)
+    if not np.isfinite(m).all():
+        wn, log_sum, _ = normalize_log_weights(logw)
+        w[...] = wn
+        return log_sum
+    np.subtract(logw, m[:, None], out=w)
+    np.exp(w, out=w)
+    s = w.sum(axis=1)
+    w /= s[:, None]
+    return m + np.log(s)
+
+
+def warn_collapse(name: str, n_collapsed: int, runs: int, T: int) -> None:
+    """One warning per filter call: how many (run, step) pairs had every weight underflow."""
+    warnings.warn(
+        f"{name}: weight collapse in {n_collapsed} of {runs * T} run-steps (every particle's likelihood "
+        "underflowed; weights reset to uniform there). See diagnostics['collapsed'].",
+        WeightCollapseWarning, stacklevel=3)
+
+
+class WeightCollapseWarning(RuntimeWarning):
+    """Every particle weight of a run underflowed at some step (recorded in ``diagnostics``)."""
 
 
 class BootstrapParticleFilter(Filter):
@@ -75,53 +108,75 @@ class BootstrapParticleFilter(Filter):
         y = self._prepare(y, rng)
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
+        model, scheme, log_n = self.model, self.resampling, np.log(N)
+        every_step = self.ess_threshold is None
+        counts_of = resampling_counts_function(scheme)
         x = self.sample_prior(rng, (runs, N))
-        logw = np.full((runs, N), -np.log(N))
+        # None: uniform weights 1/N, used when every run resamples at every step
+        logw = None if every_step else np.full((runs, N), -log_n)
         xs = np.empty((runs, T, n))
         Ps = np.empty((runs, T, n, n)) if self.return_cov else None
         ess = np.empty((runs, T))
-        resampled = np.zeros((runs, T), dtype=bool)
-        collapsed = np.zeros((runs, T), dtype=bool)
-        log_evidence = np.zeros(runs)
-        for k in range(1, T + 1):
-            if not np.all(np.isfinite(x)):
-                from .base import FilterDivergenceError
+        resampled = np.ones((runs, T), dtype=bool) if every_step else np.zeros((runs, T), dtype=bool)
+        log_sums = np.empty((runs, T))
+        w = np.empty((runs, N))          # normalised weights, reused every step
+        # Overflow/underflow of a likelihood far out in the tails is expected and handled
+        # (log domain; a run whose weights all vanish is a recorded collapse, reported once
+        # below): numpy's RuntimeWarnings about it are silenced here, at the source.
+        with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
+            for k in range(1, T + 1):
+                x = model.sample_transition(x, k, rng)
+                # log p(y_k | y_1:k-1) ≈ log sum_i w_{k-1}^i p(y_k | x_k^i) with normalised w_{k-1};
+                # after resampling w_{k-1} = 1/N, so the weights are the likelihoods themselves
+                ll = model.log_likelihood(y[:, k - 1], x)
+                if logw is not None:
+                    ll += logw
+                    log_sums[:, k - 1] = _normalize_into(ll, w)
+                else:
+                    log_sums[:, k - 1] = _normalize_into(ll, w) - log_n
+                # einsum, not w @ x: a single-run (1, 1, N) @ (1, N, n) matmul goes to a threaded
+                # OpenBLAS call that stalls for milliseconds when the cores are busy
+                xk = np.einsum("rn,rni->ri", w, x, out=xs[:, k - 1])
+                if Ps is not None:
+                    d = x - xk[:, None, :]
+                    Ps[:, k - 1] = np.einsum("rn,rni,rnj->rij", w, d, d)
+                ess_k = np.reciprocal(np.einsum("rn,rn->r", w, w), out=ess[:, k - 1])
+                if every_step:
+                    # offspring counts + one repeat: no index gather over (runs, N, n)
+                    counts = counts_of(w, rng)
+                    x = np.repeat(x.reshape(runs * N, n), counts.ravel(), axis=0).reshape(runs, N, n)
+                    continue
+                do = ess_k < self.ess_threshold * N
+                resampled[:, k - 1] = do
+                # explicit log-weights in this mode, even when every run resamples: a run's
+                # arithmetic must not depend on what the other runs of the batch do (rng rule 3)
+                logw = np.log(w)
+                if do.all():
+                    counts = counts_of(w, rng)
+                    x = np.repeat(x.reshape(runs * N, n), counts.ravel(), axis=0).reshape(runs, N, n)
+                    logw.fill(-log_n)
+                    continue
+                if do.any():
+                    sel = np.flatnonzero(do)
+                    counts = counts_of(w[sel], take_runs(rng, sel))
+                    x[sel] = np.repeat(x[sel].reshape(-1, n), counts.ravel(), axis=0).reshape(len(sel), N, n)
+                    logw[sel] = -log_n
+        # diagnostics from the stored per-step quantities, after the loop
+        collapsed = np.isneginf(log_sums)    # every weight underflowed (log-sum -inf)
+        bad = ~np.isfinite(xs).all(axis=2)
+        if bad.any():
+            from .base import FilterDivergenceError
 
-                raise FilterDivergenceError(f"PF particles became non-finite at step {k}")
-            x = self.model.sample_transition(x, k, rng)
-            # log p(y_k | y_1:k-1) ≈ log sum_i w_{k-1}^i p(y_k | x_k^i) with normalised w_{k-1}
-            logw = logw + self.model.log_likelihood(y[:, k - 1], x)
-            w, log_sum, coll = normalize_log_weights(logw)
-            log_evidence += log_sum
-            collapsed[:, k - 1] = coll
-            # einsum, not w @ x: a single-run (1, 1, N) @ (1, N, n) matmul goes to a threaded
-            # OpenBLAS call that stalls for milliseconds when the cores are busy
-            xs[:, k - 1] = np.einsum("rn,rni->ri", w, x)
-            if Ps is not None:
-                d = x - xs[:, k - 1, None, :]
-                Ps[:, k - 1] = np.einsum("rn,rni,rnj->rij", w, d, d)
-            ess_k = 1.0 / np.sum(w * w, axis=1)
-            ess[:, k - 1] = ess_k
-            do = np.ones(runs, bool) if self.ess_threshold is None else ess_k < self.ess_threshold * N
-            if do.all():
-                # offspring counts + one repeat: no index gather over (runs, N, n)
-                counts = resample_counts(w, rng, self.resampling)
-                x = np.repeat(x.reshape(runs * N, n), counts.ravel(), axis=0).reshape(runs, N, n)
-                logw = np.full((runs, N), -np.log(N))
-            elif do.any():
-                sel = np.flatnonzero(do)
-                counts = resample_counts(w[sel], take_runs(rng, sel), self.resampling)
-                x[sel] = np.repeat(x[sel].reshape(-1, n), counts.ravel(), axis=0).reshape(len(sel), N, n)
-                with np.errstate(divide="ignore"):
-                    logw = np.log(w)
-                logw[sel] = -np.log(N)
-            else:
-                with np.errstate(divide="ignore"):
-                    logw = np.log(w)
-            resampled[:, k - 1] = do
+            k_bad = int(np.flatnonzero(bad.any(axis=0))[0]) + 1
+            raise FilterDivergenceError(f"PF particles became non-finite at step {k_bad} "
+                                        f"in runs {np.flatnonzero(bad[:, k_bad - 1])[:10].tolist()}")
+        n_collapsed = int(collapsed.sum())
+        if n_collapsed:
+            warn_collapse(self.name, n_collapsed, runs, T)
+        log_evidence = log_sums.sum(axis=1)
         return FilterResult(xs, Ps, diagnostics={
             "ess": ess, "resampled": resampled, "log_evidence": log_evidence, "collapsed": collapsed,
-            "n_collapsed": int(collapsed.sum()),
+            "n_collapsed": n_collapsed,
         })
 
     def __repr__(self) -> str:

@@ -20,7 +20,7 @@ from ..rng import check_rng, run_stream
 
 __all__ = ["resample", "resample_counts", "check_scheme", "multinomial_resample", "stratified_resample",
            "systematic_resample", "residual_resample", "offspring_counts", "effective_sample_size",
-           "normalize_weights", "indices_from_counts", "RESAMPLING_SCHEMES"]
+           "normalize_weights", "indices_from_counts", "resampling_counts_function", "RESAMPLING_SCHEMES"]
 
 
 def normalize_weights(weights) -> np.ndarray:
@@ -61,8 +61,7 @@ def _diff_rows(below):
 def _systematic_counts(w, rng):
     Nc = _scaled_cumulative(w)
     Nc -= rng.random((w.shape[0], 1))
-    np.ceil(Nc, out=Nc)
-    np.maximum(Nc, 0.0, out=Nc)
+    np.ceil(Nc, out=Nc)   # N C_i >= 0 and U < 1, so ceil(N C_i - U) >= 0: no clipping needed
     return _diff_rows(Nc.astype(np.intp))
 
 
@@ -120,6 +119,12 @@ def check_scheme(scheme: str) -> str:
     if scheme not in _COUNTS:
         raise ValueError(f"unknown resampling scheme {scheme!r}; choose from {list(RESAMPLING_SCHEMES)}")
     return scheme
+
+
+def resampling_counts_function(scheme: str):
+    """The counts function ``f(w, rng)`` of the named scheme, for a filter's inner loop: ``w``
+    must already be normalised, finite and non-negative (no validation is repeated per step)."""
+    return _COUNTS[check_scheme(scheme)]
 
 
 def resample_counts(weights, rng: np.random.Generator, scheme: str = "systematic") -> np.ndarray:

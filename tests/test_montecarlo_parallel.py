@@ -1,0 +1,156 @@
+"""Per-run streams for every stochastic filter, and run_monte_carlo / map_runs over executors.
+
+Run i's numbers depend on the experiment seed, the filter's name and i only: they are
+bit-identical in batches of 1, 8 and 100 runs, when the experiment grows from 10 to 20
+runs, and serially, in a ProcessPoolExecutor and on a real dask LocalCluster.
+"""
+from concurrent.futures import ProcessPoolExecutor
+from functools import partial
+
+import numpy as np
+import pytest
+
+from pfrepro.filters import BootstrapParticleFilter, GaussianParticleFlowFilter
+from pfrepro.filters.cmspf import CMSParticleFilter, OracleCMSParticleFilter
+from pfrepro.filters.espf import EvolutionSamplingParticleFilter
+from pfrepro.models import CWPA, UNGM, BearingsOnly
+from pfrepro.montecarlo import (filter_streams, map_runs, progress_enabled, run_chunks, run_monte_carlo,
+                                truth_streams)
+
+SEED = 2024
+UNG = UNGM.zhang2016()
+NING = UNGM.ning2011()
+
+
+def stochastic_filters():
+    """Every stochastic filter of the package, small N, on a model it is used with."""
+    return {
+        "PF systematic": (UNG, BootstrapParticleFilter(UNG, 40)),
+        "PF residual ESS": (UNG, BootstrapParticleFilter(UNG, 40, resampling="residual", ess_threshold=0.5)),
+        "PF multinomial 2-D": (CWPA(), BootstrapParticleFilter(CWPA(), 30, resampling="multinomial",
+                                                               ess_threshold=0.7)),
+        "CMS-PF logistic": (NING, CMSParticleFilter(NING, 40)),
+        "CMS-PF randn": (NING, CMSParticleFilter(NING, 40, carrier="randn", n_th=1.0)),
+        "ESPF": (NING, EvolutionSamplingParticleFilter(NING, 41)),
+        "GPFF eq43": (UNG, GaussianParticleFlowFilter(UNG, 30, n_steps=5, field="eq43",
+                                                                on_divergence="drop")),
+        "GPFF BOT": (BearingsOnly.zhang2016(), GaussianParticleFlowFilter(BearingsOnly.zhang2016(), 30, n_steps=5)),
+        "GPFF drop": (UNG, GaussianParticleFlowFilter(UNG, 30, n_steps=5, field="eq41", on_divergence="drop")),
+    }
+
+
+@pytest.mark.parametrize("name", list(stochastic_filters()))
+def test_run_i_identical_in_batches_of_1_8_and_100(name):
+    model, filt = stochastic_filters()[name]
+    T = 8
+    sim = model.simulate(T, 100, truth_streams(SEED, 100))
+    np.testing.assert_array_equal(model.simulate(T, 8, truth_streams(SEED, 8)).y, sim.y[:8])
+    full = filt.filter(sim.y, filter_streams(SEED, name, 100))
+    for runs in (1, 8):
+        part = filt.filter(sim.y[:runs], filter_streams(SEED, name, runs))
+        np.testing.assert_array_equal(part.x, full.x[:runs])
+    tail = filt.filter(sim.y[57:], filter_streams(SEED, name, 43, start=57))
+    np.testing.assert_array_equal(tail.x, full.x[57:])
+    one = filt.filter(sim.y[90:91], filter_streams(SEED, name, 1, start=90))
+    np.testing.assert_array_equal(one.x, full.x[90:91])
+
+
+def test_oracle_cms_is_batch_invariant():
+    filt = OracleCMSParticleFilter(NING, 40)
+    sim = NING.simulate(6, 8, truth_streams(SEED, 8))
+    full = filt.filter(sim.y, filter_streams(SEED, "o", 8), x_true=sim.x)
+    part = filt.filter(sim.y[3:5], filter_streams(SEED, "o", 2, start=3), x_true=sim.x[3:5])
+    np.testing.assert_array_equal(part.x, full.x[3:5])
+
+
+def _mc(executor=None, runs=12, chunks=None):
+    filters = {k: v[1] for k, v in stochastic_filters().items() if v[0] is NING or k.startswith("CMS")}
+    return run_monte_carlo(NING, filters, 10, runs, SEED, executor=executor, chunks=chunks, progress=False)
+
+
+def _same(a, b, runs=None):
+    sl = slice(None) if runs is None else slice(0, runs)
+    np.testing.assert_array_equal(a.sim.x[sl], b.sim.x[sl])
+    np.testing.assert_array_equal(a.sim.y[sl], b.sim.y[sl])
+    assert list(a.results) == list(b.results)
+    for name in a.results:
+        np.testing.assert_array_equal(a.results[name].x[sl], b.results[name].x[sl])
+        for key, v in a.results[name].diagnostics.items():
+            if runs is None:
+                np.testing.assert_array_equal(v, b.results[name].diagnostics[key])
+
+
+def test_growing_runs_keeps_the_first_runs():
+    _same(_mc(runs=10), _mc(runs=20), runs=10)
+
+
+def _chunk_pf(start, size, *, T=10):
+    sim = UNG.simulate(T, size, truth_streams(SEED, size, start))
+    res = BootstrapParticleFilter(UNG, 50).filter(sim.y, filter_streams(SEED, "PF", size, start))
+    return res.x[..., 0], {"y": sim.y, "ll": res.diagnostics["log_evidence"]}
+
+
+def test_serial_process_pool_and_dask_cluster_are_bit_identical():
+    serial = _mc()
+    serial_chunked = _mc(chunks=5)
+    _same(serial, serial_chunked)
+    ref = map_runs(_chunk_pf, 12)
+    with ProcessPoolExecutor(2) as pool:
+        _same(serial, _mc(pool))
+        _same(serial, _mc(pool, chunks=7))
+        got = map_runs(partial(_chunk_pf), 12, pool, chunks=5)
+        np.testing.assert_array_equal(got[0], ref[0])
+        np.testing.assert_array_equal(got[1]["ll"], ref[1]["ll"])
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None,
+                                  silence_logs=50) as cluster, distributed.Client(cluster) as client:
+        ex = client.get_executor()
+        _same(serial, _mc(ex))
+        got = map_runs(_chunk_pf, 12, ex)
+        np.testing.assert_array_equal(got[0], ref[0])
+
+
+def test_run_chunks_and_progress_switch(monkeypatch):
+    assert run_chunks(10) == [(0, 10)]
+    assert run_chunks(10, chunks=3) == [(0, 4), (4, 4), (8, 2)]
+    assert run_chunks(2, chunks=8) == [(0, 1), (1, 1)]
+    with pytest.raises(ValueError, match="chunks"):
+        run_chunks(5, chunks=0)
+    monkeypatch.setenv("CI", "1")
+    assert progress_enabled(None) is False and progress_enabled(True) is True
+    monkeypatch.delenv("CI")
+    assert progress_enabled(False) is False
+
+
+def test_progress_bar_when_forced(capsys):
+    run_monte_carlo(UNG, {"PF": BootstrapParticleFilter(UNG, 20)}, 5, 4, SEED, progress=True)
+    assert "Monte Carlo" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("make", [
+    lambda m: BootstrapParticleFilter(m, 50),
+    lambda m: BootstrapParticleFilter(m, 50, ess_threshold=0.5),
+    lambda m: CMSParticleFilter(m, 50),
+    lambda m: EvolutionSamplingParticleFilter(m, 50),
+])
+def test_weight_collapse_is_one_clear_warning_not_numpy_noise(make):
+    """An outlier measurement makes every likelihood underflow: no numpy RuntimeWarning leaks,
+    one WeightCollapseWarning names the count, the diagnostics record it, estimates stay finite."""
+    import warnings
+
+    from pfrepro.filters.particle import WeightCollapseWarning
+    from pfrepro.models import LinearGaussianModel
+
+    model = LinearGaussianModel([[0.5]], [[1.0]], [[1.0]], [[1e-4]], [0.0], P0=[[1.0]])
+    y = np.zeros((3, 5, 1))
+    y[1, 2] = 1e200          # squared residual overflows: every log-weight -inf
+    y[2, 3] = -1e200
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = make(model).filter(y, rng=filter_streams(SEED, "collapse", 3))
+    kinds = [type(w.message) for w in caught]
+    assert kinds == [WeightCollapseWarning], [str(w.message) for w in caught]
+    assert "2 of 15 run-steps" in str(caught[0].message)
+    coll = res.diagnostics["collapsed"]
+    assert coll[1, 2] and coll[2, 3] and coll.sum() == 2 and res.diagnostics["n_collapsed"] == 2
+    assert np.all(np.isfinite(res.x))
