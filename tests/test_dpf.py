@@ -415,3 +415,22 @@ def test_dual_filters_check_the_model_contract():
     LiuWestFilter(m, 10)
     with pytest.raises(ModelContractError, match="ParameterizedModel"):
         LiuWestFilter(UNGMTheta().at([0.5]), 10)
+
+
+def test_experiment_runs_are_identical_with_an_executor():
+    """The chapter's runner goes through run_monte_carlo: chunks on an executor give the same numbers."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from pfrepro.experiments import dpf_hou2008 as E
+
+    m = UNGMTheta()
+    sim = m.simulate(6, 5, truth_streams(E.SEED_51, 5))
+    filters = {"DPF": DualParticleFilter(m, 30, 20, cap=20.0), "DEKF": E.dekf_51(m), "LW": LiuWestFilter(m, 25),
+               "exact": ThetaGridReference(m, n_theta=9, x_bounds=(-30, 30), n_grid=241)}
+    serial = E._run(filters, sim, 7, runs_of={"exact": 3})
+    with ThreadPoolExecutor(2) as ex:
+        par = E._run(filters, sim, 7, executor=ex, runs_of={"exact": 3})
+    for name in filters:
+        np.testing.assert_array_equal(serial.results[name].x, par.results[name].x)
+        np.testing.assert_array_equal(serial.results[name].diagnostics["theta"], par.results[name].diagnostics["theta"])
+    assert serial.results["exact"].x.shape[0] == 3

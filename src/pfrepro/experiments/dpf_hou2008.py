@@ -10,7 +10,6 @@ truths (paired comparisons).
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,7 +21,8 @@ from ..filters.liu_west import LiuWestFilter
 from ..filters.theta_grid import ThetaGridReference
 from ..models.reentry import FT, Reentry
 from ..models.ungm_theta import UNGMTheta
-from ..montecarlo import filter_streams, truth_streams
+from ..models.base import Simulation
+from ..montecarlo import run_monte_carlo, truth_streams
 
 __all__ = ["PAPER", "SEED_51", "SEED_52", "S51", "S52", "ASSUMPTIONS", "assumptions_table", "model_51",
            "model_52", "simulate_51", "simulate_52", "dpf_51", "dekf_51", "liu_west_51", "grid_51",
@@ -175,21 +175,24 @@ class Run:
 
 
 def _run(filters: dict, sim, seed, executor=None, runs_of: dict | None = None) -> Run:
-    """Run every filter on the same truths; filter ``name`` draws from ``filter_streams(seed, name)``.
+    """Run every filter on the same truths through :func:`pfrepro.montecarlo.run_monte_carlo`.
 
-    ``runs_of[name]`` restricts a filter to the first runs (the exact reference). ``executor`` is
-    accepted for the package-v2 interface (``run_monte_carlo(..., executor=)``); the runs are
-    processed here in one batched call per filter.
+    Filter ``name``'s run i draws from ``filter_streams(seed, name)``'s stream i, so the numbers
+    do not depend on ``executor`` (None: one batched call per filter; or any
+    ``concurrent.futures.Executor``, the runs then split into chunks). ``runs_of[name]`` restricts
+    a filter to the first runs (the exact reference). ``seconds`` is wall time, context only.
     """
     runs_of = runs_of or {}
     res, sec = {}, {}
+    groups = {}
     for name, f in filters.items():
-        t0 = time.perf_counter()
-        y = sim.y[: runs_of[name]] if name in runs_of else sim.y
-        rng = filter_streams(seed, name, y.shape[0]) if f.needs_rng else None
-        res[name] = f.filter(y, rng)
-        sec[name] = time.perf_counter() - t0
-    return Run(sim=sim, results=res, seconds=sec, filters=filters)
+        groups.setdefault(runs_of.get(name, sim.y.shape[0]), {})[name] = f
+    for n, group in groups.items():
+        sub = sim if n == sim.y.shape[0] else Simulation(sim.x[:n], sim.y[:n])
+        mc = run_monte_carlo(None, group, sub.T, n, seed, executor=executor, progress=False, sim=sub)
+        res.update(mc.results)
+        sec.update(mc.batch_seconds)
+    return Run(sim=sim, results={k: res[k] for k in filters}, seconds=sec, filters=filters)
 
 
 def run_51(executor=None) -> Run:
