@@ -343,7 +343,7 @@ def test_bad_inputs_refused():
 def test_experiment_runner_chunks_are_bit_identical():
     from concurrent.futures import ThreadPoolExecutor
 
-    from pfrepro.experiments import immpf_zhou2017 as E
+    from pfrepro.experiments import immpfor_zhou2017 as E
     sc = E.scenario(duration=20, left_turn=(5, 8), right_turn=(12, 15))
     b = {"IMMPF": ("immpf", {"N": 20}), "IMMPFOR": ("immpfor", {"N": 20}), "IMM-EKF": ("imm_ekf", {})}
     serial = E.run(b, sc, runs=3, seed=1)

@@ -19,3 +19,4 @@ __all__ = ["Filter", "FilterResult", "GaussianFilter", "FilterDivergenceError", 
            "resample", "multinomial_resample", "stratified_resample", "systematic_resample",
            "residual_resample", "offspring_counts", "effective_sample_size", "RESAMPLING_SCHEMES",
            "CMSParticleFilter", "OracleCMSParticleFilter", "EvolutionSamplingParticleFilter"]
+from .dual_pf import DualParticleFilter; from .dual_ekf import DualExtendedKalmanFilter; from .liu_west import LiuWestFilter; from .theta_grid import ThetaGridReference  # noqa: E402,E702,F401

@@ -11,3 +11,4 @@ from .jump_markov import JumpMarkovSystem, validate_transition_matrix  # noqa: F
 __all__ = ["Simulation", "StateSpaceModel", "ModelContractError", "CAPABILITIES", "has_capability",
            "missing_capabilities", "require_capabilities", "UNGM", "LinearGaussianModel", "CWPA",
            "van_loan_discretize", "BearingsOnly", "wrap_angle", "StochasticVolatility"]
+from .parameterized import FixedParameterModel, ParameterizedModel  # noqa: E402,F401  (dual estimation: DPF chapter)
