@@ -212,3 +212,81 @@ def test_ordering_claims_on_paired_differences():
     reg = ClaimsRegistry("x")
     with pytest.raises(ValueError, match="either qualitative or diff"):
         reg.add("c", "t", qualitative=True, diff=1.0, diff_se=0.1)
+
+
+def test_published_se_widens_the_interval():
+    # |11 - 10| = 1 > 2 * 0.4 but <= 2 * sqrt(0.4^2 + 0.3^2) = 1.0
+    assert verdict(published=10.0, reproduced=11.0, se=0.4, rel_tol=None) == "not reproduced"
+    assert verdict(published=10.0, reproduced=11.0, se=0.4, rel_tol=None, published_se=0.3) == "reproduced"
+    assert verdict(published=10.0, reproduced=11.0, se=0.4, rel_tol=None, published_se=0.29) == "not reproduced"
+    # the published SE alone also gives an interval (our se missing or zero)
+    assert verdict(published=10.0, reproduced=11.0, se=None, rel_tol=None, published_se=0.5) == "reproduced"
+    assert verdict(published=10.0, reproduced=11.0, se=0.0, rel_tol=None, published_se=0.49) == "not reproduced"
+    c = Claim("p", "c", "t", published=10.0, reproduced=11.0, se=0.4, rel_tol=None, published_se=0.3)
+    assert c.verdict == "reproduced"
+
+
+def test_count_basis_decides_on_the_count_only():
+    # the published time ratio is context: a count that holds reproduces even far from it
+    assert verdict(published=0.3, reproduced=2.0, qualitative=True, basis="count") == "reproduced"
+    assert verdict(published=2.0, reproduced=2.0, qualitative=False, basis="count") == "not reproduced"
+    assert verdict(published=2.0, reproduced=2.0, basis="count") == "inconclusive"
+    assert verdict(diff=0.1, diff_se=1.0, basis="count") == "inconclusive"
+    with pytest.raises(ValueError, match="basis"):
+        verdict(qualitative=True, basis="time")
+
+
+def test_readings_and_weakest_ordering():
+    from pfrepro.claims import readings_hold, weakest_ordering
+
+    assert verdict(readings={"a": True, "b": True}) == "reproduced"
+    assert verdict(readings={"a": False, "b": False}) == "not reproduced"
+    assert verdict(readings={"a": True, "b": False}) == "inconclusive"
+    assert verdict(readings={"a": True, "b": None}) == "inconclusive"
+    assert verdict(published=10.0, reproduced=10.1, readings={"a": True, "b": False}) == "reproduced"
+    assert readings_hold({"x": np.bool_(True)}) is True
+    with pytest.raises(ValueError, match="either qualitative"):
+        verdict(qualitative=True, readings={"a": True})
+    # all hold -> the weakest holds; one contradicted -> contradicted; else undecided
+    assert weakest_ordering([(3.0, 1.0), (5.0, 1.0)]) == (3.0, 1.0)
+    assert weakest_ordering([(3.0, 1.0), (-5.0, 1.0), (0.1, 1.0)]) == (-5.0, 1.0)
+    assert weakest_ordering([(3.0, 0.0), (1.0, 1.0)]) == (1.0, 1.0)  # se 0: z = +inf
+    with pytest.raises(ValueError):
+        weakest_ordering([])
+
+
+def test_claims_table(tmp_path):
+    from pfrepro.claims import claims_table
+
+    reg = ClaimsRegistry("paper_x")
+    reg.add("num", "a number", published=10.0, reproduced=10.5, se=0.2, published_se=0.1, note="n1")
+    reg.add("ord", "A beats B", diff=0.02, diff_se=0.03)
+    reg.add("cost", "A costs less", reproduced=0.5, published=0.3, qualitative=True, basis="count")
+    reg.add("read", "a conclusion", readings={"R = 10": True, "R = 100": False})
+    t = claims_table(reg)
+    assert list(t.columns) == ["id", "claim", "ours", "published", "verdict", "test"]
+    assert t["verdict"].tolist() == ["reproduced", "inconclusive", "reproduced", "inconclusive"]
+    assert t.loc[0, "ours"] == "10.50 ± 0.20" and t.loc[0, "published"] == "10.00 ± 0.10"
+    assert "√(se²+se_pub²)" in t.loc[0, "test"] and "n1" in t.loc[0, "test"]
+    assert t.loc[1, "ours"] == "Δ 0.020 ± 0.030" and "z = 0.7" in t.loc[1, "test"]
+    assert "cost count" in t.loc[2, "test"]
+    assert "R = 10 → holds" in t.loc[3, "test"] and "R = 100 → fails" in t.loc[3, "test"]
+    # the same table from saved claims (the scorecard's path), with the paper column
+    reg.save(tmp_path)
+    t2 = claims_table(load_all_claims(tmp_path), paper=True)
+    assert t2.drop(columns="paper").equals(t)
+    assert (t2["paper"] == "paper_x").all()
+
+
+def test_published_se_helpers():
+    assert published.se_from_std(3.0, 100) == 0.3
+    with pytest.raises(ValueError):
+        published.se_from_std(3.0, 1)
+    t = published.table("cmspf_ning2011", "Table 1")
+    rows = [str(i) for i in range(1, 21)]
+    v = t.loc[rows, "N=10 PF"].to_numpy(float)
+    assert published.per_run_se("cmspf_ning2011", "Table 1", "N=10 PF", range(1, 21)) == pytest.approx(
+        v.std(ddof=1) / math.sqrt(20), rel=1e-15)
+    # row 22 is the printed variance of rows 1-20: the two readings of the spread agree
+    assert published.per_run_se("cmspf_ning2011", "Table 1", "N=10 PF", range(1, 21)) == pytest.approx(
+        math.sqrt(t.loc["22", "N=10 PF"] / 20), rel=1e-3)

@@ -4,12 +4,14 @@ A chapter records each claim of its paper as a :class:`Claim` with the
 published value (if the paper gives one), our reproduced value, our Monte Carlo
 uncertainty (a standard error) and, where the claim is about an ordering or a
 trend, whether that statement holds in our runs (computed by code, never
-typed). :func:`verdict` turns those numbers into one of four verdicts:
+typed). :func:`verdict` turns those numbers into one of five verdicts:
 
 ``reproduced``
-    a numeric claim whose published value lies within 2 standard errors of ours,
-    or within the claim's stated relative tolerance (default 10 %); or a purely
-    qualitative claim (no published number) whose statement holds.
+    a numeric claim whose published value lies within ``Z_CRIT`` combined standard
+    errors of ours (``|ours - published| <= Z_CRIT * sqrt(se**2 + published_se**2)``,
+    where ``published_se`` is the paper's own standard error when it prints a spread
+    or per-run rows), or within the claim's stated relative tolerance (default 10 %);
+    or a purely qualitative claim (no published number) whose statement holds.
 ``qualitatively reproduced``
     the numbers do not match, but the claim's ordering/trend holds.
 ``not reproduced``
@@ -18,8 +20,10 @@ typed). :func:`verdict` turns those numbers into one of four verdicts:
     the paper gives nothing we can compare with (no number and no testable
     statement).
 ``inconclusive``
-    an ordering claim whose paired difference lies within ``Z_CRIT`` standard
-    errors of zero: our runs cannot tell the two apart.
+    the evidence does not decide: an ordering claim whose paired difference lies
+    within ``Z_CRIT`` standard errors of zero (our runs cannot tell the two apart);
+    a cost claim that the deterministic cost count does not decide; a conclusion
+    whose admissible readings of the paper disagree.
 
 Ordering claims ("A beats B") are decided on paired differences over common
 random numbers: the chapter passes ``diff``, the mean over runs of a per-run
@@ -27,6 +31,21 @@ difference oriented so that the claim asserts ``diff > 0`` (e.g. RMSE of B minus
 RMSE of A, on the same truths), and its standard error ``diff_se``
 (:func:`paired_difference`). The claim holds if ``diff > Z_CRIT * diff_se``,
 is contradicted if ``diff < -Z_CRIT * diff_se``, and is undecided otherwise.
+
+Cost claims (``basis="count"``) are decided on a deterministic count of what each
+filter asks of its model (:mod:`pfrepro.cost`), which does not move with machine
+load; the published number (a ratio of the paper's seconds) and our measured time
+are context and are not matched numerically: ``qualitative`` is the count's answer,
+and ``None`` (the count does not decide) gives ``inconclusive``.
+
+A conclusion that depends on an ambiguous reading of the paper passes ``readings``,
+a mapping from each admissible reading to whether the statement holds under it
+(True / False / None); the claim holds if it holds under every reading, fails if it
+fails under every reading, and is ``inconclusive`` otherwise.
+
+:func:`claims_table` turns a chapter's claims (or the scorecard's) into the compact
+table every page shows: the claim, ours ± SE, published (± its SE), the verdict and
+the test that was applied.
 
 Each chapter saves its claims to ``<claims dir>/<paper>.json``; the scorecard
 page gathers all of them. The claims directory is ``$PFREPRO_CLAIMS_DIR`` or
@@ -44,13 +63,17 @@ from pathlib import Path
 import pandas as pd
 
 __all__ = ["Claim", "ClaimsRegistry", "verdict", "VERDICTS", "claims_dir", "load_all_claims",
-           "DEFAULT_REL_TOL", "Z_CRIT", "paired_difference", "ordering_holds"]
+           "DEFAULT_REL_TOL", "Z_CRIT", "paired_difference", "ordering_holds", "weakest_ordering",
+           "readings_hold", "claims_table", "BASES"]
 
 VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive")
 #: relative tolerance for numeric claims when none is stated
 DEFAULT_REL_TOL = 0.10
 #: a published value within Z_CRIT standard errors of ours counts as inside our uncertainty
 Z_CRIT = 2.0
+#: what a claim's verdict rests on: "" (numbers / orderings, the default) or "count"
+#: (a cost claim decided on a deterministic cost count, see pfrepro.cost)
+BASES = ("", "count")
 
 
 def _isnum(v) -> bool:
@@ -84,23 +107,76 @@ def ordering_holds(diff, diff_se):
     return None
 
 
+def _z(diff, diff_se):
+    if diff_se > 0:
+        return diff / diff_se
+    return math.copysign(math.inf, diff) if diff != 0 else 0.0
+
+
+def weakest_ordering(pairs):
+    """The ``(diff, diff_se)`` pair with the smallest ``diff / diff_se`` among ``pairs``.
+
+    A claim that asserts several orderings at once ("A beats B, C and D", "in every
+    component") holds if every one of them holds; the weakest pair decides it: it
+    holds iff all hold, is contradicted iff at least one is contradicted, and is
+    undecided otherwise. ``pairs`` is an iterable of ``(diff, diff_se)``.
+    """
+    pairs = [(float(d), float(s)) for d, s in pairs]
+    if not pairs:
+        raise ValueError("weakest_ordering needs at least one (diff, diff_se) pair")
+    for d, s in pairs:
+        ordering_holds(d, s)  # validates
+    return min(pairs, key=lambda p: _z(*p))
+
+
+def readings_hold(readings):
+    """True if the statement holds under every reading, False if it fails under every
+    reading, None otherwise (the readings disagree or one of them is undecided)."""
+    vals = list(dict(readings).values())
+    if not vals:
+        raise ValueError("readings must name at least one reading")
+    if all(v is True or (v is not None and bool(v)) for v in vals):
+        return True
+    if all(v is not None and not bool(v) for v in vals):
+        return False
+    return None
+
+
 def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, qualitative=None,
-            diff=None, diff_se=None) -> str:
+            diff=None, diff_se=None, published_se=None, basis="", readings=None) -> str:
     """The verdict rule (see module docstring). All inputs are numbers or None/bool.
 
-    ``diff``/``diff_se`` (an ordering decided on paired differences) take the place
-    of ``qualitative`` when given; an undecided ordering gives ``inconclusive``
-    unless the published number itself is matched.
+    ``diff``/``diff_se`` (an ordering decided on paired differences) or ``readings``
+    (a mapping reading -> holds) take the place of ``qualitative`` when given; an
+    undecided ordering or disagreeing readings give ``inconclusive`` unless the
+    published number itself is matched. ``published_se`` (the paper's own standard
+    error) widens the interval: inside iff
+    ``|reproduced - published| <= Z_CRIT * sqrt(se**2 + published_se**2)``.
+    ``basis="count"``: a cost claim decided by ``qualitative`` alone (the count's answer);
+    ``None`` gives ``inconclusive``.
     """
+    basis = basis or ""
+    if basis not in BASES:
+        raise ValueError(f"basis must be one of {BASES}, got {basis!r}")
     undecided = False
+    given = sum(x is not None for x in (qualitative, readings)) + (diff is not None or diff_se is not None)
+    if given > 1:
+        raise ValueError("give either qualitative or diff/diff_se or readings, not more than one")
     if diff is not None or diff_se is not None:
-        if qualitative is not None:
-            raise ValueError("give either qualitative or diff/diff_se, not both")
         qualitative = ordering_holds(diff, diff_se)
         undecided = qualitative is None
+    elif readings is not None:
+        qualitative = readings_hold(readings)
+        undecided = qualitative is None
+    if basis == "count":
+        if qualitative is None:
+            return "inconclusive"
+        return "reproduced" if bool(qualitative) else "not reproduced"
     if _isnum(published) and _isnum(reproduced):
         diff = abs(reproduced - published)
-        inside = _isnum(se) and se > 0 and diff <= Z_CRIT * se
+        ses = [s for s in (se, published_se) if _isnum(s) and s > 0]
+        total_se = math.sqrt(sum(s * s for s in ses)) if ses else 0.0
+        inside = total_se > 0 and diff <= Z_CRIT * total_se
         close = diff <= (rel_tol or 0.0) * abs(published)  # rel_tol None: exact agreement only
         if inside or close:
             return "reproduced"
@@ -130,16 +206,107 @@ class Claim:
     note: str = ""     # what was compared, in a few words
     diff: float | None = None     # paired difference (claim asserts diff > 0), see paired_difference
     diff_se: float | None = None  # its standard error
+    published_se: float | None = None  # the paper's own standard error (printed spread / per-run rows)
+    basis: str = ""               # "count": a cost claim decided on a deterministic cost count
+    readings: dict | None = None  # reading of the paper -> does the statement hold under it
 
     @property
     def verdict(self) -> str:
         return verdict(self.published, self.reproduced, self.se, self.rel_tol, self.qualitative,
-                       self.diff, self.diff_se)
+                       self.diff, self.diff_se, self.published_se, self.basis, self.readings)
+
+    def test_text(self) -> str:
+        """The rule that decided this claim, in a few words (for the verdict tables)."""
+        parts = []
+        if self.basis == "count":
+            parts.append("cost count (load-independent); published/measured time: context")
+        elif _isnum(self.published) and _isnum(self.reproduced):
+            se_txt = "√(se²+se_pub²)" if _isnum(self.published_se) else "se"
+            tol = f" or ≤ {self.rel_tol:.0%}" if self.rel_tol else ""
+            parts.append(f"|ours − pub| ≤ {Z_CRIT:g}·{se_txt}{tol}")
+        if self.diff is not None:
+            z = _z(self.diff, self.diff_se)
+            parts.append(f"paired diff {_fmt(self.diff)} ± {_fmt(self.diff_se)} (z = {z:.1f}; decided at |z| > {Z_CRIT:g})")
+        if self.readings:
+            word = {True: "holds", False: "fails", None: "undecided"}
+            parts.append("readings: " + "; ".join(f"{k} → {word[None if v is None else bool(v)]}"
+                                                   for k, v in self.readings.items()))
+        if self.note:
+            parts.append(self.note)
+        return "; ".join(parts)
 
     def as_row(self) -> dict:
         d = asdict(self)
         d["verdict"] = self.verdict
         return d
+
+
+def _fmt(v, digits=3) -> str:
+    """A number in ``digits`` significant digits, without exponent noise for ordinary sizes."""
+    if not _isnum(v):
+        return ""
+    v = float(v)
+    if v == 0:
+        return "0"
+    if 1e-3 <= abs(v) < 1e5:
+        dec = max(0, digits - 1 - int(math.floor(math.log10(abs(v)))))
+        return f"{v:.{dec}f}"
+    return f"{v:.{digits - 1}e}"
+
+
+def _pm(value, se) -> str:
+    """``value ± se`` with the se in 2 significant digits and the value to the same decimals."""
+    if not _isnum(value):
+        return "–"
+    if not (_isnum(se) and se > 0):
+        return _fmt(value)
+    dec = 1 - int(math.floor(math.log10(se)))
+    if 0 <= dec <= 6 and abs(value) < 1e6:
+        return f"{value:.{dec}f} ± {se:.{dec}f}"
+    return f"{_fmt(value)} ± {_fmt(se, 2)}"
+
+
+def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFrame:
+    """The compact verdict table every chapter and the scorecard show.
+
+    ``claims``: a :class:`ClaimsRegistry`, a list of :class:`Claim`, or a DataFrame
+    of claim rows (e.g. :func:`load_all_claims`). Columns (all strings, short
+    headers so the table fits the text column): ``id`` (if ``ids``), ``paper`` (if
+    ``paper``), ``claim``, ``ours`` (value ± SE, or the paired difference ± SE of an
+    ordering), ``published`` (± its SE), ``verdict``, ``test`` (the rule applied and
+    the claim's note).
+    """
+    if isinstance(claims, ClaimsRegistry):
+        items = list(claims.claims)
+    elif isinstance(claims, pd.DataFrame):
+        fields = set(Claim.__dataclass_fields__)
+        items = [Claim(**{k: (None if (isinstance(v, float) and math.isnan(v)) else v)
+                          for k, v in row.items() if k in fields})
+                 for row in claims.to_dict("records")]
+    else:
+        items = list(claims)
+    rows = []
+    for c in items:
+        if _isnum(c.reproduced):
+            ours = _pm(c.reproduced, c.se)
+        elif c.diff is not None:
+            ours = "Δ " + _pm(c.diff, c.diff_se)
+        elif c.readings:
+            ours = f"{sum(bool(v) for v in c.readings.values() if v is not None)}/{len(c.readings)} readings hold"
+        elif c.qualitative is not None:
+            ours = "holds" if c.qualitative else "fails"
+        else:
+            ours = "–"
+        row = {}
+        if paper:
+            row["paper"] = c.paper
+        if ids:
+            row["id"] = c.claim_id
+        row.update({"claim": c.text, "ours": ours, "published": _pm(c.published, c.published_se),
+                    "verdict": c.verdict, "test": c.test_text()})
+        rows.append(row)
+    cols = (["paper"] if paper else []) + (["id"] if ids else []) + ["claim", "ours", "published", "verdict", "test"]
+    return pd.DataFrame(rows, columns=cols)
 
 
 def claims_dir() -> Path:
@@ -170,19 +337,26 @@ class ClaimsRegistry:
 
     def add(self, claim_id: str, text: str, *, published=None, reproduced=None, se=None,
             rel_tol=DEFAULT_REL_TOL, qualitative=None, source="", note="", diff=None,
-            diff_se=None) -> Claim:
+            diff_se=None, published_se=None, basis="", readings=None) -> Claim:
         if any(c.claim_id == claim_id for c in self.claims):
             raise ValueError(f"claim {claim_id!r} already recorded for {self.paper}")
         if qualitative is not None and not isinstance(qualitative, (bool,)):
             qualitative = bool(qualitative)
+        if readings is not None:
+            readings = {str(k): (None if v is None else bool(v)) for k, v in dict(readings).items()}
         c = Claim(self.paper, claim_id, text, _clean(published), _clean(reproduced), _clean(se),
-                  _clean(rel_tol), qualitative, source, note, _clean(diff), _clean(diff_se))
+                  _clean(rel_tol), qualitative, source, note, _clean(diff), _clean(diff_se),
+                  _clean(published_se), basis, readings)
         c.verdict  # validate now (e.g. both qualitative and diff given), not at the scorecard
         self.claims.append(c)
         return c
 
     def to_frame(self) -> pd.DataFrame:
         return pd.DataFrame([c.as_row() for c in self.claims])
+
+    def table(self, **kw) -> pd.DataFrame:
+        """:func:`claims_table` of this registry."""
+        return claims_table(self, **kw)
 
     def save(self, directory: Path | None = None) -> Path:
         d = Path(directory) if directory is not None else claims_dir()

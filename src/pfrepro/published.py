@@ -4,6 +4,12 @@ One CSV per paper in ``pfrepro/data/published/<paper>.csv`` with columns
 ``table, row, column, value, note`` (``table`` is the paper's own id, e.g.
 "Table 1" or "Fig. 3"). Chapters read them here to put each reproduced table
 beside the published one; nothing in the book types a published number.
+
+Published uncertainty. Where a paper prints a spread (a standard deviation over its
+runs) or the per-run rows themselves, the standard error of its mean is computed here,
+not typed: :func:`se_from_std` (printed std over ``runs`` runs) and :func:`per_run_se`
+(sample std, divisor n - 1, of the printed per-run rows, over sqrt(n)). The claims rule
+combines it with ours (``pfrepro.claims.verdict``, ``published_se``).
 """
 from __future__ import annotations
 
@@ -12,7 +18,7 @@ from importlib import resources
 
 import pandas as pd
 
-__all__ = ["PAPERS", "load", "value", "table"]
+__all__ = ["PAPERS", "load", "value", "table", "se_from_std", "per_run_se"]
 
 #: paper keys used throughout the package and the book
 PAPERS = {
@@ -56,3 +62,29 @@ def value(paper: str, table_id: str, row: str, column: str) -> float:
     if len(hit) != 1:
         raise KeyError(f"{paper} {table_id}: no unique entry for row={row!r}, column={column!r}")
     return float(hit["value"].iloc[0])
+
+
+def se_from_std(std, runs: int) -> float:
+    """Standard error of a published mean from its printed standard deviation over ``runs`` runs."""
+    import math
+
+    std, runs = float(std), int(runs)
+    if runs < 2 or not math.isfinite(std) or std < 0:
+        raise ValueError(f"se_from_std needs a finite std >= 0 and runs >= 2, got {std!r}, {runs!r}")
+    return std / math.sqrt(runs)
+
+
+def per_run_se(paper: str, table_id: str, column: str, rows) -> float:
+    """Standard error of the mean of the printed per-run rows ``rows`` of one column.
+
+    ``std(rows, ddof=1) / sqrt(len(rows))``: what the paper's own runs say about the
+    uncertainty of its mean (e.g. rows 1-20 of Ning et al.'s Tables 1 and 3).
+    """
+    import numpy as np
+
+    t = table(paper, table_id)
+    rows = [str(r) for r in rows]
+    v = t.loc[rows, column].to_numpy(float)
+    if v.size < 2 or not np.all(np.isfinite(v)):
+        raise ValueError(f"{paper} {table_id} {column!r}: need >= 2 finite per-run rows, got {v.size}")
+    return float(v.std(ddof=1) / np.sqrt(v.size))

@@ -23,7 +23,8 @@ from ..montecarlo import filter_streams, run_monte_carlo, time_filters, truth_st
 
 __all__ = ["PAPER", "T", "SEEDS", "ASSUMPTIONS", "model", "cms", "pf", "grid", "ekf", "ukf", "espf",
            "table1", "table2", "fig2_run", "fig3", "table3", "one_step", "fig6", "sensitivity",
-           "consistency", "summarise", "TABLE1_N", "FIG3_N"]
+           "consistency", "summarise", "TABLE1_N", "FIG3_N", "T3_READINGS", "cost_evidence_table2",
+           "cost_counts_fig3", "eta_sweep", "fig3_per_run"]
 
 PAPER = "cmspf_ning2011"
 #: horizon M of sec 3.1
@@ -52,6 +53,19 @@ ASSUMPTIONS = {
     "espf_mcmc_scale": 1.0,     # ESPF reconstruction: random-walk std = sqrt(Q)
     "espf_sbx_eta": 2.0,        # ESPF reconstruction: SBX distribution index
     "grid": (-40.0, 40.0, 4001),  # exact reference: bounds and nodes (sigma_w^2 = 1)
+}
+
+
+#: admissible readings of Table 3's (and Fig. 3's) noise levels. The paper prints "sigma_v = 10"
+#: for Table 3 but mixes sigma_v and sigma_v^2 elsewhere (Table 1 "sigma_v = 1", Fig. 2
+#: "sigma_v^2 = 1"), so 10 may be the variance; and its published PF numbers fit the classic
+#: benchmark's sigma_w^2 = 10 better than the printed 1. label -> (sigma_v, sigma_w2); the
+#: first is the chapter's main reading.
+T3_READINGS = {
+    "σv² = 100, σw² = 1": (10.0, None),
+    "σv² = 10, σw² = 1": (float(np.sqrt(10.0)), None),
+    "σv² = 100, σw² = 10": (10.0, 10.0),
+    "σv² = 10, σw² = 10": (float(np.sqrt(10.0)), 10.0),
 }
 
 
@@ -331,3 +345,70 @@ def consistency(Ns=(50, 200, 1000, 4000), runs: int = 50, sigma_v: float = 1.0, 
             rows.append({"N": N, "filter": name, "dist to exact mean": s["mean"], "se": s["se"],
                          "variance ratio": vr, "RMSE": float(np.mean(res.rmse(name)))})
     return pd.DataFrame(rows), summarise(rmse(sim.x[:, 1:], g.x))
+
+
+# -- cost evidence and per-run sweeps for the claims -------------------------------------------
+def cost_evidence_table2(N: int | None = None, sigma_v: float = 1.0, seed=SEEDS["table2"], repeats: int = 7):
+    """Deterministic cost counts of the Table 2 filters on run 1 (:func:`pfrepro.cost.cost_counts`,
+    per time step) beside single-run wall time as a ratio to the PF, median and [min, max]
+    over ``repeats`` interleaved repeats. CMS-PF is timed with its carrier computed beforehand."""
+    from ..cost import cost_counts, time_repeats, time_summary
+
+    N = ASSUMPTIONS["N_table2"] if N is None else N
+    m = model(sigma_v)
+    fs = {"EKF": ekf(m), "UKF": ukf(m), "PF": pf(m, N), "ESPF": espf(m, N), "CMS-PF": cms(m, N),
+          "PF (2N)": pf(m, 2 * N)}
+    y1 = m.simulate(T, 1, truth_streams(seed, 1)).y
+    counts = cost_counts(fs, y1, rng_seed=seed)
+    timed = dict(fs)
+    timed["CMS-PF"] = _OfflineCarrierCMS(fs["CMS-PF"], T, seed)
+    times = time_summary(time_repeats(timed, y1, seed, repeats), reference="PF")
+    evals = counts["model_evaluations"] / T
+    return pd.DataFrame({"transitions / step": counts["transitions"] / T, "likelihoods / step": counts["likelihoods"] / T,
+                         "model evals / step": evals, "count ratio": evals / evals["PF"],
+                         "time ratio": times["ratio median"], "time ratio min": times["ratio min"],
+                         "time ratio max": times["ratio max"]}).rename_axis("filter")
+
+
+def cost_counts_fig3(Ns=FIG3_N, sigma_v: float = 10.0, seed=SEEDS["fig3"]) -> pd.DataFrame:
+    """Model evaluations per time step of CMS-PF and PF at each N of Fig. 3 (run 1)."""
+    from ..cost import cost_counts
+
+    m = model(sigma_v)
+    y1 = m.simulate(T, 1, truth_streams(seed, 1)).y
+    rows = {}
+    for N in Ns:
+        c = cost_counts({"CMS-PF": cms(m, N), "PF": pf(m, N)}, y1, rng_seed=seed)
+        rows[N] = {"CMS-PF evals / step": c.loc["CMS-PF", "model_evaluations"] / T,
+                   "PF evals / step": c.loc["PF", "model_evaluations"] / T}
+    return pd.DataFrame(rows).T.rename_axis("N")
+
+
+def eta_sweep(values=(0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 1.0, 1.5), runs: int = 50, N: int | None = None,
+              sigma_v: float = 1.0, seed=SEEDS["sensitivity"], *, executor=None) -> pd.DataFrame:
+    """Per-run RMSE of CMS-PF for each adjustment factor (the eta rows of :func:`sensitivity`,
+    same data and the same filter stream for every value: common random numbers), columns
+    = eta values, rows = runs; for paired comparisons between values."""
+    N = ASSUMPTIONS["N_table2"] if N is None else N
+    m = model(sigma_v)
+    sim = m.simulate(T, runs, truth_streams(seed, runs))
+    out = {}
+    for v in values:
+        res = run_monte_carlo(m, {"CMS-PF": cms(m, N, eta=v)}, T, runs, seed, sim=sim, executor=executor)
+        out[v] = res.rmse("CMS-PF")
+    return pd.DataFrame(out, index=pd.RangeIndex(1, runs + 1, name="run"))
+
+
+def fig3_per_run(Ns=(FIG3_N[0], FIG3_N[-1]), runs: int | None = None, sigma_v: float = 10.0, sigma_w2=None,
+                 seed=SEEDS["fig3"], *, executor=None) -> pd.DataFrame:
+    """Per-run RMSE of CMS-PF at the given N on the Fig. 3 runs (the same data and filter
+    stream as :func:`fig3`, without the timing), columns = N; for paired comparisons
+    between N and for other readings of the noise levels (``sigma_v``, ``sigma_w2``)."""
+    runs = ASSUMPTIONS["runs_fig3"] if runs is None else runs
+    m = model(sigma_v, sigma_w2)
+    sim = m.simulate(T, runs, truth_streams(seed, runs))
+    out = {}
+    for N in Ns:
+        res = run_monte_carlo(m, {"CMS-PF": cms(m, N)}, T, runs, seed, sim=sim, executor=executor)
+        out[N] = res.rmse("CMS-PF")
+    return pd.DataFrame(out, index=pd.RangeIndex(1, runs + 1, name="run"))

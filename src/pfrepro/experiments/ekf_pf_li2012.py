@@ -46,7 +46,7 @@ __all__ = [
     "table1", "ratio_of_means", "gap_to", "per_time_rmse", "statistic_readings", "sensitivity",
     "rmse_and_cost_vs_n", "cost_ratios", "jacobian_check", "literal_eq11_ekf",
     "eq9_linearisation_check", "resampling_after_estimate_effect", "published_table1",
-]
+    "cost_evidence"]
 
 PAPER = "ekf_pf_li2012"
 #: horizon (60 s at 1 s sampling), particles, Monte Carlo counts (sec 2, Table 1)
@@ -420,3 +420,25 @@ def resampling_after_estimate_effect(res: MonteCarloResult, n_particles: int = N
     post_var = float(ex.P[..., 0, 0].mean())
     mse_exact = float(((ex.x - res.x_true) ** 2).mean())
     return {"added_var": post_var / n_particles, "relative_to_mse": post_var / n_particles / mse_exact}
+
+
+def cost_evidence(which: int, sim: Simulation, *, include=("EKF", "UKF", "PF", "Exact"), repeats: int = 7,
+                  seed: int = SEED_TABLE) -> pd.DataFrame:
+    """Deterministic cost counts of each filter on run 1 (:func:`pfrepro.cost.cost_counts`:
+    states drawn, likelihoods, f/h evaluations and Jacobians, per time step) beside its
+    single-run wall time as a ratio to the EKF, median and [min, max] over ``repeats``
+    interleaved repeats (:func:`pfrepro.cost.time_repeats`). The count decides the cost
+    claim; the time is context."""
+    from ..cost import cost_counts, time_repeats, time_summary
+
+    check_positive_int(repeats, "repeats")
+    if "EKF" not in include:
+        raise ValueError("cost evidence is relative to the EKF: include must contain 'EKF'")
+    filters = make_filters(make_model(which), include)
+    y1 = sim.y[:1]
+    counts = cost_counts(filters, y1, rng_seed=seed)
+    times = time_summary(time_repeats(filters, y1, seed, repeats), reference="EKF")
+    evals = counts["model_evaluations"] / y1.shape[1]
+    return pd.DataFrame({"model evals / step": evals, "count ratio": evals / evals["EKF"],
+                         "time ratio": times["ratio median"], "time ratio min": times["ratio min"],
+                         "time ratio max": times["ratio max"]}).rename_axis("filter")

@@ -39,7 +39,7 @@ __all__ = ["PAPER", "RUNS", "SEEDS", "UT", "N_LAMBDA", "TIMING_REPEATS", "random
            "interior_checks", "fokker_planck_check", "printed_vs_corrected_linear",
            "convergence_in_dlambda", "observed_orders", "convergence_in_n", "nonlinear_vs_linear",
            "cwpa_q_check", "run_cwpa", "cwpa_r_sensitivity", "run_ung", "run_bot", "table1", "table2",
-           "cost_ratios", "schedule_sweep"]
+           "cost_ratios", "schedule_sweep", "cost_filters", "cost_evidence"]
 
 PAPER = "gpff_zhang2016"
 RUNS = 100
@@ -509,3 +509,50 @@ def schedule_sweep(which: str, runs=RUNS, sim=None,
             rows.append({"schedule": sched, "integrator": meth, "MSE mean": s.mean, "SE": s.se,
                          "diverged runs": int((~ok).sum())})
     return pd.DataFrame(rows).set_index(["schedule", "integrator"])
+
+
+# ============================================================================ cost evidence
+def cost_filters(which: str) -> dict:
+    """The filters of Table 1 (``which="ung"``) or Table 2 (``"bot"``), built as in
+    :func:`run_ung` / :func:`run_bot`, for counting and timing on one run."""
+    if which == "ung":
+        model = UNGM.zhang2016()
+        fs = {"EKF": ExtendedKalmanFilter(model), "UKF": UnscentedKalmanFilter(model, **UT)}
+        for N in (100, 500, 1000):
+            fs[f"PF({N})"] = BootstrapParticleFilter(model, N, resampling="systematic")
+        for N in (100, 500, 1000):
+            fs[f"GPFF({N})"] = _gpff(model, N, field="eq43")
+        return fs
+    if which == "bot":
+        model = BearingsOnly.zhang2016()
+        fs = {"EKF": ExtendedKalmanFilter(model), "UKF": UnscentedKalmanFilter(model, **UT)}
+        for N in (500, 1000, 4000):
+            fs[f"PF({N})"] = BootstrapParticleFilter(model, N, resampling="systematic")
+        fs["GPFF(100)"] = _gpff(model, 100, field="eq41", on_divergence="drop")
+        return fs
+    raise ValueError("which must be 'ung' or 'bot'")
+
+
+def cost_evidence(which: str, mc: MonteCarloResult, reference: str = "GPFF(100)",
+                  repeats: int = TIMING_REPEATS) -> pd.DataFrame:
+    """Cost of each filter of Table 1/2 on run 1 of ``mc``: deterministic counts of what it
+    asks of its model (:func:`pfrepro.cost.cost_counts`) beside its single-run wall time,
+    median and [min, max] over ``repeats`` interleaved repeats, as a ratio to ``reference``.
+
+    Counts are per time step: ``model evals`` (transitions + likelihoods + f + h +
+    Jacobians, each per state) and ``flow`` (states moved per flow-field evaluation).
+    """
+    from ..cost import cost_counts, time_repeats, time_summary
+
+    fs = cost_filters(which)
+    y1 = mc.sim.y[:1]
+    T = y1.shape[1]
+    counts = cost_counts(fs, y1, rng_seed=mc.seed)
+    times = time_summary(time_repeats(fs, y1, mc.seed, repeats), reference=reference)
+    out = pd.DataFrame({"model evals / step": counts["model_evaluations"] / T,
+                        "flow / step": counts["flow"] / T,
+                        "count ratio": counts["model_evaluations"] / counts.loc[reference, "model_evaluations"],
+                        "time ratio": times["ratio median"], "time ratio min": times["ratio min"],
+                        "time ratio max": times["ratio max"]})
+    out.index.name = "filter"
+    return out

@@ -4,6 +4,7 @@ from .cmspf import CMSParticleFilter, OracleCMSParticleFilter
 from .espf import EvolutionSamplingParticleFilter
 from .gpff import GaussianParticleFlowFilter
 from .grid import GridFilter
+from .imm import IMMKalman, IMMParticleFilter, IMMPFOR  # noqa: F401  (interacting multiple model filters)
 from .kalman import ExtendedKalmanFilter, KalmanFilter, kalman_update
 from .particle import BootstrapParticleFilter, normalize_log_weights
 from .resampling import (RESAMPLING_SCHEMES, effective_sample_size, multinomial_resample,
@@ -18,3 +19,4 @@ __all__ = ["Filter", "FilterResult", "GaussianFilter", "FilterDivergenceError", 
            "resample", "multinomial_resample", "stratified_resample", "systematic_resample",
            "residual_resample", "offspring_counts", "effective_sample_size", "RESAMPLING_SCHEMES",
            "CMSParticleFilter", "OracleCMSParticleFilter", "EvolutionSamplingParticleFilter"]
+from .dual_pf import DualParticleFilter; from .dual_ekf import DualExtendedKalmanFilter; from .liu_west import LiuWestFilter; from .theta_grid import ThetaGridReference  # noqa: E402,E702,F401

@@ -163,7 +163,9 @@ class GaussianParticleFlowFilter(Filter):
 
             def field(z, lam):
                 hz = (y - r0)[:, None, :] + (z - m[:, None, :]) @ np.swapaxes(J, -1, -2)
-                return flow.gaussian_flow_field(z, lam, hz, y, y_hat, Pxy, Pyy, R)
+                # the model's residual (angles wrap) in every innovation term, as in eq 41
+                return flow.gaussian_flow_field(z, lam, hz, y, y_hat, Pxy, Pyy, R,
+                                                residual=model.residual_y)
 
             # The field is affine in z, so the integrator's map over the whole grid is an
             # affine map z -> c + M (z - m): integrate d + 1 probe points, not N particles

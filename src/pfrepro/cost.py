@@ -1,0 +1,241 @@
+"""Deterministic cost counts, and measured time with an interval, for the cost claims.
+
+Wall time moves with machine load and, for one small run, measures Python's per-call
+overhead more than an algorithm's work. A cost claim ("A costs less than B", "its
+cost grows more slowly with N") is therefore decided here on a *count* of what a
+filter asks of its model, which is exact and load-independent, and measured time is
+shown beside it as context (median and interval over interleaved repeats).
+
+Counting. :func:`count_model_calls` runs a filter once with its model wrapped in a
+:class:`CountingModel` proxy: every call of a counted method adds the number of states
+passed through it, ``prod(x.shape[:-1])`` (a particle cloud ``(runs, N, d)`` counts
+``runs * N``; a single state ``(d,)`` counts 1). No filter code changes. The counted
+methods and their column names:
+
+================= ============================ ================================
+column            model method                 what it is
+================= ============================ ================================
+``transitions``   ``sample_transition``        states drawn from p(x_k | x_{k-1})
+``likelihoods``   ``log_likelihood``           likelihood evaluations p(y_k | x)
+``f``             ``f``                        noise-free transitions (EKF/UKF, ESPF, grid)
+``h``             ``h``                        measurement-function evaluations (UKF, GPFF)
+``jacobian_f``    ``jacobian_f``               Jacobians of f (EKF)
+``jacobian_h``    ``jacobian_h``               Jacobians of h (EKF)
+================= ============================ ================================
+
+Calls a model makes to itself (``sample_transition`` calls ``f``,
+``log_likelihood`` calls ``h``) are not counted twice: the proxy sees only what the
+filter asks. ``model_evaluations`` is the sum of the six columns, a unit-cost model in
+which each state passed through the model interface costs one. ``flow`` counts the
+states moved per evaluation of a particle-flow field (Gaussian particle flow filter;
+counted by wrapping :func:`pfrepro.flow.integrate_flow` for the duration of the
+count); it is reported beside the total, not in it (with the eq (41) field each flow
+evaluation also evaluates ``h`` at every particle, which ``h`` counts already).
+
+Timing. :func:`time_repeats` times each filter on one run, the repeats interleaved
+across the filters (A, B, C, A, B, C, ...) so load drifts hit all alike, and returns
+every repeat; :func:`time_summary` gives the median of each filter and of each
+ratio to a reference, with the range over repeats as its interval (for 7 repeats the
+[min, max] of a sample is a distribution-free confidence interval for the median at
+level 1 - 2 * 0.5**7 = 98.4 %).
+"""
+from __future__ import annotations
+
+import copy
+import gc
+import math
+import time
+from contextlib import contextmanager
+
+import numpy as np
+import pandas as pd
+
+from . import flow as _flow
+from .validation import check_positive_int
+
+__all__ = ["COUNTED", "COUNT_COLUMNS", "CountingModel", "count_model_calls", "cost_counts",
+           "time_repeats", "time_summary", "median_interval"]
+
+#: counted model method -> column name
+COUNTED = {"sample_transition": "transitions", "log_likelihood": "likelihoods", "f": "f", "h": "h",
+           "jacobian_f": "jacobian_f", "jacobian_h": "jacobian_h"}
+#: columns of :func:`cost_counts`
+COUNT_COLUMNS = list(COUNTED.values()) + ["model_evaluations", "flow"]
+
+# the positional index of the state argument of each counted method
+_STATE_ARG = {"sample_transition": 0, "log_likelihood": 1, "f": 0, "h": 0, "jacobian_f": 0, "jacobian_h": 0}
+_STATE_KW = {"sample_transition": "x", "log_likelihood": "x", "f": "x", "h": "x", "jacobian_f": "x",
+             "jacobian_h": "x"}
+
+
+def _n_states(x) -> int:
+    shape = np.shape(x)
+    return int(math.prod(shape[:-1])) if len(shape) >= 1 else 1
+
+
+class CountingModel:
+    """Proxy around a state-space model that counts the states passed through each method.
+
+    Every attribute is the wrapped model's; the methods in :data:`COUNTED` are
+    wrapped so that each call adds ``prod(x.shape[:-1])`` to ``counts[column]``.
+    """
+
+    def __init__(self, model):
+        object.__setattr__(self, "_model", model)
+        object.__setattr__(self, "counts", {c: 0 for c in COUNTED.values()})
+
+    def __getattr__(self, name):
+        attr = getattr(self._model, name)
+        if name not in COUNTED:
+            return attr
+        column, pos, kw = COUNTED[name], _STATE_ARG[name], _STATE_KW[name]
+        counts = self.counts
+
+        def counted(*args, **kwargs):
+            x = kwargs[kw] if kw in kwargs else args[pos]
+            counts[column] += _n_states(x)
+            return attr(*args, **kwargs)
+
+        return counted
+
+    def __setattr__(self, name, value):
+        setattr(self._model, name, value)
+
+    def __repr__(self) -> str:
+        return f"CountingModel({self._model!r})"
+
+
+@contextmanager
+def _count_flow(counter: dict):
+    """Count states per flow-field evaluation while the block runs (restores on exit)."""
+    original = _flow.integrate_flow
+
+    def integrate_flow(x, field, grid, method="euler"):
+        def counted_field(z, lam):
+            counter["flow"] += _n_states(z)
+            return field(z, lam)
+
+        return original(x, counted_field, grid, method)
+
+    _flow.integrate_flow = integrate_flow
+    try:
+        yield
+    finally:
+        _flow.integrate_flow = original
+
+
+def _with_model(filt, proxy):
+    """A shallow copy of ``filt`` whose model is ``proxy`` (the filter itself is untouched)."""
+    if hasattr(filt, "model"):
+        c = copy.copy(filt)
+        c.model = proxy
+        return c
+    if hasattr(filt, "filt"):  # thin wrappers (e.g. a filter timed with a precomputed carrier)
+        c = copy.copy(filt)
+        c.filt = _with_model(filt.filt, proxy)
+        return c
+    raise TypeError(f"cannot count the model calls of {type(filt).__name__}: it has no .model")
+
+
+def _model_of(filt):
+    if hasattr(filt, "model"):
+        return filt.model
+    if hasattr(filt, "filt"):
+        return _model_of(filt.filt)
+    raise TypeError(f"{type(filt).__name__} has no .model")
+
+
+def count_model_calls(filt, y, rng=None, **filter_kw) -> dict:
+    """Run ``filt.filter(y, rng=rng)`` once with a counting proxy around its model.
+
+    Returns a dict with the six counted columns, ``model_evaluations`` (their sum) and
+    ``flow`` (states moved per flow-field evaluation, summed). ``rng``: a Generator
+    (default: ``numpy.random.default_rng(0)``); the counts of the filters in this book
+    do not depend on it except through data-dependent control flow (e.g. a diverged
+    run that is dropped), which the fixed default makes reproducible.
+    """
+    proxy = CountingModel(_model_of(filt))
+    counted = _with_model(filt, proxy)
+    flow_counter = {"flow": 0}
+    rng = np.random.default_rng(0) if rng is None else rng
+    with _count_flow(flow_counter):
+        counted.filter(y, rng=rng, **filter_kw)
+    out = dict(proxy.counts)
+    out["model_evaluations"] = sum(proxy.counts.values())
+    out["flow"] = flow_counter["flow"]
+    return out
+
+
+def cost_counts(filters: dict, y_one_run, rng_seed: int = 0) -> pd.DataFrame:
+    """:func:`count_model_calls` of every filter on the same run; one row per filter.
+
+    ``y_one_run``: measurements ``(1, T, dim_y)`` (one run). Columns
+    :data:`COUNT_COLUMNS` (totals over the run) plus ``per step`` (model evaluations
+    divided by T).
+    """
+    y = np.asarray(y_one_run, dtype=float)
+    if y.ndim != 3 or y.shape[0] != 1:
+        raise ValueError(f"y_one_run must be one run, shape (1, T, dim_y); got {y.shape}")
+    rows = {name: count_model_calls(f, y, np.random.default_rng(rng_seed)) for name, f in filters.items()}
+    df = pd.DataFrame(rows).T[COUNT_COLUMNS].astype(np.int64)
+    df["per step"] = df["model_evaluations"] / y.shape[1]
+    df.index.name = "filter"
+    return df
+
+
+# --------------------------------------------------------------------------------- timing
+def _timed_call(filt, y, rng_seed: int) -> float:
+    rng = np.random.default_rng(rng_seed)
+    gc_was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        t0 = time.perf_counter()
+        filt.filter(y, rng=rng)
+        return time.perf_counter() - t0
+    finally:
+        if gc_was_enabled:
+            gc.enable()
+
+
+def time_repeats(filters: dict, y_one_run, rng_seed: int = 0, repeats: int = 7, *,
+                 warmup: bool = True) -> pd.DataFrame:
+    """Single-run wall times of every filter, ``repeats`` interleaved repeats; all repeats returned.
+
+    Returns a DataFrame (rows: repeat 0..repeats-1, columns: filters) of seconds. One
+    untimed warm-up call per filter first (``warmup``); repeat r uses the seed
+    ``rng_seed + r`` for every filter; the garbage collector is paused in each call.
+    """
+    repeats = check_positive_int(repeats, "repeats")
+    if warmup:
+        for filt in filters.values():
+            _timed_call(filt, y_one_run, rng_seed)
+    times = {name: [] for name in filters}
+    for r in range(repeats):
+        for name, filt in filters.items():
+            times[name].append(_timed_call(filt, y_one_run, rng_seed + r))
+    return pd.DataFrame(times, index=pd.RangeIndex(repeats, name="repeat"))
+
+
+def median_interval(values) -> tuple[float, float, float]:
+    """(median, min, max) of a sample: the median with its range over repeats."""
+    v = np.asarray(values, dtype=float).ravel()
+    if v.size == 0 or not np.all(np.isfinite(v)):
+        raise ValueError("median_interval needs finite values")
+    return float(np.median(v)), float(v.min()), float(v.max())
+
+
+def time_summary(times: pd.DataFrame, reference: str | None = None) -> pd.DataFrame:
+    """Median and [min, max] over repeats of each filter's time and, with ``reference``,
+    of the per-repeat ratio time / time(reference) (ratios within one repeat share the
+    machine's load of that moment)."""
+    rows = {}
+    for name in times.columns:
+        med, lo, hi = median_interval(times[name])
+        row = {"time median [s]": med, "time min [s]": lo, "time max [s]": hi}
+        if reference is not None:
+            rmed, rlo, rhi = median_interval(times[name] / times[reference])
+            row.update({"ratio median": rmed, "ratio min": rlo, "ratio max": rhi})
+        rows[name] = row
+    df = pd.DataFrame(rows).T
+    df.index.name = "filter"
+    return df

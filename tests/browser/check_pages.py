@@ -1,0 +1,532 @@
+#!/usr/bin/env python3
+"""Open every built page of the book in headless Chromium, offline, and check what a reader sees.
+
+Run after the book build (``.ci/run`` does, as its own phase)::
+
+    python tests/browser/check_pages.py                # _build/html, all pages
+    python tests/browser/check_pages.py --screenshots /tmp/shots book/20_gpff.html
+
+Per page it fails on
+
+``console``   a JavaScript console error, an uncaught exception, or a browser log error
+              (e.g. a file the page references that is not in the build);
+``network``   any request that would leave ``file://`` (http, https, ws...): it is blocked
+              and counted, the book must work offline;
+``math``      math left untypeset after MathJax finished (fewer MathJax containers than math
+              spans), or a MathJax error box (bad TeX);
+``tex``       raw TeX leaking into the text (``$...$`` or ``\\command`` outside math/code);
+``image``     an image that did not load (``naturalWidth == 0``);
+``table``     a table wider than the text column; a table inside a horizontal scroll box that
+              itself fits the column is only reported (``scrolled``), not failed;
+``equation``  a display equation wider than its box, or running into its equation number;
+``overflow``  the text column (or the page) scrolls horizontally;
+``link``      a link to a page of the book, or to an anchor in one (``page.html#id``), whose
+              target does not exist (e.g. a scorecard row whose claim has no anchor).
+
+Driver: the Chrome DevTools Protocol spoken directly over ``--remote-debugging-pipe``
+(JSON messages on file descriptors 3/4), standard library only. No websocket client, no
+pip package, no browser download: it drives the Debian ``chromium`` package (or
+``$CHROMIUM``). Exit status 1 if any page fails, 2 if the browser or the build is missing.
+"""
+from __future__ import annotations
+
+import argparse
+import base64
+import fcntl
+import json
+import os
+import re
+import select
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from html.parser import HTMLParser
+from pathlib import Path
+from urllib.parse import unquote, urlsplit
+
+KINDS = ("console", "network", "math", "tex", "image", "table", "equation", "overflow", "link")
+LOCAL_SCHEMES = ("file:", "data:", "blob:", "about:", "chrome:", "chrome-extension:", "devtools:")
+
+
+def find_chromium(explicit: str | None = None) -> str | None:
+    for cand in (explicit, os.environ.get("CHROMIUM"), "chromium", "chromium-browser",
+                 "google-chrome", "/usr/bin/chromium"):
+        if cand and (path := shutil.which(cand)):
+            return path
+    return None
+
+
+class CDPError(RuntimeError):
+    pass
+
+
+class Browser:
+    """Headless Chromium driven over the DevTools pipe (fd 3: commands in, fd 4: replies out)."""
+
+    def __init__(self, executable: str, width: int = 1280, height: int = 900):
+        self.width, self.height = width, height
+        self._profile = tempfile.mkdtemp(prefix="check_pages_")
+        to_chrome_r, self._w = os.pipe()
+        self._r, from_chrome_w = os.pipe()
+        # move both child ends above the 0-4 range first, so dup2 into 3/4 cannot clobber them;
+        # close_fds=False below because Popen would close 3/4 after preexec_fn (our fds are
+        # non-inheritable by default, so nothing else leaks into the browser)
+        c_in = fcntl.fcntl(to_chrome_r, fcntl.F_DUPFD, 10)
+        c_out = fcntl.fcntl(from_chrome_w, fcntl.F_DUPFD, 10)
+        os.close(to_chrome_r)
+        os.close(from_chrome_w)
+
+        def _child_fds():
+            os.dup2(c_in, 3)
+            os.dup2(c_out, 4)
+
+        args = [
+            executable, "--headless=new", "--remote-debugging-pipe", "--no-sandbox",
+            "--disable-gpu", "--disable-dev-shm-usage", "--no-first-run", "--no-default-browser-check",
+            "--disable-extensions", "--disable-background-networking", "--disable-sync",
+            "--disable-component-update", "--disable-default-apps", "--mute-audio",
+            "--hide-scrollbars", "--force-device-scale-factor=1",
+            # belt and braces beside the Fetch-domain block below: no route out of the machine
+            "--proxy-server=http://127.0.0.1:9", "--proxy-bypass-list=<-loopback>",
+            "--allow-file-access-from-files",
+            f"--user-data-dir={self._profile}", f"--window-size={width},{height}", "about:blank",
+        ]
+        self.proc = subprocess.Popen(args, close_fds=False, preexec_fn=_child_fds,
+                                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                     stderr=subprocess.DEVNULL if not os.environ.get("CHECK_PAGES_DEBUG") else None)
+        os.close(c_in)
+        os.close(c_out)
+        self._buf = b""
+        self._id = 0
+        self._replies: dict[int, dict] = {}
+        self.events: list[dict] = []
+        self.version = self.call("Browser.getVersion")["product"]
+
+    # -- transport -------------------------------------------------------------------------
+    def _read_message(self, timeout: float) -> dict | None:
+        deadline = time.monotonic() + timeout
+        while b"\0" not in self._buf:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return None
+            ready, _, _ = select.select([self._r], [], [], left)
+            if not ready:
+                return None
+            chunk = os.read(self._r, 1 << 20)
+            if not chunk:
+                raise CDPError("chromium closed the DevTools pipe (did it crash?)")
+            self._buf += chunk
+        raw, self._buf = self._buf.split(b"\0", 1)
+        return json.loads(raw)
+
+    def _send(self, method: str, params: dict | None = None, session: str | None = None) -> int:
+        self._id += 1
+        msg = {"id": self._id, "method": method, "params": params or {}}
+        if session:
+            msg["sessionId"] = session
+        os.write(self._w, json.dumps(msg).encode() + b"\0")
+        return self._id
+
+    def _dispatch(self, msg: dict) -> None:
+        if "id" in msg:
+            self._replies[msg["id"]] = msg
+        elif "method" in msg:
+            self._on_event(msg)
+
+    def call(self, method: str, params: dict | None = None, session: str | None = None,
+             timeout: float = 60.0) -> dict:
+        mid = self._send(method, params, session)
+        deadline = time.monotonic() + timeout
+        while mid not in self._replies:
+            msg = self._read_message(max(0.0, deadline - time.monotonic()))
+            if msg is None:
+                raise CDPError(f"{method}: no reply within {timeout:.0f} s")
+            self._dispatch(msg)
+        reply = self._replies.pop(mid)
+        if "error" in reply:
+            raise CDPError(f"{method}: {reply['error']}")
+        return reply.get("result", {})
+
+    def _on_event(self, ev: dict) -> None:
+        # a paused request must be answered at once, or the page stalls
+        if ev["method"] == "Fetch.requestPaused":
+            p = ev["params"]
+            url = p["request"]["url"]
+            if url.startswith(LOCAL_SCHEMES):
+                self._send("Fetch.continueRequest", {"requestId": p["requestId"]}, ev.get("sessionId"))
+            else:
+                self._send("Fetch.failRequest", {"requestId": p["requestId"],
+                                                "errorReason": "BlockedByClient"}, ev.get("sessionId"))
+        self.events.append(ev)
+
+    def pump(self, seconds: float) -> None:
+        end = time.monotonic() + seconds
+        while (left := end - time.monotonic()) > 0:
+            msg = self._read_message(left)
+            if msg is not None:
+                self._dispatch(msg)
+
+    def wait_event(self, method: str, session: str, timeout: float) -> bool:
+        end = time.monotonic() + timeout
+        while (left := end - time.monotonic()) > 0:
+            if any(e["method"] == method and e.get("sessionId") == session for e in self.events):
+                return True
+            msg = self._read_message(left)
+            if msg is not None:
+                self._dispatch(msg)
+        return any(e["method"] == method and e.get("sessionId") == session for e in self.events)
+
+    def close(self) -> None:
+        try:
+            self.call("Browser.close", timeout=5)
+        except Exception:
+            pass
+        try:
+            self.proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+        for fd in (self._r, self._w):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+        shutil.rmtree(self._profile, ignore_errors=True)
+
+    # -- one page --------------------------------------------------------------------------
+    def open(self, url: str, timeout: float = 60.0) -> tuple[str, str]:
+        target = self.call("Target.createTarget", {"url": "about:blank"})["targetId"]
+        session = self.call("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
+        self.events.clear()
+        for domain in ("Runtime", "Log", "Network", "Page"):
+            self.call(f"{domain}.enable", session=session)
+        # every non-local request is paused and failed (see _on_event); file:// never reaches Fetch
+        self.call("Fetch.enable", {"patterns": [{"urlPattern": "http*"}, {"urlPattern": "ws*"},
+                                                {"urlPattern": "ftp*"}]}, session)
+        self.call("Emulation.setDeviceMetricsOverride",
+                  {"width": self.width, "height": self.height, "deviceScaleFactor": 1,
+                   "mobile": False}, session)
+        self.call("Page.navigate", {"url": url}, session)
+        if not self.wait_event("Page.loadEventFired", session, timeout):
+            raise CDPError(f"{url}: no load event within {timeout:.0f} s")
+        return target, session
+
+    def evaluate(self, session: str, expression: str, timeout: float = 60.0):
+        res = self.call("Runtime.evaluate", {"expression": expression, "awaitPromise": True,
+                                             "returnByValue": True}, session, timeout=timeout)
+        if "exceptionDetails" in res:
+            raise CDPError(f"page script failed: {res['exceptionDetails']}")
+        return res["result"].get("value")
+
+    def screenshot(self, session: str, path: Path, clip: dict | None = None,
+                   max_height: int = 12000) -> None:
+        # grow the window to the whole page (captureBeyondViewport alone re-lays out some
+        # themes), shoot, and restore the reader's window
+        h = min(max_height, int(self.evaluate(session, "document.documentElement.scrollHeight")))
+        metrics = {"width": self.width, "deviceScaleFactor": 1, "mobile": False}
+        self.call("Emulation.setDeviceMetricsOverride", {**metrics, "height": h}, session)
+        self.evaluate(session, "new Promise(r => requestAnimationFrame(() => setTimeout(r, 200)))")
+        if clip is None:
+            clip = {"x": 0, "y": 0, "width": self.width, "height": h}
+        clip = {**clip, "scale": 1}
+        try:
+            data = self.call("Page.captureScreenshot", {"format": "png", "clip": clip}, session)["data"]
+        finally:
+            self.call("Emulation.setDeviceMetricsOverride", {**metrics, "height": self.height}, session)
+        path.write_bytes(base64.b64decode(data))
+
+
+# Runs in the page after the load event. Waits for MathJax (if the page loads it) to finish its
+# first typeset and for every image to settle, then measures. Returns a JSON-able report.
+PAGE_JS = r"""
+(async () => {
+  const sleep = ms => new Promise(r => setTimeout(r, ms));
+  const t0 = performance.now();
+  // MathJax 3 is loaded with `defer`/`async`: wait for its startup promise, if the page has one
+  const wantsMathJax = !!document.querySelector('script[src*="mathjax"], script[src*="MathJax"]');
+  let mathjax = 'none';
+  if (wantsMathJax) {
+    while (!(window.MathJax && MathJax.startup && MathJax.startup.promise) && performance.now() - t0 < 30000)
+      await sleep(50);
+    if (window.MathJax && MathJax.startup && MathJax.startup.promise) {
+      try { await MathJax.startup.promise; mathjax = 'done'; } catch (e) { mathjax = 'failed: ' + e; }
+    } else mathjax = 'never started';
+  }
+  const imgs = [...document.images];
+  imgs.forEach(i => { i.loading = 'eager'; });
+  await Promise.all(imgs.map(i => i.complete ? null : new Promise(r => {
+    i.addEventListener('load', r, {once: true}); i.addEventListener('error', r, {once: true});
+    setTimeout(r, 10000); })));
+  if (document.fonts) await document.fonts.ready;
+  await sleep(100);
+
+  const fails = [];
+  const notes = [];
+  const label = el => {
+    const id = el.id || (el.closest('[id]') || {}).id || '';
+    return el.tagName.toLowerCase() + (id ? '#' + id : '');
+  };
+  const box = el => { const r = el.getBoundingClientRect();
+    return {x: r.left + scrollX, y: r.top + scrollY, width: r.width, height: r.height}; };
+
+  // the text column
+  const col = document.querySelector('article.bd-article') || document.querySelector('main') || document.body;
+  const cs = getComputedStyle(col);
+  const cr = col.getBoundingClientRect();
+  const colLeft = cr.left + parseFloat(cs.paddingLeft), colRight = cr.right - parseFloat(cs.paddingRight);
+  const colWidth = colRight - colLeft;
+  const tol = 1.5;
+
+  // page / column overflow
+  const de = document.documentElement;
+  if (de.scrollWidth > de.clientWidth + tol)
+    fails.push({kind: 'overflow', what: 'page', detail: `page scrolls sideways: ${de.scrollWidth}px > ${de.clientWidth}px`});
+  if (col.scrollWidth > col.clientWidth + tol)
+    fails.push({kind: 'overflow', what: label(col), detail: `text column scrolls sideways: ${col.scrollWidth}px > ${col.clientWidth}px`, box: box(col)});
+
+  // math: every .math span/div must hold a MathJax container; no MathJax error boxes
+  const mathEls = [...document.querySelectorAll('span.math, div.math')];
+  const containers = document.querySelectorAll('mjx-container').length;
+  const untypeset = mathEls.filter(el => !el.querySelector('mjx-container'));
+  if (mathEls.length && containers < mathEls.length)
+    fails.push({kind: 'math', what: 'page', detail: `${containers} MathJax containers for ${mathEls.length} math spans`});
+  untypeset.slice(0, 5).forEach(el => fails.push({kind: 'math', what: label(el),
+      detail: 'untypeset: ' + el.textContent.trim().slice(0, 80), box: box(el)}));
+  document.querySelectorAll('mjx-merror').forEach(el => fails.push({kind: 'math', what: label(el),
+      detail: 'MathJax error: ' + (el.getAttribute('data-mjx-error') || el.textContent).slice(0, 100), box: box(el)}));
+
+  // raw TeX in text nodes outside math, code and scripts
+  const skip = 'script, style, pre, code, kbd, samp, textarea, mjx-container, .math, .highlight, .cell_input, .output, .cell_output';
+  const walker = document.createTreeWalker(col, NodeFilter.SHOW_TEXT);
+  const texRe = /\$[^$\n]{0,80}[\\^_{}][^$\n]{0,80}\$|\\(?:dot|hat|mathrm|mathbf|frac|infty|alpha|sigma|lambda|sqrt|left|right|text|operatorname|tfrac|big)\b/;
+  let texHits = 0;
+  for (let n = walker.nextNode(); n; n = walker.nextNode()) {
+    if (!n.parentElement || n.parentElement.closest(skip)) continue;
+    const m = n.textContent.match(texRe);
+    if (m && texHits++ < 5)
+      fails.push({kind: 'tex', what: label(n.parentElement), detail: 'raw TeX: ' + JSON.stringify(m[0]), box: box(n.parentElement)});
+  }
+
+  // images
+  imgs.forEach(i => { if (!i.complete || i.naturalWidth === 0)
+    fails.push({kind: 'image', what: label(i), detail: 'image did not load: ' + (i.getAttribute('src') || '').slice(0, 100)}); });
+  notes.push(`${imgs.length} images`);
+
+  // tables
+  let nTables = 0, nScrolled = 0;
+  document.querySelectorAll('table').forEach(t => {
+    if (!col.contains(t) || t.closest('mjx-container')) return;
+    nTables++;
+    const r = t.getBoundingClientRect();
+    if (r.width <= colWidth + tol && r.left >= colLeft - tol && r.right <= colRight + tol) return;
+    // inside a horizontal scroll box that itself fits the column?
+    let scroller = null;
+    for (let a = t.parentElement; a && a !== col; a = a.parentElement) {
+      const ox = getComputedStyle(a).overflowX;
+      if (ox === 'auto' || ox === 'scroll') { scroller = a; break; }
+    }
+    const sr = scroller && scroller.getBoundingClientRect();
+    const what = label(t) + ' ' + [...t.querySelectorAll('th')].slice(0, 4).map(h => h.textContent.trim()).join('|').slice(0, 60);
+    if (sr && sr.left >= colLeft - tol && sr.right <= colRight + tol) {
+      nScrolled++;
+      notes.push(`scrolled table ${what}: ${Math.round(r.width)}px in a ${Math.round(colWidth)}px column`);
+    } else fails.push({kind: 'table', what, detail: `table ${Math.round(r.width)}px wide, text column ${Math.round(colWidth)}px`, box: box(t)});
+  });
+  notes.push(`${nTables} tables` + (nScrolled ? ` (${nScrolled} scrolled)` : ''));
+
+  // display equations: content within its box and clear of the equation number
+  let nEq = 0;
+  document.querySelectorAll('div.math').forEach(d => {
+    const m = d.querySelector('mjx-container mjx-math');
+    if (!m) return;
+    nEq++;
+    const dr = d.getBoundingClientRect(), mr = m.getBoundingClientRect();
+    const why = [];
+    if (mr.width > dr.width + tol || mr.left < dr.left - tol || mr.right > dr.right + tol)
+      why.push(`content ${Math.round(mr.width)}px, box ${Math.round(dr.width)}px`);
+    if (dr.right > colRight + tol) why.push(`box ends ${Math.round(dr.right - colRight)}px past the column`);
+    const eq = d.querySelector('.eqno');
+    if (eq) {
+      const er = eq.getBoundingClientRect();
+      const vert = er.top < mr.bottom && er.bottom > mr.top;
+      if (vert && er.left < mr.right - tol && er.right > mr.left + tol)
+        why.push(`runs into its number ${eq.textContent.trim().replace(/[#¶]/g, '')}`);
+    }
+    if (why.length) fails.push({kind: 'equation', what: label(d) + ' ' + (eq ? eq.textContent.trim().replace(/[#¶]/g, '') : ''),
+                                detail: why.join('; '), box: box(d)});
+  });
+  notes.push(`${nEq} display equations, ${mathEls.length} math spans, column ${Math.round(colWidth)}px`);
+  return {mathjax, fails, notes, column: Math.round(colWidth), title: document.title};
+})()
+"""
+
+
+_REFRESH = re.compile(r'<meta[^>]+http-equiv=["\']refresh["\'][^>]+content=["\'][^"\']*url=([^"\'>]+)', re.I)
+
+
+def console_failures(events: list[dict]) -> list[dict]:
+    out = []
+    for ev in events:
+        m, p = ev["method"], ev.get("params", {})
+        if m == "Runtime.consoleAPICalled" and p.get("type") in ("error", "assert"):
+            text = " ".join(str(a.get("value", a.get("description", ""))) for a in p.get("args", []))
+            out.append({"kind": "console", "what": "console." + p["type"], "detail": text[:300]})
+        elif m == "Runtime.exceptionThrown":
+            d = p.get("exceptionDetails", {})
+            text = d.get("exception", {}).get("description") or d.get("text", "")
+            out.append({"kind": "console", "what": "exception", "detail": f"{text[:300]} ({d.get('url', '')}:{d.get('lineNumber', '')})"})
+        elif m == "Log.entryAdded" and p.get("entry", {}).get("level") == "error":
+            e = p["entry"]
+            out.append({"kind": "console", "what": "log." + e.get("source", ""), "detail": f"{e.get('text', '')[:200]} {e.get('url', '')}"})
+        elif m == "Network.requestWillBeSent":
+            url = p.get("request", {}).get("url", "")
+            if not url.startswith(LOCAL_SCHEMES):
+                out.append({"kind": "network", "what": "request", "detail": "blocked: " + url[:200]})
+        elif m == "Network.webSocketCreated":
+            out.append({"kind": "network", "what": "websocket", "detail": "blocked: " + p.get("url", "")[:200]})
+    return out
+
+
+class _IdsAndLinks(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.ids: set[str] = set()
+        self.links: list[str] = []
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if a.get("id"):
+            self.ids.add(a["id"])
+        if tag == "a" and a.get("name"):
+            self.ids.add(a["name"])
+        if tag == "a" and a.get("href"):
+            self.links.append(a["href"])
+
+
+def broken_links(root: Path, page: Path, _cache: dict = {}) -> list[dict]:
+    """Links from ``page`` to pages of the book (and anchors in them) that do not exist."""
+    def parse(p: Path) -> _IdsAndLinks:
+        key = p.resolve()
+        if key not in _cache:
+            parser = _IdsAndLinks()
+            parser.feed(p.read_text(encoding="utf-8", errors="replace"))
+            _cache[key] = parser
+        return _cache[key]
+
+    out = []
+    for href in parse(page).links:
+        parts = urlsplit(href)
+        if parts.scheme or parts.netloc or href.startswith(("mailto:", "javascript:")):
+            continue
+        target = (page.parent / unquote(parts.path)).resolve() if parts.path else page.resolve()
+        if parts.path and not parts.path.endswith(".html"):
+            if not target.exists():
+                out.append({"kind": "link", "what": href[:100], "detail": "file not in the build"})
+            continue
+        try:
+            target.relative_to(root.resolve())
+        except ValueError:
+            out.append({"kind": "link", "what": href[:100], "detail": "points outside the build"})
+            continue
+        if not target.is_file():
+            out.append({"kind": "link", "what": href[:100], "detail": "page not in the build"})
+        elif parts.fragment and unquote(parts.fragment) not in parse(target).ids:
+            out.append({"kind": "link", "what": href[:100], "detail": f"no anchor #{parts.fragment} in {target.name}"})
+    return out
+
+
+def pages_under(root: Path) -> list[Path]:
+    skip = {"_static", "_sources", "_images", "_downloads"}
+    return sorted(p for p in root.rglob("*.html") if not skip & set(p.relative_to(root).parts[:-1]))
+
+
+def check(root: Path, pages: list[Path], chromium: str, width: int, height: int,
+          shots: Path | None, verbose: bool) -> dict:
+    browser = Browser(chromium, width, height)
+    print(f"browser: {browser.version} ({chromium}), window {width}x{height}, offline")
+    results = {}
+    try:
+        for page in pages:
+            rel = page.relative_to(root).as_posix()
+            t0 = time.monotonic()
+            redirect = _REFRESH.search(page.read_text(encoding="utf-8", errors="replace")[:4000])
+            if redirect:  # index.html: a meta-refresh stub; the page it points to is checked itself
+                dest = (page.parent / unquote(urlsplit(redirect.group(1)).path))
+                fails = [] if dest.is_file() else [{"kind": "link", "what": redirect.group(1), "detail": "redirect target missing"}]
+                results[rel] = {"fails": fails, "notes": [f"redirect to {redirect.group(1)}"], "seconds": 0.0}
+                print(f"{'ok  ' if not fails else 'FAIL'} {rel:<32} {'redirect to ' + redirect.group(1)}")
+                continue
+            try:
+                target, session = browser.open(page.resolve().as_uri())
+                report = browser.evaluate(session, PAGE_JS, timeout=90)
+                browser.pump(0.3)  # late console messages
+                fails = console_failures(browser.events) + report["fails"] + broken_links(root, page)
+                if report["mathjax"] not in ("done", "none"):
+                    fails.append({"kind": "math", "what": "MathJax", "detail": report["mathjax"]})
+                if shots is not None:
+                    stem = rel.replace("/", "_").removesuffix(".html")
+                    browser.screenshot(session, shots / f"{stem}.png")
+                    for i, f in enumerate(x for x in fails if x.get("box")):
+                        b = f["box"]
+                        clip = {"x": max(0, b["x"] - 20), "y": max(0, b["y"] - 20),
+                                "width": min(width, b["width"] + 40) or 1, "height": min(1500, b["height"] + 40) or 1}
+                        browser.screenshot(session, shots / f"{stem}__{i:02d}_{f['kind']}.png", clip)
+                browser.call("Target.closeTarget", {"targetId": target})
+                notes = report["notes"]
+            except CDPError as exc:
+                fails, notes = [{"kind": "console", "what": "driver", "detail": str(exc)}], []
+            results[rel] = {"fails": fails, "notes": notes, "seconds": time.monotonic() - t0}
+            counts = {k: sum(f["kind"] == k for f in fails) for k in KINDS}
+            status = "ok  " if not fails else "FAIL"
+            summary = ", ".join(f"{k} {n}" for k, n in counts.items() if n) or "clean"
+            print(f"{status} {rel:<32} {summary:<40} [{'; '.join(n for n in notes if not n.startswith('scrolled'))}] "
+                  f"{results[rel]['seconds']:.1f}s")
+            for f in fails:
+                print(f"       {f['kind']:<9} {f['what']}: {f['detail']}")
+            if verbose:
+                for n in notes:
+                    if n.startswith("scrolled"):
+                        print(f"       note      {n}")
+    finally:
+        browser.close()
+    return results
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("pages", nargs="*", help="pages relative to --root (default: every page)")
+    ap.add_argument("--root", default="_build/html", type=Path, help="built HTML (default _build/html)")
+    ap.add_argument("--chromium", help="browser executable (default: $CHROMIUM or chromium)")
+    ap.add_argument("--width", type=int, default=1280)
+    ap.add_argument("--height", type=int, default=900)
+    ap.add_argument("--screenshots", type=Path, help="save a full-page PNG per page (and a clip per failure) here")
+    ap.add_argument("--json", type=Path, help="write the per-page results here")
+    ap.add_argument("-v", "--verbose", action="store_true", help="also list horizontally scrolled tables")
+    args = ap.parse_args(argv)
+
+    root = args.root
+    if not (root / "index.html").is_file():
+        print(f"ERROR: no built book at {root} (run the book build first)", file=sys.stderr)
+        return 2
+    chromium = find_chromium(args.chromium)
+    if chromium is None:
+        print("ERROR: no chromium found (apt-get install -y chromium, or set $CHROMIUM)", file=sys.stderr)
+        return 2
+    pages = [root / p for p in args.pages] if args.pages else pages_under(root)
+    if args.screenshots:
+        args.screenshots.mkdir(parents=True, exist_ok=True)
+    t0 = time.monotonic()
+    results = check(root, pages, chromium, args.width, args.height, args.screenshots, args.verbose)
+    totals = {k: sum(f["kind"] == k for r in results.values() for f in r["fails"]) for k in KINDS}
+    bad = [p for p, r in results.items() if r["fails"]]
+    print(f"\n{len(results)} pages, {len(bad)} failing, {time.monotonic() - t0:.0f}s; failures by kind: "
+          + ", ".join(f"{k} {n}" for k, n in totals.items()))
+    if args.json:
+        args.json.write_text(json.dumps({"totals": totals, "pages": results}, indent=1))
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,144 @@
+"""Cost counts against hand-computed values; the counting proxy changes nothing; timing repeats."""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pfrepro.cost import (COUNT_COLUMNS, CountingModel, cost_counts, count_model_calls, median_interval,
+                          time_repeats, time_summary)
+from pfrepro.filters import (BootstrapParticleFilter, CMSParticleFilter, EvolutionSamplingParticleFilter,
+                             ExtendedKalmanFilter, GaussianParticleFlowFilter, GridFilter, KalmanFilter,
+                             UnscentedKalmanFilter)
+from pfrepro.models import CWPA, UNGM, BearingsOnly
+
+T = 6
+
+
+@pytest.fixture(scope="module")
+def ung():
+    m = UNGM.zhang2016()
+    return m, m.simulate(T, 3, np.random.default_rng(1))
+
+
+@pytest.fixture(scope="module")
+def bot():
+    m = BearingsOnly.zhang2016()
+    return m, m.simulate(T, 2, np.random.default_rng(2))
+
+
+def zeros_except(c, **expected):
+    for col in ("transitions", "likelihoods", "f", "h", "jacobian_f", "jacobian_h", "flow"):
+        assert c[col] == expected.get(col, 0), (col, c[col], expected.get(col, 0))
+    assert c["model_evaluations"] == sum(c[k] for k in ("transitions", "likelihoods", "f", "h",
+                                                        "jacobian_f", "jacobian_h"))
+
+
+def test_pf_counts_n_t_transitions_and_likelihoods(ung):
+    m, sim = ung
+    N, runs = 37, sim.runs
+    c = count_model_calls(BootstrapParticleFilter(m, N), sim.y, np.random.default_rng(0))
+    zeros_except(c, transitions=runs * N * T, likelihoods=runs * N * T)
+
+
+def test_ekf_counts_t_of_each(ung):
+    m, sim = ung
+    c = count_model_calls(ExtendedKalmanFilter(m), sim.y[:1])
+    zeros_except(c, f=T, h=T, jacobian_f=T, jacobian_h=T)
+
+
+def test_ukf_counts_sigma_points(bot):
+    m, sim = bot
+    n = m.dim_x  # 4 -> 2n + 1 = 9 sigma points in predict and in update
+    c = count_model_calls(UnscentedKalmanFilter(m), sim.y[:1])
+    zeros_except(c, f=(2 * n + 1) * T, h=(2 * n + 1) * T)
+
+
+def test_kf_asks_nothing_of_the_model():
+    m = CWPA.zhang2016("gaussian")
+    sim = m.simulate(T, 1, np.random.default_rng(3))
+    zeros_except(count_model_calls(KalmanFilter(m), sim.y))
+
+
+def test_gpff_counts_eq41_and_eq43(bot):
+    m, sim = bot
+    d, N, S = m.dim_x, 11, 5
+    c41 = count_model_calls(GaussianParticleFlowFilter(m, N, n_steps=S, field="eq41"), sim.y[:1])
+    # h at the 2d+1 sigma points, then at every particle in each of the S Euler steps
+    zeros_except(c41, transitions=N * T, h=(2 * d + 1) * T + N * S * T, flow=N * S * T)
+    c43 = count_model_calls(GaussianParticleFlowFilter(m, N, n_steps=S, field="eq43"), sim.y[:1])
+    # the eq (43) field is affine: d + 1 probe points are integrated, not the N particles
+    zeros_except(c43, transitions=N * T, h=(2 * d + 1) * T, flow=(d + 1) * S * T)
+    rk4 = count_model_calls(GaussianParticleFlowFilter(m, N, n_steps=S, field="eq41", integrator="rk4"),
+                            sim.y[:1])
+    assert rk4["flow"] == 4 * N * S * T
+
+
+def test_cms_espf_and_grid_counts(ung):
+    m, sim = ung
+    N = 20
+    zeros_except(count_model_calls(CMSParticleFilter(m, N), sim.y[:1], np.random.default_rng(0)),
+                 transitions=N * T, likelihoods=2 * N * T)
+    zeros_except(count_model_calls(EvolutionSamplingParticleFilter(m, N), sim.y[:1], np.random.default_rng(0)),
+                 f=N * T, likelihoods=3 * N * T)
+    G = 301
+    zeros_except(count_model_calls(GridFilter(m, bounds=(-30.0, 30.0), n_grid=G), sim.y[:1]),
+                 f=G * T, likelihoods=G * T)
+
+
+def test_counting_changes_nothing(ung):
+    m, sim = ung
+    pf = BootstrapParticleFilter(m, 50)
+    ref = pf.filter(sim.y, rng=np.random.default_rng(7)).x
+    count_model_calls(pf, sim.y, np.random.default_rng(7))
+    assert pf.model is m  # the filter itself is untouched
+    np.testing.assert_array_equal(pf.filter(sim.y, rng=np.random.default_rng(7)).x, ref)
+    # the proxy returns exactly what the model returns
+    proxy = CountingModel(m)
+    x = np.random.default_rng(0).standard_normal((2, 5, 1))
+    np.testing.assert_array_equal(proxy.h(x), m.h(x))
+    assert proxy.counts["h"] == 10 and proxy.dim_x == m.dim_x
+    proxy.f(np.array([0.3]), 1)
+    assert proxy.counts["f"] == 1  # a single state counts one
+
+
+def test_counts_do_not_depend_on_the_rng(ung):
+    m, sim = ung
+    pf = BootstrapParticleFilter(m, 30)
+    a = count_model_calls(pf, sim.y[:1], np.random.default_rng(1))
+    b = count_model_calls(pf, sim.y[:1], np.random.default_rng(2))
+    assert a == b
+
+
+def test_cost_counts_table(ung):
+    m, sim = ung
+    df = cost_counts({"EKF": ExtendedKalmanFilter(m), "PF(10)": BootstrapParticleFilter(m, 10)}, sim.y[:1])
+    assert list(df.columns) == COUNT_COLUMNS + ["per step"]
+    assert df.loc["PF(10)", "model_evaluations"] == 2 * 10 * T
+    assert df.loc["EKF", "per step"] == 4
+    with pytest.raises(ValueError, match="one run"):
+        cost_counts({"EKF": ExtendedKalmanFilter(m)}, sim.y)
+
+
+def test_time_repeats_and_summary(ung):
+    m, sim = ung
+    fs = {"EKF": ExtendedKalmanFilter(m), "PF": BootstrapParticleFilter(m, 20)}
+    t = time_repeats(fs, sim.y[:1], repeats=3)
+    assert t.shape == (3, 2) and (t.to_numpy() > 0).all()
+    s = time_summary(t, reference="EKF")
+    np.testing.assert_allclose(s.loc["EKF", ["ratio median", "ratio min", "ratio max"]].to_numpy(float), 1.0)
+    assert s.loc["PF", "time min [s]"] <= s.loc["PF", "time median [s]"] <= s.loc["PF", "time max [s]"]
+    assert median_interval([3.0, 1.0, 2.0]) == (2.0, 1.0, 3.0)
+    with pytest.raises(ValueError):
+        median_interval([])
+    with pytest.raises(ValueError, match="repeats"):
+        time_repeats(fs, sim.y[:1], repeats=0)
+    assert isinstance(t, pd.DataFrame)
+
+
+def test_cms_fig3_counts_are_3n_and_2n():
+    from pfrepro.experiments import cmspf_ning2011 as E
+
+    c = E.cost_counts_fig3(Ns=(10, 25))
+    assert c["CMS-PF evals / step"].tolist() == [30.0, 75.0]
+    assert c["PF evals / step"].tolist() == [20.0, 50.0]
