@@ -13,7 +13,7 @@ from ..experiments import immpfor_zhou2017 as E
 from ..models.tracking import IDX_POS, IDX_VEL
 from . import new_figure
 
-__all__ = ["table1_frame", "fig1", "rmse_plot", "fig2", "fig3", "fig4", "fig5", "reproduce",
+__all__ = ["table1_frame", "fig1", "shade_turns", "rmse_plot", "fig2", "fig3", "fig4", "fig5", "reproduce",
            "TABLES", "FIGURES", "N_STEPS", "PF_NAMES"]
 
 #: what :func:`reproduce` makes
@@ -80,7 +80,8 @@ def fig1(main, run: int = 0):
     return fig
 
 
-def _shade(ax):
+def shade_turns(ax):
+    """Grey bands over the two turns of the scenario on ``ax`` (time axis in s)."""
     for a, b in (E.SCENARIO["left_turn"], E.SCENARIO["right_turn"]):
         ax.axvspan(a, b, color="0.9", lw=0)
 
@@ -90,7 +91,7 @@ def rmse_plot(run_, names, idx_pos, idx_vel, title_pos, title_vel, styles=("C0-"
     kk = np.arange(1, E.SCENARIO["duration"] + 1)
     fig, axs = new_figure(1, 2, figsize=(9, 3.3))
     for ax, idx, lab in ((axs[0], idx_pos, title_pos), (axs[1], idx_vel, title_vel)):
-        _shade(ax)
+        shade_turns(ax)
         for n, st in zip(names, styles):
             ax.plot(kk, E.rmse_curves(run_.x_true, run_.results[n].x, idx), st, lw=1, label=n)
         ax.set_xlabel("time [s]"); ax.set_ylabel(lab)
