@@ -59,7 +59,7 @@ def rmse_table(r51, pub=None):
 
     def fmt(t, digits):
         out = pd.DataFrame(index=t.index)
-        out["runs"] = t["runs"]
+        out["runs"] = t["runs"].astype(object)  # the paper row holds a string
         for c in ("eq14 x", "usual x", "eq14 θ", "usual θ"):
             d = digits if "x" in c else digits + 2
             out[c] = [pm(m, s, d) for m, s in zip(t[c], t[c + " se"])]
