@@ -71,8 +71,8 @@ VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not che
 DEFAULT_REL_TOL = 0.10
 #: a published value within Z_CRIT standard errors of ours counts as inside our uncertainty
 Z_CRIT = 2.0
-#: what a claim's verdict rests on: "" (numbers / orderings, the default) or "count"
-#: (a cost claim decided on a deterministic cost count, see pfrepro.cost)
+#: The bases a claim's verdict can rest on. ``""`` means numbers or orderings (the default),
+#: ``"count"`` a cost claim decided on a deterministic cost count (see :mod:`pfrepro.cost`).
 BASES = ("", "count")
 
 

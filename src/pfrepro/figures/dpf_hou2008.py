@@ -45,7 +45,7 @@ def rmse_table(r51, pub=None):
     tab : pandas.DataFrame
         The shown table (strings), all runs, then the exact reference's runs, then the paper.
     t_all, t_grid : pandas.DataFrame
-        :func:`~pfrepro.experiments.dpf_hou2008.rmse_table_51` on all runs and on the runs of
+        ``pfrepro.experiments.dpf_hou2008.rmse_table_51`` on all runs and on the runs of
         the exact reference (numbers).
     """
     if pub is None:
@@ -126,7 +126,7 @@ def figs_7_9(r52, crb_ft=None, rm: dict | None = None):
 
     ``r52`` is :func:`~pfrepro.experiments.dpf_hou2008.run_52`'s result, ``crb_ft``
     :func:`~pfrepro.experiments.dpf_hou2008.crb_theta_52` (default: computed), ``rm`` the
-    per-filter :func:`~pfrepro.experiments.dpf_hou2008.rmse_over_time_52` (default: computed).
+    per-filter ``pfrepro.experiments.dpf_hou2008.rmse_over_time_52`` (default: computed).
     """
     if crb_ft is None:
         crb_ft = E.crb_theta_52("feet")

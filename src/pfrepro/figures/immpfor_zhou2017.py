@@ -42,8 +42,8 @@ def table1_frame(main, lik_pair=None, pub=None) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        Columns ``paper peak, ours peak, se, paper mean, ours mean, se `` (the second se has a
-        trailing space), one row per filter.
+        Columns "paper peak", "ours peak", "se", "paper mean", "ours mean" and "se " (the second
+        standard error's name ends with a space), one row per filter.
     """
     if pub is None:
         from .. import published
