@@ -200,3 +200,61 @@ def test_run_with_jobs_matches_serial(li_run, tmp_path):
     # differently when the runs are split into chunks, at the 1e-16 level
     assert a["ours"].to_numpy() == pytest.approx(b["ours"].to_numpy(), rel=1e-12, abs=0)
     assert a["exact"].to_numpy() == pytest.approx(b["exact"].to_numpy(), rel=1e-12)
+
+
+# -- the dual PF and IMM-PF papers: registered, listed, runnable on one run -------------------
+def test_list_shows_dpf_and_immpf(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("PFREPRO_CLAIMS_DIR", raising=False)
+    code, out, _ = run_cli(["list"], capsys)
+    assert code == 0
+    for key, alias, label in (("dpf_hou2008", "hou2008", "Figs. 7-9"), ("immpfor_zhou2017", "zhou2017", "Fig. 5")):
+        assert key in out and alias in out and label in out
+    assert papers.get_paper("dpf").chapter == "book/50_dpf.md"
+    assert papers.get_paper("IMMPF").chapter == "book/60_immpf.md"
+
+
+@pytest.mark.parametrize("name, key, files", [
+    ("dpf", "dpf_hou2008", ("rmse_table.csv", "fig4.png", "fig5.png", "figs_7_9.png")),
+    ("immpf", "immpfor_zhou2017", ("table1.csv", "fig1.png", "fig2.png", "fig3.png", "fig4.png", "fig5.png")),
+])
+def test_run_new_papers_on_one_run(name, key, files, tmp_path, capsys):
+    code, out, err = run_cli(["run", name, "--runs", "1", "--seed", "5", "--out", str(tmp_path)], capsys)
+    assert code == 0, err
+    for f in files:
+        assert (tmp_path / f).stat().st_size > 0
+        if f.endswith(".png"):
+            assert (tmp_path / f).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    claims = json.loads((tmp_path / "claims" / f"{key}.json").read_text())
+    assert len(claims) == 4 and all(c["published"] is not None for c in claims)
+    assert "verdicts of the 4 table-cell claims" in out
+
+
+def test_dpf_reproduce_uses_the_chapter_experiment_and_restores_settings():
+    """The DPF table is the experiment module's rmse_table_51 on the same (scaled) run, and the
+    temporary run count and seeds are put back afterwards."""
+    from pfrepro.experiments import dpf_hou2008 as E
+    from pfrepro.figures import dpf_hou2008 as F
+
+    before = (dict(E.S51), E.SEED_51, E.SEED_52)
+    with F._scale(2, 11):
+        assert E.S51["runs"] == 2 and E.S51["grid_runs"] == 2 and E.SEED_51 == 11
+        r51 = E.run_51()
+    assert (dict(E.S51), E.SEED_51, E.SEED_52) == before
+    tab, t_all, t_grid = F.rmse_table(r51)
+    direct = E.rmse_table_51(r51, ["DPF", "DEKF", "Liu-West"])
+    assert t_all["eq14 x"].to_numpy() == pytest.approx(direct["eq14 x"].to_numpy(), rel=1e-12)
+    assert list(tab.index)[-1] == "paper (1 run)" and "exact (2 runs)" in tab.index
+    assert tab.loc["DPF", "eq14 x"] == F.pm(t_all.loc["DPF", "eq14 x"], t_all.loc["DPF", "eq14 x se"], 3)
+
+
+def test_immpf_table1_frame_matches_the_experiment():
+    from pfrepro.experiments import immpfor_zhou2017 as E
+    from pfrepro.figures import immpfor_zhou2017 as F
+
+    main = E.run(F.PF_NAMES, runs=2, seed=7)
+    tab = F.table1_frame(main)
+    t1 = E.table1(main, ["IMMPF", "IMMPFOR"])
+    assert tab.loc[["IMMPF", "IMMPFOR"], "ours mean"].to_numpy() == pytest.approx(t1["mean"].to_numpy(), rel=1e-12)
+    assert "IMM-EKF" not in tab.index          # rows of filters that were not run are left out
+    assert tab.loc["IMMPF", "paper peak"] > 0

@@ -71,8 +71,8 @@ VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not che
 DEFAULT_REL_TOL = 0.10
 #: a published value within Z_CRIT standard errors of ours counts as inside our uncertainty
 Z_CRIT = 2.0
-#: What a claim's verdict rests on, ``""`` (numbers and orderings, the default) or ``"count"``
-#: (a cost claim decided on a deterministic cost count, see :mod:`pfrepro.cost`).
+#: The bases a claim's verdict can rest on. ``""`` means numbers or orderings (the default),
+#: ``"count"`` a cost claim decided on a deterministic cost count (see :mod:`pfrepro.cost`).
 BASES = ("", "count")
 
 
@@ -212,6 +212,7 @@ class Claim:
 
     @property
     def verdict(self) -> str:
+        """The verdict, recomputed from the stored numbers by :func:`verdict` (never stored as text)."""
         return verdict(self.published, self.reproduced, self.se, self.rel_tol, self.qualitative,
                        self.diff, self.diff_se, self.published_se, self.basis, self.readings)
 
@@ -236,6 +237,7 @@ class Claim:
         return "; ".join(parts)
 
     def as_row(self) -> dict:
+        """The claim's fields and its verdict as a dict (one row of the scorecard / JSON file)."""
         d = asdict(self)
         d["verdict"] = self.verdict
         return d
@@ -310,6 +312,7 @@ def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFra
 
 
 def claims_dir() -> Path:
+    """Where claims are saved and read: ``$PFREPRO_CLAIMS_DIR``, else ``_claims`` under the working directory."""
     return Path(os.environ.get("PFREPRO_CLAIMS_DIR", Path.cwd() / "_claims"))
 
 
@@ -338,6 +341,39 @@ class ClaimsRegistry:
     def add(self, claim_id: str, text: str, *, published=None, reproduced=None, se=None,
             rel_tol=DEFAULT_REL_TOL, qualitative=None, source="", note="", diff=None,
             diff_se=None, published_se=None, basis="", readings=None) -> Claim:
+        """Record one claim of the paper and check now that its verdict can be computed.
+
+        Parameters
+        ----------
+        claim_id : str
+            Unique within the paper (``ValueError`` if recorded twice).
+        text : str
+            The claim in a few words, as the paper states it.
+        published, reproduced, se : float, optional
+            A numeric claim: the paper's value, ours and our standard error.
+        rel_tol : float, optional
+            Relative tolerance of a numeric claim (default :data:`DEFAULT_REL_TOL`).
+        qualitative : bool, optional
+            A claim judged by eye (holds / does not hold), when no number decides it.
+        source : str, optional
+            Where in the paper (table, figure, section).
+        note : str, optional
+            What was compared, in a few words.
+        diff, diff_se : float, optional
+            An ordering claim: the paired difference oriented so that the claim asserts
+            ``diff > 0`` and its standard error (:func:`paired_difference`).
+        published_se : float, optional
+            The paper's own standard error, if it prints one.
+        basis : {"", "count"}, optional
+            ``"count"``: a cost claim decided on a deterministic cost count.
+        readings : dict, optional
+            Reading of the paper -> whether the statement holds under it (bool or None).
+
+        Returns
+        -------
+        Claim
+            The recorded claim; its verdict is :func:`verdict` of these fields.
+        """
         if any(c.claim_id == claim_id for c in self.claims):
             raise ValueError(f"claim {claim_id!r} already recorded for {self.paper}")
         if qualitative is not None and not isinstance(qualitative, (bool,)):
@@ -352,6 +388,7 @@ class ClaimsRegistry:
         return c
 
     def to_frame(self) -> pd.DataFrame:
+        """Every recorded claim as a row (:meth:`Claim.as_row`), with its verdict."""
         return pd.DataFrame([c.as_row() for c in self.claims])
 
     def table(self, **kw) -> pd.DataFrame:
@@ -359,6 +396,18 @@ class ClaimsRegistry:
         return claims_table(self, **kw)
 
     def save(self, directory: Path | None = None) -> Path:
+        """Write the claims to ``<directory>/<paper>.json`` for the scorecard.
+
+        Parameters
+        ----------
+        directory : path, optional
+            Default :func:`claims_dir`; created if missing.
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+        """
         d = Path(directory) if directory is not None else claims_dir()
         d.mkdir(parents=True, exist_ok=True)
         path = d / f"{self.paper}.json"

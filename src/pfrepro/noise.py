@@ -61,6 +61,23 @@ class GaussianNoise:
             self._log_norm = -0.5 * (self.dim * _LOG_2PI) - np.sum(np.log(np.diag(self._chol)))
 
     def sample(self, rng: np.random.Generator, shape=()) -> np.ndarray:
+        """Draw noise vectors.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator or pfrepro.rng.RunStreams
+            The random source; with :class:`~pfrepro.rng.RunStreams`, ``shape`` must start
+            with the number of runs.
+        shape : tuple of int, optional
+            Leading shape of the draw, e.g. ``(runs, N)``; ``()`` gives one vector.
+
+        Returns
+        -------
+        ndarray
+            Shape ``shape + (dim,)``: ``mean + L z`` with ``z`` standard normal and ``L`` the
+            Cholesky factor of ``cov`` (the symmetric square root if ``cov`` is singular;
+            no draw at all if ``cov`` is zero).
+        """
         shape = tuple(np.atleast_1d(shape)) if shape != () else ()
         if self.is_zero:  # deterministic: no draw at all (Q = 0)
             return np.broadcast_to(self.mean, shape + (self.dim,)).copy()
@@ -76,6 +93,23 @@ class GaussianNoise:
         return z
 
     def logpdf(self, v) -> np.ndarray:
+        """Log density of noise values ``v``.
+
+        Parameters
+        ----------
+        v : array_like
+            Shape ``(..., dim)``.
+
+        Returns
+        -------
+        ndarray
+            Shape ``v.shape[:-1]``: log N(v; mean, cov).
+
+        Raises
+        ------
+        ValueError
+            If ``cov`` is singular (degenerate noise has no density).
+        """
         if self.is_singular:
             raise ValueError(
                 "this Gaussian noise has a singular covariance and no density; a method that needs "
@@ -126,6 +160,21 @@ class GaussianMixtureNoise:
         self.cov = second - np.outer(self.mean, self.mean)
 
     def sample(self, rng: np.random.Generator, shape=()) -> np.ndarray:
+        """Draw noise vectors: a component j with probability ``weights[j]``, then its Gaussian.
+
+        Parameters
+        ----------
+        rng : numpy.random.Generator or pfrepro.rng.RunStreams
+            The random source; with :class:`~pfrepro.rng.RunStreams` each run draws its own
+            slice from its own stream (``shape`` starts with the number of runs).
+        shape : tuple of int, optional
+            Leading shape of the draw; ``()`` gives one vector.
+
+        Returns
+        -------
+        ndarray
+            Shape ``shape + (dim,)``.
+        """
         shape = tuple(np.atleast_1d(shape)) if shape != () else ()
         if isinstance(rng, RunStreams):  # per-run streams: each run draws its own slice
             return np.stack([self.sample(g, shape[1:]) for g in rng])
@@ -137,6 +186,18 @@ class GaussianMixtureNoise:
         return out
 
     def logpdf(self, v) -> np.ndarray:
+        """Log density ``log sum_j w_j N(v; mean_j, cov_j)`` (log-sum-exp over components).
+
+        Parameters
+        ----------
+        v : array_like
+            Shape ``(..., dim)``.
+
+        Returns
+        -------
+        ndarray
+            Shape ``v.shape[:-1]``.
+        """
         parts = [np.log(wj) + c.logpdf(v) for wj, c in zip(self.weights, self.components) if wj > 0]
         return logsumexp(np.stack(parts, axis=0), axis=0)
 

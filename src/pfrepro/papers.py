@@ -77,6 +77,8 @@ PAPERS: tuple[Paper, ...] = (
     Paper("gpff_zhang2016", ("gpff", "zhang2016"), "book/20_gpff.md"),
     Paper("ekf_pf_li2012", ("li2012", "ekf_pf"), "book/30_ekf_pf.md"),
     Paper("cmspf_ning2011", ("cmspf", "ning2011"), "book/40_cmspf.md"),
+    Paper("dpf_hou2008", ("dpf", "hou2008"), "book/50_dpf.md"),
+    Paper("immpfor_zhou2017", ("immpf", "immpfor", "zhou2017"), "book/60_immpf.md"),
 )
 
 

@@ -111,9 +111,39 @@ class RunStreams:
         return out
 
     def standard_normal(self, size=None, dtype=np.float64):
+        """``Generator.standard_normal`` per run, with the runs axis first.
+
+        Parameters
+        ----------
+        size : tuple of int
+            ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
+        dtype : {float64, float32}, optional
+            Output dtype.
+
+        Returns
+        -------
+        ndarray
+            Shape ``size``; slice ``[i]`` is drawn from run i's Generator alone, so it does
+            not depend on the other runs.
+        """
         return self._fill(self._standard_normal, self._size(size, "standard_normal"), dtype)
 
     def random(self, size=None, dtype=np.float64):
+        """``Generator.random`` per run, with the runs axis first.
+
+        Parameters
+        ----------
+        size : tuple of int
+            ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
+        dtype : {float64, float32}, optional
+            Output dtype; draws are uniform on [0, 1).
+
+        Returns
+        -------
+        ndarray
+            Shape ``size``; slice ``[i]`` is drawn from run i's Generator alone, so it does
+            not depend on the other runs.
+        """
         return self._fill(self._random, self._size(size, "random"), dtype)
 
     @staticmethod
@@ -130,21 +160,113 @@ class RunStreams:
         return out
 
     def normal(self, loc=0.0, scale=1.0, size=None):
+        """``Generator.normal`` per run, with the runs axis first.
+
+        Parameters
+        ----------
+        loc, scale : float or array_like
+            Mean and standard deviation; arrays broadcast against ``size``, run i uses slice ``[i]``.
+        size : tuple of int
+            ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
+
+        Returns
+        -------
+        ndarray
+            Shape ``size``; slice ``[i]`` is drawn from run i's Generator alone, so it does
+            not depend on the other runs.
+        """
         return self._per_run("normal", size, loc, scale)
 
     def uniform(self, low=0.0, high=1.0, size=None):
+        """``Generator.uniform`` per run, with the runs axis first.
+
+        Parameters
+        ----------
+        low, high : float or array_like
+            Interval [low, high); arrays broadcast against ``size``, run i uses slice ``[i]``.
+        size : tuple of int
+            ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
+
+        Returns
+        -------
+        ndarray
+            Shape ``size``; slice ``[i]`` is drawn from run i's Generator alone, so it does
+            not depend on the other runs.
+        """
         return self._per_run("uniform", size, low, high)
 
     def beta(self, a, b, size=None):
+        """``Generator.beta`` per run, with the runs axis first.
+
+        Parameters
+        ----------
+        a, b : float or array_like
+            Positive shape parameters; arrays broadcast against ``size``, run i uses slice ``[i]``.
+        size : tuple of int
+            ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
+
+        Returns
+        -------
+        ndarray
+            Shape ``size``; slice ``[i]`` is drawn from run i's Generator alone, so it does
+            not depend on the other runs.
+        """
         return self._per_run("beta", size, a, b)
 
     def gamma(self, shape, scale=1.0, size=None):
+        """``Generator.gamma`` per run, with the runs axis first.
+
+        Parameters
+        ----------
+        shape, scale : float or array_like
+            Shape k > 0 and scale θ > 0; arrays broadcast against ``size``, run i uses slice ``[i]``.
+        size : tuple of int
+            ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
+
+        Returns
+        -------
+        ndarray
+            Shape ``size``; slice ``[i]`` is drawn from run i's Generator alone, so it does
+            not depend on the other runs.
+        """
         return self._per_run("gamma", size, shape, scale)
 
     def exponential(self, scale=1.0, size=None):
+        """``Generator.exponential`` per run, with the runs axis first.
+
+        Parameters
+        ----------
+        scale : float or array_like
+            Mean 1/λ > 0; an array broadcasts against ``size``, run i uses slice ``[i]``.
+        size : tuple of int
+            ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
+
+        Returns
+        -------
+        ndarray
+            Shape ``size``; slice ``[i]`` is drawn from run i's Generator alone, so it does
+            not depend on the other runs.
+        """
         return self._per_run("exponential", size, scale)
 
     def integers(self, low, high=None, size=None, dtype=np.int64):
+        """``Generator.integers`` per run, with the runs axis first.
+
+        Parameters
+        ----------
+        low, high : int
+            Draws from [low, high); ``high=None`` means [0, low). Shared by every run.
+        size : tuple of int
+            ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
+        dtype : integer dtype, optional
+            Output dtype.
+
+        Returns
+        -------
+        ndarray
+            Shape ``size``; slice ``[i]`` is drawn from run i's Generator alone, so it does
+            not depend on the other runs.
+        """
         size = self._size(size, "integers")
         out = np.empty(size, dtype=dtype)
         for i, g in enumerate(self._gens):

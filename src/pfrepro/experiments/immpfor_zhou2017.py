@@ -118,7 +118,7 @@ def truth_system(sc=None) -> JumpMarkovSystem:
 
 
 def filter_system(sc=None) -> JumpMarkovSystem:
-    """The filters' model set: CV, per-axis CT (|w| = the truth's turn rate), CA; Markov matrix."""
+    """The filters' model set: CV, per-axis CT (``|w|`` = the truth's turn rate), CA; Markov matrix."""
     sc = sc or SCENARIO
     w = math.radians(sc["turn_rate_deg"])
     T, meas, x0, P0 = sc["T_s"], _meas(sc), np.array(sc["x0"]), _P0(sc)

@@ -14,7 +14,7 @@ Our copy of Zhou et al. lost every displayed equation; the equations below are a
 reconstruction from the paper's step names and its sources, each choice documented in
 the class docstrings and in ``book/60_immpf.md``.
 
-Conventions: the system is a :class:`~pfrepro.models.JumpMarkovSystem` with r modes and
+Conventions: the system is a :class:`~pfrepro.models.jump_markov.JumpMarkovSystem` with r modes and
 transition matrix ``Pi[i, j] = P(m_k = j | m_{k-1} = i)`` (row = from, column = to), so
 the predicted mode probabilities are ``c = mu @ Pi`` and the mixing probabilities are
 
@@ -160,7 +160,7 @@ class IMMParticleFilter(Filter):
 
     Parameters
     ----------
-    system : :class:`~pfrepro.models.JumpMarkovSystem` (mode models, Pi, initial probabilities).
+    system : :class:`~pfrepro.models.jump_markov.JumpMarkovSystem` (mode models, Pi, initial probabilities).
     n_particles : N >= 1 per mode (r N in all).
     model_likelihood : ``"gaussian"`` or ``"mean"`` (step 5).
     n_th : resampling threshold as a fraction of N (N_th = n_th N), in [0, 1]; 0 never resamples
@@ -344,7 +344,7 @@ class IMMPFOR(IMMParticleFilter):
        particles with at least one offspring form the copy group, particles with none the
        discard group S^j. Its size is set by the weights (not a free parameter).
     b. *Slots*: the resampled set holds, besides one copy of each copy-group particle,
-       |S^j| extra copies; the m-th extra-copy slot (in slot order) is paired with the m-th
+       ``|S^j|`` extra copies; the m-th extra-copy slot (in slot order) is paired with the m-th
        discarded particle x_s (in index order) and gets the new particle, eq (23).
     c. *Joint normalisation* (eq 24): w'_l^j = u_j(k) w_l^j over all r N particles (sums to 1);
        their weighted mean m and covariance C define the metric: distances are measured in
@@ -403,7 +403,7 @@ class IMMPFOR(IMMParticleFilter):
         return m, L, z.reshape(R_, r, N, n)
 
     def replacement(self, x, w, u, M, counts, other_slots, do=None):
-        """Eqs 22-25 for the modes of ``R`` runs; returns the new particle sets (R, r, N, n) and |S^j|.
+        """Eqs 22-25 for the modes of ``R`` runs; returns the new particle sets (R, r, N, n) and ``|S^j|``.
 
         ``x`` (R, r, N, n) particles after weighting, ``w`` (R, r, N) their weights, ``u`` (R, r)
         the model probabilities, ``M`` (R, r, r) the mixing probabilities mu_{i|j}(k|k),
@@ -486,7 +486,7 @@ class IMMKalman(Filter):
 
     Parameters
     ----------
-    system : :class:`~pfrepro.models.JumpMarkovSystem`.
+    system : :class:`~pfrepro.models.jump_markov.JumpMarkovSystem`.
     mode_filters : list of r :class:`~pfrepro.filters.GaussianFilter` instances (KF, EKF, UKF),
         filter j built on ``system.models[j]``; their ``predict(x, P, k)`` / ``update(x, P, y)``
         are used (their own m0/P0 are ignored: the IMM starts every mode at m0, P0).

@@ -85,7 +85,7 @@ def rk4_integrate_variational(a, a_x, a_theta, x, t0: float, dt: float, n_subste
 
 
 class ContinuousParameterizedModel(ParameterizedModel):
-    """A :class:`ParameterizedModel` whose transition is RK4 of dx/dt = a(x, t, θ) (module docstring).
+    """A :class:`~pfrepro.models.parameterized.ParameterizedModel` whose transition is RK4 of dx/dt = a(x, t, θ) (module docstring).
 
     Subclasses implement :meth:`a`, :meth:`a_x` (∂a/∂x) and :meth:`a_theta` (∂a/∂θ).
 
@@ -93,7 +93,7 @@ class ContinuousParameterizedModel(ParameterizedModel):
     ----------
     dt : sampling interval.
     n_substeps : RK4 steps per sampling interval.
-    Other parameters as :class:`ParameterizedModel`.
+    Other parameters as :class:`~pfrepro.models.parameterized.ParameterizedModel`.
     """
 
     def __init__(self, *args, dt: float = 1.0, n_substeps: int = 64, **kwargs):

@@ -11,9 +11,10 @@ N(0, beta^2 exp(x_k)), so
 
 It is the package's worked example of the model contract (see
 :mod:`pfrepro.models.base`): ``additive_measurement_noise = False``,
-:meth:`log_likelihood` and :meth:`sample_measurement` overridden, no ``h``.
+:meth:`~pfrepro.models.StochasticVolatility.log_likelihood` and
+:meth:`~pfrepro.models.StochasticVolatility.sample_measurement` overridden, no ``h``.
 Particle filters and the grid filter run on it; the Kalman family and GPFF,
-which need y = h(x) + v, refuse it with a :class:`ModelContractError`.
+which need y = h(x) + v, refuse it with a :class:`~pfrepro.models.ModelContractError`.
 """
 from __future__ import annotations
 

@@ -18,7 +18,7 @@ written per axis (position, velocity, acceleration) and stacked block-diagonally
   This is the exact discretisation of  d(pos) = vel, d(vel) = acc, d(acc) = -w^2 vel
   on each axis. A coordinated turn at rate +w *or* -w with the centripetal acceleration
   a = w J v (J the 90-degree rotation) satisfies exactly this equation, so one
-  per-axis CT model follows left and right turns of rate |w| once its acceleration
+  per-axis CT model follows left and right turns of rate ``|w|`` once its acceleration
   state holds the centripetal acceleration (checked in ``tests/test_imm_models.py``).
   It is the form found in Chinese IMM code for this 6-D state; it keeps the model
   block-diagonal, as the state ordering [Rx, Vx, ax, Ry, Vy, ay] suggests.

@@ -1,0 +1,201 @@
+"""Figures and tables of Hou & Yin (2008), dual particle filter (chapter ``book/50_dpf.md``).
+
+The experiments are :mod:`pfrepro.experiments.dpf_hou2008`; this module only draws their
+results (Fig. 4, Fig. 5, Figs. 7-9, the sec 5.1 RMSE table) and bundles them for the command
+line (:func:`reproduce`).
+"""
+from __future__ import annotations
+
+import contextlib
+
+import numpy as np
+import pandas as pd
+
+from ..experiments import dpf_hou2008 as E
+from . import new_figure
+
+__all__ = ["pm", "rmse_table", "fig4", "fig5", "figs_7_9", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
+
+#: what :func:`reproduce` makes
+TABLES = ("RMSE table",)
+FIGURES = ("Fig. 4", "Fig. 5", "Figs. 7-9")
+#: experiments :func:`reproduce` runs (for a progress bar)
+N_STEPS = 3
+#: the filters of the sec 5.1 RMSE table
+NAMES_51 = ("DPF", "DEKF", "Liu-West")
+
+
+def pm(m, se, digits=3) -> str:
+    """``"m ± se"`` with ``digits`` decimals."""
+    return f"{m:.{digits}f} ± {se:.{digits}f}"
+
+
+def rmse_table(r51, pub=None):
+    """The sec 5.1 RMSE table as shown: mean ± se of the eq-(14) and usual RMSEs of x and θ.
+
+    Parameters
+    ----------
+    r51 : pfrepro.experiments.dpf_hou2008.Run
+        :func:`~pfrepro.experiments.dpf_hou2008.run_51`'s result.
+    pub : pandas.DataFrame, optional
+        ``published.table("dpf_hou2008", "Sec 5.1")`` (default: read it); its row is added.
+
+    Returns
+    -------
+    tab : pandas.DataFrame
+        The shown table (strings), all runs, then the exact reference's runs, then the paper.
+    t_all, t_grid : pandas.DataFrame
+        ``pfrepro.experiments.dpf_hou2008.rmse_table_51`` on all runs and on the runs of
+        the exact reference (numbers).
+    """
+    if pub is None:
+        from .. import published
+
+        pub = published.table(E.PAPER, "Sec 5.1")
+    names = list(NAMES_51)
+    n_grid = r51.results["exact"].x.shape[0]
+    t_all = E.rmse_table_51(r51, names)
+    t_grid = E.rmse_table_51(r51, names + ["exact"], runs=n_grid)
+
+    def fmt(t, digits):
+        out = pd.DataFrame(index=t.index)
+        out["runs"] = t["runs"].astype(object)  # the paper row holds a string
+        for c in ("eq14 x", "usual x", "eq14 θ", "usual θ"):
+            d = digits if "x" in c else digits + 2
+            out[c] = [pm(m, s, d) for m, s in zip(t[c], t[c + " se"])]
+        return out
+
+    tab = pd.concat([fmt(t_all, 3), fmt(t_grid, 3).rename(index=lambda s: s + f" ({n_grid} runs)")])
+    tab.loc["paper (1 run)"] = ["1", f"{pub.loc['RMSE x', 'DPF']:.3f} / {pub.loc['RMSE x', 'DEKF']:.3f}", "—",
+                                f"{pub.loc['RMSE theta', 'DPF']:.5f} / {pub.loc['RMSE theta', 'DEKF']:.5f}", "—"]
+    return tab, t_all, t_grid
+
+
+def fig4(r51, run: int = 0):
+    """Fig. 4: one run of sec 5.1, state (top) and θ estimates (bottom) with the exact posterior."""
+    kk = np.arange(1, r51.sim.x.shape[1])
+    fig, axs = new_figure(2, 1, figsize=(6.5, 4.6), sharex=True)
+    axs[0].plot(kk, r51.sim.x[run, 1:, 0], "k-", lw=1, label="truth")
+    axs[0].plot(kk, r51.results["DPF"].x[run, :, 0], "C0-", lw=0.9, label="DPF")
+    axs[0].plot(kk, r51.results["DEKF"].x[run, :, 0], "C3--", lw=0.9, label="DEKF")
+    axs[0].set_ylabel("x_k"); axs[0].legend(ncol=3, fontsize=7)
+    ex = r51.results["exact"].diagnostics
+    qx = E.theta_interval(r51, "exact")
+    axs[1].fill_between(kk, qx[0, run], qx[2, run], color="0.85", label="exact 95 %")
+    axs[1].plot(kk, ex["theta"][run], "k-", lw=1, label="exact posterior mean")
+    axs[1].plot(kk, r51.results["DPF"].diagnostics["theta"][run], "C0-", lw=0.9, label="DPF")
+    axs[1].plot(kk, r51.results["DEKF"].diagnostics["theta"][run], "C3--", lw=0.9, label="DEKF")
+    axs[1].plot(kk, r51.results["Liu-West"].diagnostics["theta"][run], "C2:", lw=1.2, label="Liu–West")
+    axs[1].axhline(E.S51["theta_true"], color="k", lw=0.5, ls=":")
+    axs[1].set_ylim(0, 1); axs[1].set_ylabel("θ estimate"); axs[1].set_xlabel("k"); axs[1].legend(ncol=3, fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def fig5(f5: dict, run: int = 0):
+    """Fig. 5: θ quantiles for the initial guesses (``f5`` is :func:`~pfrepro.experiments.dpf_hou2008.run_fig5`'s).
+
+    Top: quantiles of the estimate over the Monte Carlo runs; bottom: each filter's own
+    posterior quantiles in run ``run``.
+    """
+    kk = np.arange(1, next(iter(f5.values())).sim.x.shape[1])
+    fig, axs = new_figure(2, 2, figsize=(7, 5), sharey=True, sharex=True)
+    for col, name in enumerate(("DEKF", "DPF")):
+        for c, (g0, rr) in zip(("C0", "C1", "C2"), f5.items()):
+            # top: quantiles over the Monte Carlo runs of the estimate θ̂_k (ref [18]'s reading)
+            qr = np.quantile(rr.results[name].diagnostics["theta"], (0.025, 0.5, 0.975), axis=0)
+            # bottom: one run, the filter's own posterior quantiles
+            q = E.theta_interval(rr, name)[:, run]
+            for row, qq in ((0, qr), (1, q)):
+                ax = axs[row, col]
+                ax.plot(kk, qq[1], color=c, lw=1, label=f"guess {g0}")
+                ax.plot(kk, qq[0], color=c, lw=0.6, ls="--"); ax.plot(kk, qq[2], color=c, lw=0.6, ls="--")
+        for row in (0, 1):
+            axs[row, col].axhline(E.S51["theta_true"], color="k", lw=0.5, ls=":")
+            axs[row, col].set_ylim(-0.05, 1.05)
+        axs[0, col].set_title(f"({'ab'[col]}) {name}: θ estimate, quantiles over runs", fontsize=8)
+        axs[1, col].set_title(f"({'cd'[col]}) {name}: own posterior quantiles, run {run + 1}", fontsize=8)
+        axs[1, col].set_xlabel("k")
+    axs[0, 0].set_ylabel("θ"); axs[1, 0].set_ylabel("θ"); axs[0, 1].legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def figs_7_9(r52, crb_ft=None, rm: dict | None = None):
+    """Figs. 7-9: RMSE against time of altitude, speed and θ (metres), with θ's Cramér-Rao bound.
+
+    ``r52`` is :func:`~pfrepro.experiments.dpf_hou2008.run_52`'s result, ``crb_ft``
+    :func:`~pfrepro.experiments.dpf_hou2008.crb_theta_52` (default: computed), ``rm`` the
+    per-filter ``pfrepro.experiments.dpf_hou2008.rmse_over_time_52`` (default: computed).
+    """
+    if crb_ft is None:
+        crb_ft = E.crb_theta_52("feet")
+    if rm is None:
+        rm = {n: E.rmse_over_time_52(r52, n) for n in NAMES_51}
+    lab52 = ["altitude (m)", "speed (m/s)", "θ (1/m)"]
+    T = rm["DPF"].shape[-1]
+    tt = np.arange(1, T + 1)
+    fig, axs = new_figure(1, 3, figsize=(7.5, 2.5))
+    for j, (ax, lab) in enumerate(zip(axs, lab52)):
+        for n, c, ls in (("DEKF", "C3", (0, (4, 1.5))), ("DPF", "C0", "-"), ("Liu-West", "C2", ":")):
+            ax.plot(tt, E.to_metres(rm[n][j], j), color=c, ls=ls, label=n.replace("-", "–"))
+        if j == 2:
+            ax.plot(tt, E.to_metres(np.asarray(crb_ft)[:T], 2), color="k", lw=0.7, label="CRB sd")
+            ax.set_ylim(1e-6, 1e-1)
+        ax.set_yscale("log"); ax.set_xlabel("t (s)"); ax.set_title(f"({'abc'[j]}) RMSE of {lab}", fontsize=8)
+    axs[2].legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+@contextlib.contextmanager
+def _scale(runs, seed):
+    """Temporarily ``runs`` runs (exact reference on at most as many) and seeds ``seed``, ``seed + 1``."""
+    saved = dict(E.S51), (E.SEED_51, E.SEED_52)
+    try:
+        if runs is not None:
+            E.S51["runs"] = int(runs)
+            E.S51["grid_runs"] = min(E.S51["grid_runs"], int(runs))
+        if seed is not None:
+            E.SEED_51, E.SEED_52 = int(seed), int(seed) + 1
+        yield
+    finally:
+        E.S51.clear(); E.S51.update(saved[0])
+        E.SEED_51, E.SEED_52 = saved[1]
+
+
+def reproduce(runs: int | None = None, seed: int | None = None, executor=None, steps=None):
+    """The sec 5.1 RMSE table, Figs. 4-5 and Figs. 7-9 (paper scale: 100 and 50 runs).
+
+    Calls the chapter's experiment functions (:func:`~pfrepro.experiments.dpf_hou2008.run_51`,
+    :func:`~pfrepro.experiments.dpf_hou2008.run_fig5`, :func:`~pfrepro.experiments.dpf_hou2008.run_52`).
+    ``runs`` replaces both run counts (the exact reference runs on at most 40 of them);
+    ``seed`` replaces the fixed seeds by ``seed`` (5.1) and ``seed + 1`` (5.2). Returns a
+    :class:`pfrepro.papers.Reproduction`; its claims are the four published RMSE cells
+    against our mean eq-(14) RMSE (the chapter judges them on the spread of single runs).
+    """
+    from ..papers import Reproduction, call_with_executor, cell_claims
+
+    step = steps or (lambda label: None)
+    with _scale(runs, seed):
+        runs51, runs52, grid = E.S51["runs"], E.S52["runs"] if runs is None else int(runs), E.S51["grid_runs"]
+        seeds = (E.SEED_51, E.SEED_52)
+        step(f"Sec 5.1, Fig. 4 ({runs51} runs)")
+        r51 = call_with_executor(E.run_51, executor=executor)
+        step(f"Fig. 5, initial guesses ({runs51} runs)")
+        f5 = call_with_executor(E.run_fig5, r51, executor=executor)
+        step(f"Sec 5.2, Figs. 7-9 ({runs52} runs)")
+        r52 = call_with_executor(E.run_52, "feet", runs=runs, executor=executor)
+    tab, t_all, _ = rmse_table(r51)
+    from .. import published
+
+    pub = published.table(E.PAPER, "Sec 5.1")
+    cells = pd.DataFrame([{"filter": n, "quantity": q, "published": float(pub.loc[key, n]),
+                           "ours": float(t_all.loc[n, f"eq14 {q}"]), "se": float(t_all.loc[n, f"eq14 {q} se"])}
+                          for q, key in (("x", "RMSE x"), ("θ", "RMSE theta")) for n in ("DPF", "DEKF")])
+    claims = cell_claims(E.PAPER, cells, lambda r: f"cli-rmse-{r['quantity'].replace('θ', 'theta')}-{r['filter'].lower()}",
+                         lambda r: f"{r['filter']} eq-(14) RMSE of {r['quantity']} (sec 5.1)", "Sec 5.1")
+    figures = {"Fig. 4": fig4(r51), "Fig. 5": fig5(f5), "Figs. 7-9": figs_7_9(r52)}
+    return Reproduction(E.PAPER, tables={"RMSE table": tab}, figures=figures, claims=claims,
+                        settings={"runs (5.1)": runs51, "runs (exact reference)": grid, "runs (5.2)": runs52,
+                                  "seed (5.1)": seeds[0], "seed (5.2)": seeds[1]})
