@@ -42,16 +42,14 @@ level 1 - 2 * 0.5**7 = 98.4 %).
 from __future__ import annotations
 
 import copy
-import gc
 import math
-import time
 from contextlib import contextmanager
 
 import numpy as np
 import pandas as pd
 
 from . import flow as _flow
-from .validation import check_positive_int
+from .montecarlo import time_filter_repeats
 
 __all__ = ["COUNTED", "COUNT_COLUMNS", "CountingModel", "count_model_calls", "cost_counts",
            "time_repeats", "time_summary", "median_interval"]
@@ -184,19 +182,6 @@ def cost_counts(filters: dict, y_one_run, rng_seed: int = 0) -> pd.DataFrame:
 
 
 # --------------------------------------------------------------------------------- timing
-def _timed_call(filt, y, rng_seed: int) -> float:
-    rng = np.random.default_rng(rng_seed)
-    gc_was_enabled = gc.isenabled()
-    gc.disable()
-    try:
-        t0 = time.perf_counter()
-        filt.filter(y, rng=rng)
-        return time.perf_counter() - t0
-    finally:
-        if gc_was_enabled:
-            gc.enable()
-
-
 def time_repeats(filters: dict, y_one_run, rng_seed: int = 0, repeats: int = 7, *,
                  warmup: bool = True) -> pd.DataFrame:
     """Single-run wall times of every filter, ``repeats`` interleaved repeats; all repeats returned.
@@ -205,15 +190,8 @@ def time_repeats(filters: dict, y_one_run, rng_seed: int = 0, repeats: int = 7, 
     untimed warm-up call per filter first (``warmup``); repeat r uses the seed
     ``rng_seed + r`` for every filter; the garbage collector is paused in each call.
     """
-    repeats = check_positive_int(repeats, "repeats")
-    if warmup:
-        for filt in filters.values():
-            _timed_call(filt, y_one_run, rng_seed)
-    times = {name: [] for name in filters}
-    for r in range(repeats):
-        for name, filt in filters.items():
-            times[name].append(_timed_call(filt, y_one_run, rng_seed + r))
-    return pd.DataFrame(times, index=pd.RangeIndex(repeats, name="repeat"))
+    times = time_filter_repeats(filters, y_one_run, rng_seed, repeats, warmup=warmup)
+    return pd.DataFrame(times, index=pd.RangeIndex(len(next(iter(times.values()), [])), name="repeat"))
 
 
 def median_interval(values) -> tuple[float, float, float]:

@@ -32,7 +32,7 @@ from .rng import RunStreams
 from .validation import check_positive_int
 
 __all__ = ["MonteCarloResult", "run_monte_carlo", "map_runs", "run_chunks", "filter_rng", "truth_rng",
-           "truth_streams", "filter_streams", "time_single_run", "time_filters", "progress_enabled"]
+           "truth_streams", "filter_streams", "time_single_run", "time_filters", "time_filter_repeats", "progress_enabled"]
 
 
 def truth_rng(seed: int) -> np.random.Generator:
@@ -94,6 +94,14 @@ def time_filters(filters: dict, y_one_run, rng_seed: int = 0, repeats: int = 7, 
     Repeat r uses the seed ``rng_seed + r``; ``warmup=False`` skips the warm-up
     (for a caller that has just warmed the filters up itself).
     """
+    times = time_filter_repeats(filters, y_one_run, rng_seed, repeats, warmup=warmup)
+    return {name: float(np.median(v)) for name, v in times.items()}
+
+
+def time_filter_repeats(filters: dict, y_one_run, rng_seed: int = 0, repeats: int = 7, *,
+                        warmup: bool = True) -> dict:
+    """Every repeat of :func:`time_filters` (same interleaving, warm-up and seeds):
+    ``{name: [seconds of repeat 0, 1, ...]}``."""
     repeats = check_positive_int(repeats, "repeats")
     for filt in filters.values() if warmup else ():
         _timed_call(filt, y_one_run, rng_seed)
@@ -101,7 +109,7 @@ def time_filters(filters: dict, y_one_run, rng_seed: int = 0, repeats: int = 7, 
     for r in range(repeats):
         for name, filt in filters.items():
             times[name].append(_timed_call(filt, y_one_run, rng_seed + r))
-    return {name: float(np.median(v)) for name, v in times.items()}
+    return times
 
 
 @dataclass
