@@ -21,7 +21,7 @@ N_STEPS = 4
 #: the filters drawn in Figs. 4-5
 BOT_FIGURE_FILTERS = ("EKF", "UKF", "PF(500)", "GPFF(100)")
 #: axis labels of the BOT state components
-COMPONENT_LABELS = {"x": "x", "y": "y", "xdot": r"$\dot x$", "ydot": r"$\dot y$"}
+COMPONENT_LABELS = {"x": "x", "y": "y", "xdot": "ẋ", "ydot": "ẏ"}  # plain Unicode: no TeX in labels or docs
 
 
 def fig1(mc_gaussian, mc_mixture):
