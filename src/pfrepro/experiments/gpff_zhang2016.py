@@ -39,7 +39,7 @@ __all__ = ["PAPER", "RUNS", "SEEDS", "UT", "N_LAMBDA", "TIMING_REPEATS", "random
            "interior_checks", "fokker_planck_check", "printed_vs_corrected_linear",
            "convergence_in_dlambda", "observed_orders", "convergence_in_n", "nonlinear_vs_linear",
            "cwpa_q_check", "run_cwpa", "cwpa_r_sensitivity", "run_ung", "run_bot", "table1", "table2",
-           "cost_ratios", "schedule_sweep", "cost_filters", "cost_evidence"]
+           "cost_ratios", "schedule_sweep", "ung_table_filters", "bot_table_filters", "cost_filters", "cost_evidence"]
 
 PAPER = "gpff_zhang2016"
 RUNS = 100
@@ -385,6 +385,16 @@ def cwpa_r_sensitivity(mc_mixture: MonteCarloResult, *, executor=None) -> pd.Dat
 UNG_LABELS = ["EKF", "UKF", "PF(100)", "PF(500)", "PF(1000)", "GPFF(100)", "GPFF(500)", "GPFF(1000)"]
 
 
+def ung_table_filters(model) -> dict:
+    """The filters of Table 1 (the UNG rows, ``UNG_LABELS``), in table order."""
+    filters = {"EKF": ExtendedKalmanFilter(model), "UKF": UnscentedKalmanFilter(model, **UT)}
+    for N in (100, 500, 1000):
+        filters[f"PF({N})"] = BootstrapParticleFilter(model, N, resampling="systematic")
+    for N in (100, 500, 1000):
+        filters[f"GPFF({N})"] = _gpff(model, N, field="eq43")
+    return filters
+
+
 def run_ung(runs=RUNS, T=500, time_per_run=True, *, executor=None) -> MonteCarloResult:
     """Sec 5.2 / Table 1: UNG with Q = R = 1, x0 = 0.1, P0 = 0.1, T = 500.
 
@@ -392,11 +402,7 @@ def run_ung(runs=RUNS, T=500, time_per_run=True, *, executor=None) -> MonteCarlo
     blows up on this model (run as "GPFF(100) eq41" with divergence recorded).
     Also the exact grid filter (the optimum) on [-40, 40] with 1601 nodes."""
     model = UNGM.zhang2016()
-    filters = {"EKF": ExtendedKalmanFilter(model), "UKF": UnscentedKalmanFilter(model, **UT)}
-    for N in (100, 500, 1000):
-        filters[f"PF({N})"] = BootstrapParticleFilter(model, N, resampling="systematic")
-    for N in (100, 500, 1000):
-        filters[f"GPFF({N})"] = _gpff(model, N, field="eq43")
+    filters = ung_table_filters(model)
     filters["GPFF(100) eq41"] = _gpff(model, 100, field="eq41", on_divergence="drop")
     filters["Grid (exact)"] = GridFilter(model, bounds=(-40.0, 40.0), n_grid=1601)
     return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS["ung"], time_per_run=time_per_run,
@@ -406,14 +412,20 @@ def run_ung(runs=RUNS, T=500, time_per_run=True, *, executor=None) -> MonteCarlo
 BOT_LABELS = ["EKF", "UKF", "PF(500)", "PF(1000)", "PF(4000)", "GPFF(100)"]
 
 
-def run_bot(runs=RUNS, T=200, time_per_run=True, *, executor=None) -> MonteCarloResult:
-    """Sec 5.3 / Table 2: two-sensor bearings-only tracking, T = 200; GPFF(100) is the
-    literal eq (41) field (it does not diverge here); "GPFF(100) eq43" for comparison."""
-    model = BearingsOnly.zhang2016()
+def bot_table_filters(model) -> dict:
+    """The filters of Table 2 (``BOT_LABELS``), in table order; GPFF(100) is the eq (41) field."""
     filters = {"EKF": ExtendedKalmanFilter(model), "UKF": UnscentedKalmanFilter(model, **UT)}
     for N in (500, 1000, 4000):
         filters[f"PF({N})"] = BootstrapParticleFilter(model, N, resampling="systematic")
     filters["GPFF(100)"] = _gpff(model, 100, field="eq41", on_divergence="drop")
+    return filters
+
+
+def run_bot(runs=RUNS, T=200, time_per_run=True, *, executor=None) -> MonteCarloResult:
+    """Sec 5.3 / Table 2: two-sensor bearings-only tracking, T = 200; GPFF(100) is the
+    literal eq (41) field (it does not diverge here); "GPFF(100) eq43" for comparison."""
+    model = BearingsOnly.zhang2016()
+    filters = bot_table_filters(model)
     filters["GPFF(100) eq43"] = _gpff(model, 100, field="eq43", on_divergence="drop")
     return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS["bot"], time_per_run=time_per_run,
                            timing_repeats=TIMING_REPEATS, executor=executor)
@@ -516,20 +528,9 @@ def cost_filters(which: str) -> dict:
     """The filters of Table 1 (``which="ung"``) or Table 2 (``"bot"``), built as in
     :func:`run_ung` / :func:`run_bot`, for counting and timing on one run."""
     if which == "ung":
-        model = UNGM.zhang2016()
-        fs = {"EKF": ExtendedKalmanFilter(model), "UKF": UnscentedKalmanFilter(model, **UT)}
-        for N in (100, 500, 1000):
-            fs[f"PF({N})"] = BootstrapParticleFilter(model, N, resampling="systematic")
-        for N in (100, 500, 1000):
-            fs[f"GPFF({N})"] = _gpff(model, N, field="eq43")
-        return fs
+        return ung_table_filters(UNGM.zhang2016())
     if which == "bot":
-        model = BearingsOnly.zhang2016()
-        fs = {"EKF": ExtendedKalmanFilter(model), "UKF": UnscentedKalmanFilter(model, **UT)}
-        for N in (500, 1000, 4000):
-            fs[f"PF({N})"] = BootstrapParticleFilter(model, N, resampling="systematic")
-        fs["GPFF(100)"] = _gpff(model, 100, field="eq41", on_divergence="drop")
-        return fs
+        return bot_table_filters(BearingsOnly.zhang2016())
     raise ValueError("which must be 'ung' or 'bot'")
 
 
