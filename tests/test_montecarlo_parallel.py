@@ -14,8 +14,8 @@ from pfrepro.filters import BootstrapParticleFilter, GaussianParticleFlowFilter
 from pfrepro.filters.cmspf import CMSParticleFilter, OracleCMSParticleFilter
 from pfrepro.filters.espf import EvolutionSamplingParticleFilter
 from pfrepro.models import CWPA, UNGM, BearingsOnly
-from pfrepro.montecarlo import (filter_streams, map_runs, progress_enabled, run_chunks, run_monte_carlo,
-                                truth_streams)
+from pfrepro.montecarlo import (filter_streams, map_runs, process_pool, progress_enabled, run_chunks,
+                                run_monte_carlo, truth_streams)
 
 SEED = 2024
 UNG = UNGM.zhang2016()
@@ -108,6 +108,21 @@ def test_serial_process_pool_and_dask_cluster_are_bit_identical():
         _same(serial, _mc(ex))
         got = map_runs(_chunk_pf, 12, ex)
         np.testing.assert_array_equal(got[0], ref[0])
+
+
+def _blas_threads(start, size):
+    from threadpoolctl import threadpool_info
+    n = max((p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"), default=1)
+    return np.full((size,), n)
+
+
+def test_process_pool_gives_one_blas_thread_per_worker_and_serial_numbers():
+    with process_pool(2) as pool:
+        assert pool._max_workers == 2
+        np.testing.assert_array_equal(map_runs(_blas_threads, 4, pool, chunks=4), np.ones(4))
+        _same(_mc(), _mc(pool))
+    with pytest.raises(ValueError, match="max_workers"):
+        process_pool(0)
 
 
 def test_run_chunks_and_progress_switch(monkeypatch):

@@ -192,9 +192,9 @@ def cmd_run(args) -> int:
 
     executor = None
     if args.jobs > 1:
-        from concurrent.futures import ProcessPoolExecutor
+        from .montecarlo import process_pool
 
-        executor = ProcessPoolExecutor(max_workers=args.jobs)
+        executor = process_pool(args.jobs)
     t0 = time.perf_counter()
     steps = _Steps(getattr(paper.figures_module, "N_STEPS", None), paper.key)
     try:
