@@ -78,7 +78,8 @@ class GaussianNoise:
             Cholesky factor of ``cov`` (the symmetric square root if ``cov`` is singular;
             no draw at all if ``cov`` is zero).
         """
-        shape = tuple(np.atleast_1d(shape)) if shape != () else ()
+        if type(shape) is not tuple:
+            shape = tuple(np.atleast_1d(shape))
         if self.is_zero:  # deterministic: no draw at all (Q = 0)
             return np.broadcast_to(self.mean, shape + (self.dim,)).copy()
         z = rng.standard_normal(shape + (self.dim,))
@@ -175,7 +176,8 @@ class GaussianMixtureNoise:
         ndarray
             Shape ``shape + (dim,)``.
         """
-        shape = tuple(np.atleast_1d(shape)) if shape != () else ()
+        if type(shape) is not tuple:
+            shape = tuple(np.atleast_1d(shape))
         if isinstance(rng, RunStreams):  # per-run streams: each run draws its own slice
             return np.stack([self.sample(g, shape[1:]) for g in rng])
         which = rng.choice(len(self.weights), size=shape, p=self.weights)

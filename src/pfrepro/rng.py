@@ -89,6 +89,9 @@ class RunStreams:
 
     # -- draws -------------------------------------------------------------------
     def _size(self, size, what: str) -> tuple:
+        if type(size) is tuple and size and size[0] == len(self._gens) \
+                and all(type(s) is int for s in size):
+            return size                       # the hot path of every filter step: already valid
         if size is None:
             raise ValueError(f"RunStreams.{what} needs size=(runs, ...) with the runs axis first")
         size = tuple(int(s) for s in np.atleast_1d(size))

@@ -45,7 +45,7 @@ def normalize_weights(weights) -> np.ndarray:
 def _scaled_cumulative(w):
     """N * C_i with the last entry exactly N (so every row closes)."""
     N = w.shape[1]
-    c = np.cumsum(w, axis=1)
+    c = w.cumsum(axis=1)
     c *= N / c[:, -1:]
     c[:, -1] = N
     return c
