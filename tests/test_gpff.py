@@ -221,3 +221,22 @@ def test_linear_model_exact_integrator_handles_generic_linear_model():
     g = GaussianParticleFlowFilter(model, 500, integrator="exact").filter(sim.y, filter_rng(4, "g"))
     k = KalmanFilter(model).filter(sim.y)
     assert np.max(np.abs(g.x - k.x)) < 0.2
+
+
+def test_field_from_cached_coefficients_is_the_field():
+    """GPFF's per-lambda coefficient cache (flow_field_coefficients + field_from_coefficients)
+    computes exactly what gaussian_flow_field computes, scalar and vector measurements."""
+    rng = np.random.default_rng(5)
+    for d, m in ((1, 1), (4, 2), (3, 3)):
+        A = rng.standard_normal((2, m, m)); Pyy = A @ np.swapaxes(A, -1, -2) + np.eye(m)
+        Pxy = rng.standard_normal((2, d, m)); R = np.eye(m) * 0.3
+        y, yh, hx = rng.standard_normal((2, m)), rng.standard_normal((2, m)), rng.standard_normal((2, 7, m))
+        for lam in (0.0, 0.35, 1.0):
+            ref = flow.gaussian_flow_field(None, lam, hx, y, yh, Pxy, Pyy, R)
+            G, c = flow.flow_field_coefficients(lam, y, yh, Pxy, Pyy, R)
+            assert np.array_equal(flow.field_from_coefficients(hx, y, G, c), ref)
+            # and the defining formula, 1/2 Pxy C [r(y, h) + R C r(y, y_hat)], C = (lam Pyy + R)^-1
+            C = np.linalg.inv(lam * Pyy + R)
+            want = 0.5 * np.einsum("rdm,rmk,rnk->rnd", Pxy, C,
+                                   (y[:, None] - hx) + np.einsum("mk,rkj,rj->rm", R, C, y - yh)[:, None])
+            np.testing.assert_allclose(ref, want, rtol=1e-10, atol=1e-12)

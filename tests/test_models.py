@@ -176,6 +176,14 @@ def test_wrap_angle_fixed_points():
                                atol=1e-12)
 
 
+def test_wrap_angle_keeps_angles_inside_exactly():
+    a = np.linspace(-np.pi, np.pi, 1001)[1:]          # (-pi, pi]
+    assert np.array_equal(wrap_angle(a), a)
+    mixed = np.array([0.3, 4.0, -2.0])                 # one outside: the others still exact
+    w = wrap_angle(mixed)
+    assert w[0] == 0.3 and w[2] == -2.0 and abs(w[1] - (4.0 - 2 * np.pi)) < 1e-15
+
+
 @settings(max_examples=300, derandomize=True, database=None, deadline=None)
 @given(st.floats(-1e4, 1e4, allow_nan=False))
 def test_wrap_angle_range_and_equivalence(a):

@@ -27,6 +27,7 @@ import numpy as np
 
 __all__ = ["lambda_schedule", "homotopy_moments", "affine_flow_coefficients", "affine_flow_field",
            "flow_moment_rhs", "kalman_bucy_rhs", "exact_affine_map", "gaussian_flow_field",
+           "flow_field_coefficients", "field_from_coefficients",
            "nonlinear_coefficients", "integrate_flow", "INTEGRATORS", "SCHEDULES"]
 
 #: integrators of the flow ODE in lambda and their orders
@@ -209,7 +210,35 @@ def exact_affine_map(m, P, H, R, y, lam=1.0):
 
 # ----------------------------------------------------------------------------- nonlinear case
 def _solve_sym(S, B):
+    if S.shape[-1] == 1:
+        # scalar measurement: LAPACK's 1 x 1 solve is this division (bit-identical),
+        # without np.linalg's per-call overhead (the flow calls it 2 x 20-80 times a step)
+        return B / S
     return np.linalg.solve(S, B)
+
+
+def flow_field_coefficients(lam, y, y_hat, Pxy, Pyy, R, residual=None):
+    """The particle-independent parts of :func:`gaussian_flow_field` at pseudo-time ``lam``.
+
+    Returns ``(G, c)``: ``G = Pxy C`` (runs, d, m) and ``c = R C r(y, y_hat)`` (runs, m),
+    ``C = (lam Pyy + R)^{-1}``, so that f = 1/2 [r(y, h(x)) + c] G^T. They depend on
+    ``lam`` but not on the particles: an integrator that evaluates the field several
+    times at one ``lam`` (RK4's two midpoint stages; a step's end is the next step's
+    start) can compute them once.
+    """
+    r = (lambda a, b: a - b) if residual is None else residual
+    S = lam * Pyy + R
+    G = _T(_solve_sym(S, _T(Pxy)))                      # Pxy C        (runs, d, m)
+    c = _mv(R, _solve_sym(S, r(y, y_hat)[..., None])[..., 0])  # R C r(y, y_hat) (runs, m)
+    return G, c
+
+
+def field_from_coefficients(h_x, y, G, c, residual=None):
+    """f = 1/2 [r(y, h(x)) + c] G^T from :func:`flow_field_coefficients` (see
+    :func:`gaussian_flow_field`); ``h_x`` (runs, N, m) -> (runs, N, d)."""
+    r = (lambda a, b: a - b) if residual is None else residual
+    inner = r(y[..., None, :], h_x) + c[..., None, :]   # (runs, N, m)
+    return 0.5 * inner @ _T(G)
 
 
 def gaussian_flow_field(x, lam, h_x, y, y_hat, Pxy, Pyy, R, residual=None):
@@ -224,12 +253,8 @@ def gaussian_flow_field(x, lam, h_x, y, y_hat, Pxy, Pyy, R, residual=None):
     With linear h (Pxy = P H^T, Pyy = H P H^T, y_hat = H m) this is eq (27)'s
     A x + b exactly. ``x`` is unused (the field depends on x only through h(x)).
     """
-    r = (lambda a, b: a - b) if residual is None else residual
-    S = lam * Pyy + R
-    G = _T(_solve_sym(S, _T(Pxy)))                      # Pxy C        (runs, d, m)
-    c = _mv(R, _solve_sym(S, r(y, y_hat)[..., None])[..., 0])  # R C r(y, y_hat) (runs, m)
-    inner = r(y[..., None, :], h_x) + c[..., None, :]   # (runs, N, m)
-    return 0.5 * inner @ _T(G)
+    G, c = flow_field_coefficients(lam, y, y_hat, Pxy, Pyy, R, residual)
+    return field_from_coefficients(h_x, y, G, c, residual)
 
 
 def nonlinear_coefficients(lam, y, y_hat, Pxy, Pyy, R, form="corrected"):

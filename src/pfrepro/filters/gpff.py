@@ -151,11 +151,20 @@ class GaussianParticleFlowFilter(Filter):
             m1, Phi = flow.exact_affine_map(m, P, model.H, model.R, y, 1.0)
             return m1[:, None, :] + (x - m[:, None, :]) @ np.swapaxes(Phi, -1, -2)
         m, P, y_hat, Pyy, Pxy = self.prior_statistics(x)
-        R = model.R
+        R, res = model.R, model.residual_y
+        cache = {}
+
+        def coefficients(lam):
+            # G(lam), c(lam) do not depend on the particles: once per distinct lam of the
+            # grid (RK4 evaluates the field twice at each midpoint, and a step's end is the
+            # next step's start); the same arithmetic as flow.gaussian_flow_field
+            if lam not in cache:
+                cache[lam] = flow.flow_field_coefficients(lam, y, y_hat, Pxy, Pyy, R, residual=res)
+            return cache[lam]
+
         if self.field == "eq41":
             def field(z, lam):
-                return flow.gaussian_flow_field(z, lam, model.h(z), y, y_hat, Pxy, Pyy, R,
-                                                residual=model.residual_y)
+                return flow.field_from_coefficients(model.h(z), y, *coefficients(lam), residual=res)
         else:
             # h(z) ~ y_hat + J (z - m), J = Pxy^T P^{-1}; innovations r(y, y_hat) - J (z - m)
             J = np.swapaxes(np.linalg.solve(P, Pxy), -1, -2)          # (runs, m, d)
@@ -164,8 +173,7 @@ class GaussianParticleFlowFilter(Filter):
             def field(z, lam):
                 hz = (y - r0)[:, None, :] + (z - m[:, None, :]) @ np.swapaxes(J, -1, -2)
                 # the model's residual (angles wrap) in every innovation term, as in eq 41
-                return flow.gaussian_flow_field(z, lam, hz, y, y_hat, Pxy, Pyy, R,
-                                                residual=model.residual_y)
+                return flow.field_from_coefficients(hz, y, *coefficients(lam), residual=res)
 
             # The field is affine in z, so the integrator's map over the whole grid is an
             # affine map z -> c + M (z - m): integrate d + 1 probe points, not N particles

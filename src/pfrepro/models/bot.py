@@ -17,8 +17,13 @@ __all__ = ["BearingsOnly", "wrap_angle"]
 
 
 def wrap_angle(a):
-    """Wrap angles to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+    """Wrap angles to (-pi, pi]; angles already in (-pi, pi] are returned unchanged."""
+    a = np.asarray(a, dtype=float)
+    inside = (a > -np.pi) & (a <= np.pi)
+    # the common case (residuals of a tracking filter): no floating-point mod at all,
+    # which both saves its cost and keeps those angles exact
+    out = a.copy() if inside.all() else np.where(inside, a, np.pi - np.mod(np.pi - a, 2.0 * np.pi))
+    return out[()] if out.ndim == 0 else out
 
 
 class BearingsOnly(StateSpaceModel):
