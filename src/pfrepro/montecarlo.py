@@ -121,6 +121,9 @@ class MonteCarloResult:
     batch_seconds: dict[str, float]
     seconds_per_run: dict[str, float] = field(default_factory=dict)
     seed: int = 0
+    #: every interleaved single-run timing repeat behind ``seconds_per_run`` (``{name: [s, ...]}``),
+    #: for callers that want the spread (e.g. :func:`pfrepro.cost.time_summary`) without timing again
+    timing_repeats: dict[str, list[float]] = field(default_factory=dict)
 
     @property
     def x_true(self) -> np.ndarray:
@@ -393,5 +396,7 @@ def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, execu
                 batch[name] = float(sum(t for _, t in out))
     finally:
         bar.close()
-    per_run = time_filters(filters, sim.y[:1], seed, timing_repeats) if time_per_run else {}
-    return MonteCarloResult(sim=sim, results=results, batch_seconds=batch, seconds_per_run=per_run, seed=seed)
+    reps = time_filter_repeats(filters, sim.y[:1], seed, timing_repeats) if time_per_run else {}
+    per_run = {name: float(np.median(v)) for name, v in reps.items()}    # as time_filters
+    return MonteCarloResult(sim=sim, results=results, batch_seconds=batch, seconds_per_run=per_run, seed=seed,
+                            timing_repeats=reps)
