@@ -217,3 +217,36 @@ def test_invalid_weights_and_scheme():
         resample_counts(np.ones((2, 2, 2)), rng)
     with pytest.raises(ValueError, match="shape"):
         resample_counts(np.ones((3, 0)), rng)
+
+
+class _FixedUniforms:
+    """An rng stand-in whose ``random`` returns given uniforms (to pin the inverse-CDF map)."""
+
+    def __init__(self, u):
+        self.u = np.array(u, dtype=float)
+
+    def random(self, size):
+        assert tuple(size) == self.u.shape
+        return self.u.copy()
+
+
+def test_multinomial_counts_are_the_inverse_cdf_of_the_uniforms_including_ties():
+    """Particle i receives the uniforms in [C_{i-1}, C_i): a uniform equal to C_i goes to i + 1,
+    zero-weight particles get nothing, and the counts equal bincount(searchsorted(C, u, 'right'))."""
+    from pfrepro.filters.resampling import resampling_counts_function
+
+    counts_of = resampling_counts_function("multinomial")
+    w = np.array([[0.25, 0.0, 0.25, 0.5], [0.5, 0.25, 0.25, 0.0]])
+    u = np.array([[0.25, 0.0, 0.49, 0.75], [0.5, 0.75, 0.1, 0.99]])   # ties with C at 0.25, 0.5, 0.75
+    got = counts_of(w, _FixedUniforms(u))
+    np.testing.assert_array_equal(got, [[1, 0, 2, 1], [1, 1, 2, 0]])
+    rng = np.random.default_rng(3)
+    w = rng.random((5, 50)) ** 4
+    w /= w.sum(axis=1, keepdims=True)
+    u = rng.random((5, 50))
+    c = np.cumsum(w, axis=1)
+    c /= c[:, -1:]
+    c[:, -1] = 1.0
+    want = np.array([np.bincount(np.minimum(np.searchsorted(c[r], u[r], side="right"), 49), minlength=50)
+                     for r in range(5)])
+    np.testing.assert_array_equal(counts_of(w, _FixedUniforms(u)), want)

@@ -329,13 +329,13 @@ def rmse_and_cost_vs_n(which: int, sim: Simulation, seed: int, n_values=N_SWEEP,
     check_positive_int(repeats, "repeats")
     model = make_model(which)
     ekf = ExtendedKalmanFilter(model)
+    t_ekf_batch = _batch_seconds(ekf, sim.y, seed)    # the reference, timed once
     rows = []
     for N in n_values:
         name = f"PF N={N}"
         pf = BootstrapParticleFilter(model, N, resampling=RESAMPLING_DEFAULT)
         res = run_monte_carlo(model, {name: pf}, T, sim.runs, seed, sim=sim)
         t = time_filters({"EKF": ekf, name: pf}, sim.y[:1], seed, repeats)
-        t_ekf_batch = _batch_seconds(ekf, sim.y, seed)
         s = mc_summary(res.rmse(name))
         row = {"N": N, "rmse": s.mean, "se": s.se,
                "single_run_ratio": t[name] / t["EKF"],

@@ -82,11 +82,15 @@ def _multinomial_counts(w, rng):
     c /= c[:, -1:]
     c[:, -1] = 1.0
     u = rng.random((runs, N))
-    counts = np.empty((runs, N), dtype=np.intp)
+    # particle i gets the uniforms in [c_{i-1}, c_i): with the uniforms sorted, the count of
+    # those below each c_i is one searchsorted of the (increasing) c_i into them -- the
+    # same counts as bincount(searchsorted(c, u, "right")), without the scattered lookups
+    u.sort(axis=1)
+    below = np.empty((runs, N), dtype=np.intp)
     for r in range(runs):
-        idx = np.minimum(np.searchsorted(c[r], u[r], side="right"), N - 1)
-        counts[r] = np.bincount(idx, minlength=N)
-    return counts
+        below[r] = np.searchsorted(u[r], c[r], side="left")
+    below[:, -1] = N          # c_N = 1 > every uniform
+    return _diff_rows(below)
 
 
 def _residual_counts(w, rng):
