@@ -122,8 +122,10 @@ def rmse_usual(err):
 
 
 def mean_se(v):
+    """Mean and its standard error (NaN for a single run, which has no spread to estimate)."""
     v = np.asarray(v, float)
-    return float(v.mean()), float(v.std(ddof=1) / np.sqrt(v.size))
+    se = float(v.std(ddof=1) / np.sqrt(v.size)) if v.size > 1 else float("nan")
+    return float(v.mean()), se
 
 
 def coverage(lo, hi, truth):
