@@ -18,7 +18,8 @@ Per page it fails on
 ``image``     an image that did not load (``naturalWidth == 0``);
 ``table``     a table wider than the text column; a table inside a horizontal scroll box that
               itself fits the column is only reported (``scrolled``), not failed;
-``equation``  a display equation wider than its box, or running into its equation number;
+``equation``  a display equation wider than its box, scrolling sideways in a box of its own, or
+              running into its equation number;
 ``overflow``  the text column (or the page) scrolls horizontally;
 ``link``      a link to a page of the book, or to an anchor in one (``page.html#id``), whose
               target does not exist (e.g. a scorecard row whose claim has no anchor).
@@ -347,6 +348,14 @@ PAGE_JS = r"""
     if (mr.width > dr.width + tol || mr.left < dr.left - tol || mr.right > dr.right + tol)
       why.push(`content ${Math.round(mr.width)}px, box ${Math.round(dr.width)}px`);
     if (dr.right > colRight + tol) why.push(`box ends ${Math.round(dr.right - colRight)}px past the column`);
+    // MathJax or the theme may give the equation a horizontal scroll box of its own: then the
+    // box fits but the reader has to scroll to see the equation's end
+    for (const el of [d, ...d.querySelectorAll('mjx-container')]) {
+      if (el.scrollWidth > el.clientWidth + tol && el.clientWidth > 0) {
+        why.push(`scrolls sideways: ${el.scrollWidth}px of content in ${el.clientWidth}px`);
+        break;
+      }
+    }
     const eq = d.querySelector('.eqno');
     if (eq) {
       const er = eq.getBoundingClientRect();

@@ -29,6 +29,9 @@ BROKEN = (HEAD + "<main style='width:600px'><p>leak $\\dot x$ here</p>"
           "<img src='missing.png' alt='gone'><a href='index.html#nowhere'>x</a><a href='gone.html'>y</a>"
           "<table style='width:900px'><tr><td>too wide</td></tr></table>"
           "<img src='http://example.com/x.png' alt='remote'>"
+          "<div class='math' style='width:600px'><mjx-container style='display:block;overflow-x:auto'>"
+          "<mjx-math style='display:inline-block;width:500px'>x</mjx-math>"
+          "<span style='display:inline-block;width:900px'>a long tail</span></mjx-container></div>"
           "<script>console.error('boom')</script></main></body></html>")
 
 
@@ -50,6 +53,7 @@ def test_each_defect_is_caught(tmp_path):
     assert n["table"] == 1
     assert n["tex"] == 1
     assert n["link"] == 2            # missing anchor + missing page
+    assert n["equation"] == 1        # an equation that scrolls sideways in a box of its own
 
 
 def test_no_build_is_a_clear_error(tmp_path, capsys):
