@@ -115,6 +115,30 @@ class Simulation:
         return Simulation(self.x[i : i + 1], self.y[i : i + 1])
 
 
+def init_noise_and_prior(model, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, truth_init="fixed") -> None:
+    """Validate and set what every model has: ``dim_x``, ``dim_y``, ``process_noise`` (Q,
+    possibly singular or zero), ``measurement_noise`` (a noise object with ``logpdf``, or a
+    covariance R), the truth's ``x0``, the filters' prior ``N(m0, P0)`` and ``truth_init``.
+    Shared by :class:`StateSpaceModel` and the θ-parameterised models
+    (:class:`pfrepro.models.parameterized.ParameterizedModel`)."""
+    model.dim_x = check_positive_int(dim_x, "dim_x")
+    model.dim_y = check_positive_int(dim_y, "dim_y")
+    # Q may be singular (Q = G Qc G^T of lower rank) or zero (deterministic dynamics)
+    model.process_noise = GaussianNoise(as_covariance(Q, "Q", model.dim_x, allow_singular=True),
+                                        allow_singular=True)
+    if not hasattr(measurement_noise, "logpdf"):
+        measurement_noise = GaussianNoise(as_covariance(measurement_noise, "R", model.dim_y))
+    if measurement_noise.dim != model.dim_y:
+        raise ValueError(f"measurement noise has dimension {measurement_noise.dim}, model has dim_y = {model.dim_y}")
+    model.measurement_noise = measurement_noise
+    model.x0 = as_vector(x0, "x0", model.dim_x)
+    model.m0 = as_vector(m0, "m0", model.dim_x)
+    model.P0 = as_covariance(P0, "P0", model.dim_x)
+    if truth_init not in ("fixed", "prior"):
+        raise ValueError("truth_init must be 'fixed' or 'prior'")
+    model.truth_init = truth_init
+
+
 class StateSpaceModel:
     """Additive-Gaussian-process-noise state-space model (see module docstring).
 
@@ -139,22 +163,7 @@ class StateSpaceModel:
     additive_measurement_noise = True
 
     def __init__(self, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, truth_init="fixed"):
-        self.dim_x = check_positive_int(dim_x, "dim_x")
-        self.dim_y = check_positive_int(dim_y, "dim_y")
-        # Q may be singular (Q = G Qc G^T of lower rank) or zero (deterministic dynamics)
-        self.process_noise = GaussianNoise(as_covariance(Q, "Q", self.dim_x, allow_singular=True),
-                                           allow_singular=True)
-        if not hasattr(measurement_noise, "logpdf"):
-            measurement_noise = GaussianNoise(as_covariance(measurement_noise, "R", self.dim_y))
-        if measurement_noise.dim != self.dim_y:
-            raise ValueError(f"measurement noise has dimension {measurement_noise.dim}, model has dim_y = {self.dim_y}")
-        self.measurement_noise = measurement_noise
-        self.x0 = as_vector(x0, "x0", self.dim_x)
-        self.m0 = as_vector(m0, "m0", self.dim_x)
-        self.P0 = as_covariance(P0, "P0", self.dim_x)
-        if truth_init not in ("fixed", "prior"):
-            raise ValueError("truth_init must be 'fixed' or 'prior'")
-        self.truth_init = truth_init
+        init_noise_and_prior(self, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, truth_init)
 
     # -- covariances a Gaussian filter is given ------------------------------------
     @property

@@ -19,10 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..noise import GaussianNoise
 from ..rng import check_rng
-from ..validation import as_covariance, as_vector, check_positive_int
-from .base import Simulation, StateSpaceModel
+from ..validation import check_positive_int
+from .base import Simulation, StateSpaceModel, init_noise_and_prior
 
 __all__ = ["ParameterizedModel", "FixedParameterModel", "as_theta"]
 
@@ -60,24 +59,14 @@ class ParameterizedModel:
     name = "parameterised model"
 
     def __init__(self, dim_x, dim_y, dim_theta, Q, R, x0, m0, P0, theta_true, bounds, truth_init="fixed"):
-        self.dim_x = check_positive_int(dim_x, "dim_x")
-        self.dim_y = check_positive_int(dim_y, "dim_y")
+        init_noise_and_prior(self, dim_x, dim_y, Q, R, x0, m0, P0, truth_init)
         self.dim_theta = check_positive_int(dim_theta, "dim_theta")
-        Q = as_covariance(Q, "Q", self.dim_x, allow_singular=True)
-        self.process_noise = GaussianNoise(Q, allow_singular=True)
-        self.measurement_noise = GaussianNoise(as_covariance(R, "R", self.dim_y))
-        self.x0 = as_vector(x0, "x0", self.dim_x)
-        self.m0 = as_vector(m0, "m0", self.dim_x)
-        self.P0 = as_covariance(P0, "P0", self.dim_x)
         self.theta_true = as_theta(theta_true, self.dim_theta, "theta_true")
         lo, hi = (float(b) for b in bounds)
         if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
             raise ValueError(f"bounds must be finite with r_l < r_u, got {bounds}")
         self.bounds = (lo, hi)
-        if truth_init not in ("fixed", "prior"):
-            raise ValueError("truth_init must be 'fixed' or 'prior'")
-        self.truth_init = truth_init
-        self.has_process_noise = bool(np.any(Q != 0.0))
+        self.has_process_noise = bool(np.any(self.Q != 0.0))
 
     @property
     def Q(self) -> np.ndarray:
