@@ -59,13 +59,14 @@ def toc_files(root: Path | None = None) -> list[str]:
 
 
 def papers_in_book(root: Path | None = None) -> dict[str, str]:
-    """``{paper key: chapter docname}`` for the papers that have a chapter in this build.
+    """``{paper key: chapter docname}`` for the papers that have a chapter in this build, and for
+    the report's own claim registries (:data:`pfrepro.published.REPORT_KEYS`, e.g. ``synthesis``).
 
     A chapter covers a paper when its source imports the paper's experiment module
     (``from pfrepro.experiments import <key>`` or ``pfrepro.experiments.<key>``) or opens its
     claims registry (``ClaimsRegistry("<key>")``). Order: book order.
     """
-    from .published import PAPERS
+    from .published import CLAIM_SOURCES
 
     root = book_root(root)
     found: dict[str, str] = {}
@@ -75,7 +76,7 @@ def papers_in_book(root: Path | None = None) -> dict[str, str]:
         if src is None:
             continue
         text = src.read_text(encoding="utf-8")
-        for key in PAPERS:
+        for key in CLAIM_SOURCES:
             k = re.escape(key)
             pat = (rf"from\s+pfrepro\.experiments\s+import\s+{k}\b|import\s+pfrepro\.experiments\.{k}\b"
                    rf"|from\s+pfrepro\.experiments\.{k}\s+import|ClaimsRegistry\(\s*[\"']{k}[\"']")

@@ -66,7 +66,7 @@ from . import gpff_zhang2016 as GPFF
 
 __all__ = ["PAPER", "RUNS", "SEEDS", "TIMING_REPEATS", "PF_N", "SCHEMES", "SCHEME_N", "METHOD_N", "BOT_REF_N",
            "TIMING_STEPS", "COUNT_STEPS", "FLAT_FACTOR", "NOT_RUN", "BENCHMARKS", "Method", "Benchmark", "BenchResult", "build", "run_benchmark", "run_all",
-           "pf_at_cost", "equal_budget", "distance_table", "ranking", "verdicts", "frontier", "record_claims",
+           "efficient_frontier", "pf_at_cost", "equal_budget", "distance_table", "ranking", "verdicts", "frontier", "record_claims",
            "benchmarks_table", "bot_pcrb"]
 
 PAPER = "synthesis"
@@ -337,21 +337,34 @@ def _frontier_names(r: BenchResult) -> list[str]:
     return [m.name for m in r.bench.methods if m.family == r.bench.baseline]
 
 
+def efficient_frontier(r: BenchResult, axis: str = "count") -> list[str]:
+    """The baseline's configurations that no other configuration beats on both cost and mean MSE,
+    sorted by cost (on the time axis a small-N PF can be slower than a larger one: per-call overhead
+    dominates a one-run step, and the machine is shared; such a point is dominated and dropped)."""
+    names = _frontier_names(r)
+    c = {n: _cost(r, n, axis) for n in names}
+    m = {n: float(r.err[n].mean()) for n in names}
+    keep = [n for n in names if not any(c[o] <= c[n] and m[o] <= m[n] and (c[o], m[o]) != (c[n], m[n])
+                                         for o in names)]
+    return sorted(keep, key=c.get)
+
+
 def pf_at_cost(r: BenchResult, target: float, axis: str = "count"):
     """Per-run MSE of the baseline (bootstrap PF; Liu-West on ``theta_hou``) at cost ``target``.
 
-    Linear interpolation in log cost between the two frontier points that bracket ``target``,
+    Linear interpolation in log cost between the two points of the baseline's efficient frontier
+    (:func:`efficient_frontier`) that bracket ``target``,
     run by run (so the result is paired with every method's per-run MSE). Returns
     ``(per_run_mse, where)`` with ``where`` = "inside", "below" (target cheaper than the cheapest
     frontier point: that point is used) or "above" (dearer than the dearest: that point is used).
-    "below, flat" / "above, flat": outside, but within a factor :data:`FLAT_FACTOR` of the end point,
-    and the frontier is flat at that end (its two end points' paired MSE difference is within 2 SE,
-    or goes the wrong way), so the end point stands in for the baseline at ``target``.
+    "below, flat" / "above, flat": outside, but within a factor :data:`FLAT_FACTOR` of the cheapest
+    (dearest) configuration,
+    and the baseline is flat at that end (its two dearest -- cheapest -- configurations' paired MSE
+    difference is within 2 SE, or goes the wrong way), so the end point stands in for it at ``target``.
     """
-    names = _frontier_names(r)
+    names = efficient_frontier(r, axis)
+    every = sorted(_frontier_names(r), key=lambda n: _cost(r, n, axis))   # all configurations, by cost
     c = np.array([_cost(r, n, axis) for n in names])
-    order = np.argsort(c)
-    c, names = c[order], [names[i] for i in order]
     lc, lt = np.log(c), math.log(target)
 
     def flat(a, b):   # does spending more (b dearer than a) fail to lower the MSE significantly?
@@ -362,15 +375,16 @@ def pf_at_cost(r: BenchResult, target: float, axis: str = "count"):
         if np.isclose(lt, lc[0]):
             where = "inside"
         else:
-            where = "below, flat" if (len(c) > 1 and c[0] / target <= FLAT_FACTOR and flat(names[0], names[1])) \
+            where = "below, flat" if (len(every) > 1 and _cost(r, every[0], axis) / target <= FLAT_FACTOR
+                                      and flat(every[0], every[1])) \
                 else "below"
         return r.err[names[0]].to_numpy(), where
     if lt >= lc[-1]:
         if np.isclose(lt, lc[-1]):
             where = "inside"
         else:
-            where = "above, flat" if (len(c) > 1 and target / c[-1] <= FLAT_FACTOR and flat(names[-2], names[-1])) \
-                else "above"
+            where = "above, flat" if (len(every) > 1 and target / _cost(r, every[-1], axis) <= FLAT_FACTOR
+                                      and flat(every[-2], every[-1])) else "above"
         return r.err[names[-1]].to_numpy(), where
     j = int(np.searchsorted(lc, lt)) - 1
     w = (lt - lc[j]) / (lc[j + 1] - lc[j])
