@@ -36,7 +36,7 @@ Equal budget: a method of cost B is compared with the bootstrap PF (systematic r
 every step) whose cost is B, on the same truths: per run, the PF's MSE is interpolated
 linearly in log cost between the two PF particle numbers that bracket B (:func:`pf_at_cost`),
 and the paired per-run difference MSE(PF at B) - MSE(method) with its standard error decides
-better / equal / worse (:func:`pfrepro.claims.ordering_holds`: |d| <= 2 SE is a tie).
+better / equal / worse (:func:`pfrepro.claims.ordering_holds`; abs(d) <= 2 SE is a tie).
 Outside the PF's range of costs the nearest PF is used and only the conclusion that
 survives the cost mismatch is kept (:func:`equal_budget`).
 
@@ -90,9 +90,9 @@ SCHEMES = ("multinomial", "stratified", "residual")
 SCHEME_N = 300
 #: particles of GPFF, CMS-PF and ESPF (GPFF's paper N; CMS-PF and ESPF at the same N)
 METHOD_N = 100
-#: the BOT reference: a large-N PF was planned (the GPFF chapter uses N = 16000, ~100 CPU-s here). In a trial of
+#: no large-N PF as the BOT reference. One was planned (the GPFF chapter uses N = 16000, ~100 CPU-s here). In a trial of
 #: 8 runs (before the chapter's runs) PF(4000) had an MSE 40 times the PCRB and above the EKF's (lost tracks), so
-#: it is no yardstick; the PCRB is used instead, a bound that no filter need attain
+#: it is no yardstick (heavy-tailed errors); the PCRB is used instead, a bound that no filter need attain
 BOT_REF_N = None
 #: truth trajectories of the PCRB's Monte Carlo expectation
 PCRB_RUNS = 200
@@ -101,14 +101,14 @@ LW_N = (250, 500, 1000)
 DPF_N = (250, 500)
 #: what is not run, and why
 NOT_RUN = {
-    "manoeuvring target (Zhou 2017)": "IMMPF and IMMPFOR at N = 500 per mode cost about 25 CPU-s per 100 runs "
-                                     "of T = 300, more than this chapter's whole 40 s budget allows next to the "
-                                     "other five benchmarks; no cheap exact reference exists for it",
+    "manoeuvring target (Zhou 2017)": "IMMPF and IMMPFOR at N = 500 per mode took about 25 CPU-s per 100 runs "
+                                     "of T = 300 in a trial, more than this chapter's 40 s budget leaves next to "
+                                     "the other five benchmarks; no cheap exact reference exists for it",
     "resampling schemes on BOT": "each extra PF(1000) on BOT costs ~2.5 CPU-s; the schemes are compared on the "
                                  "three scalar benchmarks",
     "GPFF eq (43) field on BOT": "the paper's BOT filter is the eq (41) field (run with both lambda schedules)",
-    "large-N PF reference on BOT": "N = 16000 costs ~100 CPU-s; a trial PF(4000) lost tracks (MSE 40x the PCRB), "
-                                   "so the PCRB is the yardstick",
+    "large-N PF reference on BOT": "N = 16000 costs ~100 CPU-s; in a trial of 8 runs PF(4000) had heavy-tailed "
+                                   "errors (MSE 40x the PCRB, above the EKF's), so the PCRB is the yardstick",
 }
 
 
@@ -212,6 +212,7 @@ def build(key: str) -> Benchmark:
     raise ValueError(f"unknown benchmark {key!r}; choose from {BENCHMARKS}")
 
 
+#: the benchmark keys, in the chapter's order
 BENCHMARKS = ("ung_zhang", "ung_li", "ung_ning", "theta_hou", "bot")
 
 

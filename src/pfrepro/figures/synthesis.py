@@ -5,7 +5,7 @@ The experiments are :mod:`pfrepro.experiments.synthesis`; this module only draws
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
 from ..experiments import synthesis as S
 from . import new_figure
@@ -19,6 +19,20 @@ STYLE = {
     "GPFF eq43 unif.": ("s", "C0"), "GPFF eq43 exp.": ("D", "C0"), "GPFF eq41 unif.": ("s", "C9"),
     "GPFF eq41 exp.": ("D", "C9"), "CMS-PF": ("*", "C3"), "ESPF": ("P", "C1"), "DPF": ("*", "C2"),
 }
+
+
+def _log_ticks(axis, lo, hi):
+    """Readable plain-number ticks on a log axis: decades over a wide range, 1-2-5 over one to
+    two decades, a few linear ticks inside one decade."""
+    decades = np.log10(hi / lo)
+    if decades > 2.2:
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0,)))
+    elif decades > 0.9:
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    else:
+        axis.set_major_locator(MaxNLocator(4))
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(NullFormatter())
 
 
 def frontier_figure(results: dict, axis: str = "count"):
@@ -45,10 +59,8 @@ def frontier_figure(results: dict, axis: str = "count"):
             handles.setdefault(label, h)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        for a in (ax.xaxis, ax.yaxis):
-            a.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-            a.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-            a.set_minor_formatter(NullFormatter())
+        _log_ticks(ax.xaxis, *ax.get_xlim())
+        _log_ticks(ax.yaxis, *ax.get_ylim())
         ax.axhline(1.0, color="0.6", lw=0.7, ls=":")
         ax.set_title(f"{key}: {r.bench.title}", fontsize=8.5)
         ax.set_xlabel("model evaluations / step" if axis == "count" else "ms / step (one run)", fontsize=8)
