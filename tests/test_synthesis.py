@@ -163,7 +163,9 @@ def test_synthesis_is_a_claim_source_but_not_a_paper(tmp_path):
     (tmp_path / "book" / "00_intro.md").write_text("# intro\n")
     (tmp_path / "book" / "20_a.md").write_text("from pfrepro.experiments import gpff_zhang2016 as E\n")
     (tmp_path / "book" / "70_s.md").write_text("from pfrepro.experiments import synthesis as S\n")
-    assert bookinfo.papers_in_book(tmp_path / "book") == {"gpff_zhang2016": "book/20_a", "synthesis": "book/70_s"}
+    assert bookinfo.papers_in_book(tmp_path / "book") == {"gpff_zhang2016": "book/20_a"}   # papers only
+    assert bookinfo.papers_in_book(tmp_path / "book", report=True) == {"gpff_zhang2016": "book/20_a",
+                                                                       "synthesis": "book/70_s"}
 
 
 def test_efficient_frontier_drops_dominated_points():
