@@ -9,7 +9,7 @@ from pfrepro.claims import ClaimsRegistry
 from pfrepro.experiments import cmspf_ning2011 as CMS
 from pfrepro.experiments import gpff_zhang2016 as GPFF
 from pfrepro.experiments import synthesis as S
-from pfrepro.filters import BootstrapParticleFilter, ExtendedKalmanFilter, GaussianParticleFlowFilter
+from pfrepro.filters import ExtendedKalmanFilter, GaussianParticleFlowFilter
 
 
 def fake(err: dict, cost: dict, seconds: dict | None = None, ref="ref", families=None, papers=None, bound=None):

@@ -202,7 +202,7 @@ def process_pool(max_workers: int | None = None):
     """A ``ProcessPoolExecutor`` for :func:`run_monte_carlo` / :func:`map_runs`.
 
     ``max_workers`` defaults to the number of cores. Each worker runs BLAS on one thread
-    (:func:`_one_blas_thread`): the parallelism is over runs, and BLAS threads on top of
+    (``_one_blas_thread``): the parallelism is over runs, and BLAS threads on top of
     it oversubscribe the cores. Use it as a context manager, or leave it to the
     interpreter's exit.
     """

@@ -29,13 +29,13 @@ PAPERS = {
     "immpfor_zhou2017": "Zhou, Sun, Chu, Cui (2017), IMM-PF optimised resampling",
 }
 
-#: claim registries of this report's own chapters that are not papers (no published numbers): the
-#: scorecard lists their claims in their own section, after the papers, and counts only PAPERS as papers
+#: Claim registries of this report's own chapters that are not papers and have no published numbers.
+#: The scorecard lists their claims in a section of their own, after the papers, and counts only PAPERS.
 REPORT_KEYS = {
     "synthesis": "Synthesis: the papers' methods at equal cost (this report, not a paper)",
 }
 
-#: every key a claims registry may use: the papers, then the report's own chapters
+#: Every key a claims registry may use, the papers first, then the report's own chapters.
 CLAIM_SOURCES = {**PAPERS, **REPORT_KEYS}
 
 
