@@ -174,3 +174,13 @@ def test_efficient_frontier_drops_dominated_points():
              seconds={"PF(10)": 2e-5, "PF(30)": 1e-5, "PF(100)": 3e-5})
     assert S.efficient_frontier(r, "count") == ["PF(10)", "PF(30)", "PF(100)"]
     assert S.efficient_frontier(r, "time") == ["PF(30)", "PF(100)"]   # PF(10): slower and worse than PF(30)
+
+
+def test_run_all_in_a_pool_equals_serial():
+    from pfrepro.montecarlo import process_pool
+
+    serial = S.run_all(("ung_ning",), runs=3, time_it=False)
+    with process_pool(2) as pool:
+        par = S.run_all(("ung_ning",), runs=3, executor=pool, time_it=False)
+    pd.testing.assert_frame_equal(serial["ung_ning"].err, par["ung_ning"].err)
+    pd.testing.assert_frame_equal(serial["ung_ning"].counts, par["ung_ning"].counts)
