@@ -58,15 +58,18 @@ def toc_files(root: Path | None = None) -> list[str]:
     return [f for f in out if not (f in seen or seen.add(f))]
 
 
-def papers_in_book(root: Path | None = None) -> dict[str, str]:
-    """``{paper key: chapter docname}`` for the papers that have a chapter in this build.
+def papers_in_book(root: Path | None = None, *, report: bool = False) -> dict[str, str]:
+    """``{paper key: chapter docname}`` for the papers that have a chapter in this build; with
+    ``report=True`` also the report's own claim registries that are not papers
+    (:data:`pfrepro.published.REPORT_KEYS`, e.g. ``synthesis``: the scorecard links their claims).
 
     A chapter covers a paper when its source imports the paper's experiment module
     (``from pfrepro.experiments import <key>`` or ``pfrepro.experiments.<key>``) or opens its
     claims registry (``ClaimsRegistry("<key>")``). Order: book order.
     """
-    from .published import PAPERS
+    from .published import CLAIM_SOURCES, PAPERS
 
+    keys = CLAIM_SOURCES if report else PAPERS
     root = book_root(root)
     found: dict[str, str] = {}
     for doc in toc_files(root):
@@ -75,7 +78,7 @@ def papers_in_book(root: Path | None = None) -> dict[str, str]:
         if src is None:
             continue
         text = src.read_text(encoding="utf-8")
-        for key in PAPERS:
+        for key in keys:
             k = re.escape(key)
             pat = (rf"from\s+pfrepro\.experiments\s+import\s+{k}\b|import\s+pfrepro\.experiments\.{k}\b"
                    rf"|from\s+pfrepro\.experiments\.{k}\s+import|ClaimsRegistry\(\s*[\"']{k}[\"']")

@@ -18,7 +18,7 @@ from importlib import resources
 
 import pandas as pd
 
-__all__ = ["PAPERS", "load", "value", "table", "se_from_std", "per_run_se"]
+__all__ = ["PAPERS", "REPORT_KEYS", "CLAIM_SOURCES", "load", "value", "table", "se_from_std", "per_run_se"]
 
 #: paper keys used throughout the package and the book
 PAPERS = {
@@ -28,6 +28,15 @@ PAPERS = {
     "cmspf_ning2011": "Ning, Chen, Zhao, He, Shi (2011), chaos map sampling PF",
     "immpfor_zhou2017": "Zhou, Sun, Chu, Cui (2017), IMM-PF optimised resampling",
 }
+
+#: Claim registries of this report's own chapters that are not papers and have no published numbers.
+#: The scorecard lists their claims in a section of their own, after the papers, and counts only PAPERS.
+REPORT_KEYS = {
+    "synthesis": "Synthesis: the papers' methods at equal cost (this report, not a paper)",
+}
+
+#: Every key a claims registry may use, the papers first, then the report's own chapters.
+CLAIM_SOURCES = {**PAPERS, **REPORT_KEYS}
 
 
 @lru_cache(maxsize=None)

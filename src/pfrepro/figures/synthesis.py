@@ -1,0 +1,74 @@
+"""Figures of the synthesis chapter (``book/70_synthesis.md``): accuracy-cost frontiers.
+
+The experiments are :mod:`pfrepro.experiments.synthesis`; this module only draws them.
+"""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
+
+from ..experiments import synthesis as S
+from . import new_figure
+
+__all__ = ["frontier_figure", "STYLE"]
+
+#: marker and colour per method family (baselines grey/black, the papers' methods in colour)
+STYLE = {
+    "PF": ("o", "black"), "PF multinomial": ("v", "0.45"), "PF stratified": ("^", "0.45"),
+    "PF residual": ("<", "0.45"), "EKF": ("x", "0.35"), "UKF": ("+", "0.35"), "Liu-West": ("o", "black"),
+    "GPFF eq43 unif.": ("s", "C0"), "GPFF eq43 exp.": ("D", "C0"), "GPFF eq41 unif.": ("s", "C9"),
+    "GPFF eq41 exp.": ("D", "C9"), "CMS-PF": ("*", "C3"), "ESPF": ("P", "C1"), "DPF": ("*", "C2"),
+}
+
+
+def _log_ticks(axis, lo, hi):
+    """Readable plain-number ticks on a log axis: decades over a wide range, 1-2-5 over one to
+    two decades, a few linear ticks inside one decade."""
+    decades = np.log10(hi / lo)
+    if decades > 2.2:
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0,)))
+    elif decades > 0.9:
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+    else:
+        axis.set_major_locator(MaxNLocator(4))
+    axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    axis.set_minor_formatter(NullFormatter())
+
+
+def frontier_figure(results: dict, axis: str = "count"):
+    """One panel per benchmark: MSE / reference against cost per step, log-log, error bars = SE.
+
+    ``axis`` = "count" (model evaluations per step) or "time" (ms per step, single run). The
+    baseline's efficient frontier (bootstrap PF, systematic; Liu-West on the θ benchmark) is joined by a line.
+    """
+    n = len(results)
+    ncol = 3
+    nrow = int(np.ceil(n / ncol))
+    fig, axes = new_figure(nrow, ncol, figsize=(7.5, 2.45 * nrow + 0.5), squeeze=False)
+    col = "evals/step" if axis == "count" else "ms/step"
+    handles = {}
+    for ax, (key, r) in zip(axes.ravel(), results.items()):
+        fr = S.frontier(r)
+        base = fr.loc[S.efficient_frontier(r, axis)]
+        ax.plot(base[col], base["MSE / opt."], "-", color="black", lw=0.9, zorder=1)
+        for name, row in fr.iterrows():
+            mk, c = STYLE.get(row["family"], ("o", "C4"))
+            h = ax.errorbar(row[col], row["MSE / opt."], yerr=row["SE"], fmt=mk, color=c, ms=5, capsize=2,
+                            lw=0.8, mfc="none" if row["paper"] == "" and mk not in "x+" else c)
+            label = row["family"] if row["family"] not in ("PF",) else "bootstrap PF (systematic)"
+            handles.setdefault(label, h)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        _log_ticks(ax.xaxis, *ax.get_xlim())
+        _log_ticks(ax.yaxis, *ax.get_ylim())
+        ax.axhline(1.0, color="0.6", lw=0.7, ls=":")
+        ax.set_title(f"{key}: {r.bench.title}", fontsize=8.5)
+        ax.set_xlabel("model evaluations / step" if axis == "count" else "ms / step (one run)", fontsize=8)
+        ax.set_ylabel("MSE / reference", fontsize=8)
+        ax.tick_params(labelsize=7.5)
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=4, fontsize=7,
+               frameon=False, bbox_to_anchor=(0.5, 0.0))
+    fig.tight_layout(rect=(0, 0.1 if nrow > 1 else 0.16, 1, 1))
+    return fig
