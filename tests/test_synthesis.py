@@ -186,3 +186,30 @@ def test_run_all_in_a_pool_equals_serial():
         par = S.run_all(("ung_ning",), runs=3, executor=pool, time_it=False)
     pd.testing.assert_frame_equal(serial["ung_ning"].err, par["ung_ning"].err)
     pd.testing.assert_frame_equal(serial["ung_ning"].counts, par["ung_ning"].counts)
+
+
+def test_imm_benchmark_from_the_imm_chapters_record(tmp_path):
+    """The manoeuvring target reuses the IMM chapter's runs: the saved record round-trips, a record
+    of another size is not used, and the benchmark ranks the chapter's filters against IMMPF(2000)."""
+    from pfrepro.experiments import immpfor_zhou2017 as IMM
+
+    rec = IMM.run_synthesis_record(runs=3)
+    path = tmp_path / "imm.npz"
+    np.savez(path, **rec)
+    back = IMM.load_synthesis_record(path, runs=3)
+    assert set(back) == set(rec) and all(np.array_equal(back[k], rec[k]) for k in rec)
+    assert IMM.load_synthesis_record(path, runs=5) is None
+    assert IMM.load_synthesis_record(tmp_path / "missing.npz") is None
+    r = S.run_imm(runs=3, record=rec, time_it=False)
+    n = IMM.SCENARIO["N"]
+    # IMMPF cost: r N transitions + r N likelihoods per step (3 modes)
+    assert r.counts.loc[f"IMMPF({n})", "model evals / step"] == 2 * 3 * n
+    assert r.counts.loc[f"IMMPFOR({n})", "model evals / step"] > 2 * 3 * n      # + density evaluations
+    assert r.counts.loc["IMM-EKF", "model evals / step"] == 3 * 4                # f, F, h, H per mode
+    assert r.ref == f"IMMPF({IMM.SCENARIO['N_fig5']})"
+    np.testing.assert_array_equal(r.err[f"IMMPF({n})"], rec["mse/IMMPF(500)"])
+    reg = ClaimsRegistry("synthesis")
+    rows = S.record_claims(reg, {"imm_zhou": r})
+    assert list(rows["method"]) == [f"IMMPFOR({n})"]
+    assert reg.claims[0].basis == "count" and reg.claims[0].verdict in ("reproduced", "not reproduced",
+                                                                          "inconclusive")

@@ -36,7 +36,8 @@ _ENGINE_EXECUTOR = "executor" in _inspect.signature(run_monte_carlo).parameters
 __all__ = ["PAPER", "SCENARIO", "ALTERNATIVES", "SEEDS", "scenario", "truth_system", "filter_system",
            "schedule", "simulate", "immpf", "immpfor", "imm_ekf", "imm_ukf", "run", "Run", "errors",
            "table1", "rmse_curves", "bootstrap_table", "paired", "equal_compute_N", "mode_timeline",
-           "lost_tracks"]
+           "lost_tracks", "SYNTHESIS_FILTERS", "synthesis_record", "synthesis_record_path",
+           "save_synthesis_record", "load_synthesis_record", "run_synthesis_record"]
 
 #: key of this paper in ``pfrepro.published`` and the claims registry
 PAPER = "immpfor_zhou2017"
@@ -320,3 +321,79 @@ def mode_timeline(sc=None) -> np.ndarray:
     """True filter-mode label per step k = 1..T: 0 CV, 1 CT (either turn)."""
     s = schedule(sc)[1:]
     return np.where(s == 0, 0, 1)
+
+
+# -- the synthesis chapter's manoeuvring-target benchmark ------------------------------------------
+#: the chapter's paper-scale filters the synthesis compares (name -> builder, keywords); "IMMPF(2000)"
+#: (the Fig. 5 IMMPF) is its reference, "IMMPF(N_eq)" the IMMPF at IMMPFOR(500)'s cost
+SYNTHESIS_FILTERS = ("IMMPF(500)", "IMMPFOR(500)", "IMMPF(N_eq)", "IMM-EKF", "IMM-UKF", "IMMPF(2000)")
+
+
+def synthesis_record(main: Run, fig5: Run, N_eq: int) -> dict:
+    """What the synthesis chapter needs of this chapter's paper-scale runs (common truths):
+    per-run position MSE (mean over k of the squared position error, m²) of every filter of
+    :data:`SYNTHESIS_FILTERS`, and the deterministic cost per step of the particle filters
+    (state transitions r N plus likelihood and density evaluations, from the diagnostics:
+    the cost behind :func:`equal_compute_N`)."""
+    if not np.array_equal(main.sim.y, fig5.sim.y):
+        raise ValueError("main and fig5 must be runs on the same truths")
+    res = {"IMMPF(500)": main.results["IMMPF"], "IMMPFOR(500)": main.results["IMMPFOR"],
+           "IMMPF(N_eq)": fig5.results[f"IMMPF (N = {N_eq})"], "IMM-EKF": main.results["IMM-EKF"],
+           "IMM-UKF": main.results["IMM-UKF"], "IMMPF(2000)": fig5.results["IMMPF"]}
+    T, r = main.sim.y.shape[1], len(filter_system().models)
+    N = {"IMMPF(500)": SCENARIO["N"], "IMMPFOR(500)": SCENARIO["N"], "IMMPF(N_eq)": N_eq,
+         "IMMPF(2000)": SCENARIO["N_fig5"]}
+    out = {"N_eq": np.array(N_eq), "runs": np.array(main.sim.y.shape[0]), "seed": np.array(main.seed)}
+    for name, rr in res.items():
+        e = errors(main.x_true, rr.x)
+        out[f"mse/{name}"] = np.mean(e * e, axis=1)
+        if name in N:
+            d = rr.diagnostics
+            per_run = r * N[name] * T + np.asarray(d["likelihood_evals"], float) \
+                + np.asarray(d.get("density_evals", 0.0), float)
+            out[f"cost/{name}"] = np.array(float(np.mean(per_run)) / T)
+    return out
+
+
+def synthesis_record_path():
+    """Where this chapter leaves :func:`synthesis_record` for the synthesis chapter of the same build
+    (next to the saved claims, :func:`pfrepro.claims.claims_dir`)."""
+    from ..claims import claims_dir
+
+    return claims_dir() / "results" / f"{PAPER}.npz"
+
+
+def save_synthesis_record(main: Run, fig5: Run, N_eq: int, path=None):
+    """Write :func:`synthesis_record` to ``path`` (default :func:`synthesis_record_path`); returns the path."""
+    from pathlib import Path
+
+    path = Path(path) if path is not None else synthesis_record_path()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez(path, **synthesis_record(main, fig5, N_eq))
+    return path
+
+
+def load_synthesis_record(path=None, runs: int | None = None) -> dict | None:
+    """The record saved by this chapter in this build, or None when there is none (or it has another
+    number of runs or seed: then the caller reruns it with :func:`run_synthesis_record`)."""
+    from pathlib import Path
+
+    path = Path(path) if path is not None else synthesis_record_path()
+    if not path.is_file():
+        return None
+    with np.load(path) as f:
+        rec = {k: f[k] for k in f.files}
+    if int(rec["seed"]) != SEEDS["main"] or (runs is not None and int(rec["runs"]) != runs):
+        return None
+    return rec
+
+
+def run_synthesis_record(runs: int | None = None, executor=None) -> dict:
+    """Run what :func:`synthesis_record` needs, as this chapter does (same seeds, same truths):
+    the fallback of the synthesis chapter when it runs without this chapter before it."""
+    main = run({"IMMPF": ("immpf", {}), "IMMPFOR": ("immpfor", {}), "IMM-EKF": ("imm_ekf", {}),
+                "IMM-UKF": ("imm_ukf", {})}, runs=runs, executor=executor)
+    N_eq = equal_compute_N(main.results["IMMPFOR"], SCENARIO["N"])
+    fig5 = run({"IMMPF": ("immpf", {"N": SCENARIO["N_fig5"]}), f"IMMPF (N = {N_eq})": ("immpf", {"N": N_eq})},
+               runs=runs, executor=executor)
+    return synthesis_record(main, fig5, N_eq)

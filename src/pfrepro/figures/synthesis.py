@@ -18,6 +18,7 @@ STYLE = {
     "PF residual": ("<", "0.45"), "EKF": ("x", "0.35"), "UKF": ("+", "0.35"), "Liu-West": ("o", "black"),
     "GPFF eq43 unif.": ("s", "C0"), "GPFF eq43 exp.": ("D", "C0"), "GPFF eq41 unif.": ("s", "C9"),
     "GPFF eq41 exp.": ("D", "C9"), "CMS-PF": ("*", "C3"), "ESPF": ("P", "C1"), "DPF": ("*", "C2"),
+    "IMMPF": ("o", "black"), "IMM-EKF": ("x", "0.35"), "IMM-UKF": ("+", "0.35"), "IMMPFOR": ("*", "C4"),
 }
 
 
