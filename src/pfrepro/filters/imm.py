@@ -225,18 +225,30 @@ class IMMParticleFilter(Filter):
         return flat[np.arange(runs)[:, None, None], idx], M
 
     def model_log_likelihood(self, eps, logw, loglik):
-        """Eqs 11-15: log Lambda_j (runs, r) from residuals ``eps`` (runs, r, N, m), previous log-weights."""
+        """Eqs 11-15: log Lambda_j (runs, r) from residuals ``eps`` (runs, r, N, m), previous log-weights.
+
+        ``logw=None`` means uniform weights 1/N (the filter's case: after the interaction every
+        particle weighs 1/N), with the same arithmetic as ``logw = full(-log N)``.
+        """
+        N = eps.shape[-2]
         if self.model_likelihood == "mean":
-            a = logw + loglik
+            a = loglik + (-np.log(N)) if logw is None else logw + loglik
             m = np.max(a, axis=-1, keepdims=True)
             m = np.where(np.isfinite(m), m, 0.0)
             with np.errstate(divide="ignore"):
                 return (m[..., 0] + np.log(np.sum(np.exp(a - m), axis=-1)))
-        w = np.exp(logw - logw.max(axis=-1, keepdims=True))
-        w /= w.sum(axis=-1, keepdims=True)
-        ebar = (w[..., None, :] @ eps)[..., 0, :]                                # (11)
-        d = eps - ebar[..., None, :]
-        dw = d * np.sqrt(w)[..., None]
+        if logw is None:
+            # exp(logw - max) = 1 exactly and the N ones sum to N exactly: the weights are 1.0 / N
+            w = np.full(eps.shape[:-1], 1.0 / N)
+            ebar = (w[..., None, :] @ eps)[..., 0, :]                            # (11)
+            dw = eps - ebar[..., None, :]
+            dw *= math.sqrt(1.0 / N)                                             # d sqrt(w), in place
+        else:
+            w = np.exp(logw - logw.max(axis=-1, keepdims=True))
+            w /= w.sum(axis=-1, keepdims=True)
+            ebar = (w[..., None, :] @ eps)[..., 0, :]                            # (11)
+            d = eps - ebar[..., None, :]
+            dw = d * np.sqrt(w)[..., None]
         S = self.system.R + np.swapaxes(dw, -1, -2) @ dw                         # (12) + (14)
         return gaussian_loglik(ebar, S)                                          # (15)
 
@@ -278,7 +290,9 @@ class IMMParticleFilter(Filter):
         sysm = self.system
         r, N, n = sysm.r, self.n_particles, sysm.dim_x
         x = self.sample_prior(rng, (runs, r, N))
-        logw = np.full((runs, r, N), -np.log(N))
+        # the weights entering every step are uniform (the prior at k = 1, the interaction's
+        # equally weighted draws after): log w = -log N, passed on as ``None``/a scalar
+        lognorm = -np.log(N)
         w = np.full((runs, r, N), 1.0 / N)
         mu = np.broadcast_to(sysm.initial_probs, (runs, r)).copy()
         xs = np.empty((runs, T, n))
@@ -294,7 +308,6 @@ class IMMParticleFilter(Filter):
             c, _ = mixing_probabilities(mu, sysm.Pi)
             if k > 1:
                 x, _ = self.interact(x, w, mu, rng)
-                logw = np.full((runs, r, N), -np.log(N))
             for j, m in enumerate(sysm.models):                                   # (8)
                 x[:, j] = m.sample_transition(x[:, j], k, rng)
             if not np.all(np.isfinite(x)):
@@ -303,9 +316,9 @@ class IMMParticleFilter(Filter):
             eps = sysm.residual_y(yk, sysm.h(x))                                 # (9)-(10)
             ll = self.particle_log_likelihood(eps)                                # (13)
             cost["likelihood"] += r * N
-            lam = self.model_log_likelihood(eps, logw, ll)                        # (11)-(15)
+            lam = self.model_log_likelihood(eps, None, ll)                        # (11)-(15)
             u = self.update_mode_probabilities(c, lam)                            # (16)
-            w, _, coll = normalize_log_weights((logw + ll).reshape(runs * r, N))  # (17)-(18)
+            w, _, coll = normalize_log_weights((ll + lognorm).reshape(runs * r, N))  # (17)-(18)
             w = w.reshape(runs, r, N)
             collapsed[:, k - 1] = coll.reshape(runs, r)
             e = 1.0 / np.sum(w * w, axis=-1)                                      # (19)
@@ -320,9 +333,6 @@ class IMMParticleFilter(Filter):
             xs[:, k - 1] = np.einsum("ar,ari->ai", u, est)                        # (21)
             probs[:, k - 1] = u
             loglam[:, k - 1] = lam
-            with np.errstate(divide="ignore"):
-                logw = np.log(w)
-            logw[resampled[:, k - 1]] = -np.log(N)
             mu = u
         return FilterResult(xs, None, diagnostics={
             "mode_probs": probs, "model_estimates": xj, "log_model_likelihood": loglam, "ess": ess,
