@@ -185,6 +185,21 @@ def test_wrap_angle_range_and_equivalence(a):
     assert abs(turns - round(turns)) < 1e-9
 
 
+def test_wrap_angle_fast_path_is_bit_identical_to_the_formula():
+    """The array fast path (no mod when pi - a lies in [0, 2 pi)) gives the formula's bits exactly."""
+    rng = np.random.default_rng(7)
+    edge = np.array([0.0, -0.0, np.pi, -np.pi, np.nextafter(np.pi, 0), np.nextafter(-np.pi, 0),
+                     np.nextafter(-np.pi, -4), 1e-300, -1e-17, 2 * np.pi, 7.0])
+    for a in (rng.uniform(-np.pi, np.pi, 1000), rng.normal(0, 1e-3, (4, 3, 50)), rng.uniform(-50, 50, 999),
+              edge, np.r_[rng.normal(0, 0.1, 20), np.nan], np.r_[0.1, np.inf], np.zeros(0),
+              rng.normal(0, 1e-2, (5, 7, 3))[..., 2]):
+        ref = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+        got = wrap_angle(a)
+        assert got.shape == ref.shape and got.dtype == ref.dtype
+        assert np.array_equal(got.view(np.int64), ref.view(np.int64))    # bitwise, NaN and -0.0 included
+    assert wrap_angle(0.1) == np.pi - np.mod(np.pi - 0.1, 2.0 * np.pi)
+
+
 def test_bot_residual_wraps():
     m = BearingsOnly.zhang2016()
     r = m.residual_y(np.array([np.pi - 0.01, -np.pi + 0.02]), np.array([-np.pi + 0.01, np.pi - 0.03]))
