@@ -97,6 +97,21 @@ def _indices_from_counts(counts):
     return idx.reshape(lead + (n_out,))
 
 
+def _gather_rows(x, a, j, counts):
+    """In place: ``x[a_k, j_k] = x[a_k, j_k][ancestors of counts_k]`` for rows k (one flat gather).
+
+    ``x`` (runs, r, N, n) C-contiguous, ``a``, ``j`` (K,) the (run, mode) rows, ``counts`` (K, N).
+    """
+    if a.size == 0:
+        return x
+    _, r, N, n = x.shape
+    src = _indices_from_counts(counts)                     # (K, N) ancestor within the row
+    src += ((a * r + j) * N)[:, None]                      # flat particle index
+    flat = x.reshape(-1, n)
+    x[a, j] = flat[src]
+    return x
+
+
 def _init_on_system(filt, system, m0, P0, mode_requirements):
     """Filter set-up on a jump-Markov system: every mode model must meet the model contract.
 
@@ -272,13 +287,9 @@ class IMMParticleFilter(Filter):
         if sel.size == 0:
             return x, w, np.zeros((runs, r), dtype=np.intp)
         uu = take_runs(rng, sel).random((sel.size, r))
-        counts = systematic_counts(w[sel], uu, N)
-        idx = _indices_from_counts(counts)
-        xs = x[sel]
-        new = xs[np.arange(sel.size)[:, None, None], np.arange(r)[None, :, None], idx]
-        dsel = do[sel]
-        xs[dsel] = new[dsel]
-        x[sel] = xs
+        # only the (run, mode) rows that resample: each row's counts use its own weights and offset
+        a, j = np.nonzero(do)
+        _gather_rows(x, a, j, systematic_counts(w[a, j], uu[np.searchsorted(sel, a), j], N))
         w = w.copy()
         w[do] = 1.0 / N
         return x, w, np.zeros((runs, r), dtype=np.intp)
@@ -429,34 +440,44 @@ class IMMPFOR(IMMParticleFilter):
         logL = math.lgamma(1 + 1 / n) - (np.log(r * N) + logp + np.log(unit_ball_volume(n))) / n   # (22), (25)
         logstep = np.log(self.d) + logL                                          # (R, r, N) per particle
         idx = _indices_from_counts(counts)                                       # (R, r, N) ancestors
-        a_ = np.arange(R_)[:, None, None]
-        r_ = np.arange(r)[None, :, None]
-        out = x.copy()
-        out[do] = x[a_, r_, idx][do]                                             # standard resampled sets
-        n_disc = (counts == 0).sum(axis=-1)                                       # |S^j| = number of extra copies
+        out = x.copy(order="C")
+        a, j = np.nonzero(do)
+        rowbase = (np.arange(R_)[:, None] * r + np.arange(r)) * N                 # (R, r) flat row offsets
+        if a.size:                                                                # standard resampled sets
+            out[a, j] = x.reshape(-1, n)[idx[a, j] + rowbase[a, j][:, None]]
+        is_disc = counts == 0
+        n_disc = is_disc.sum(axis=-1)                                             # |S^j| = number of extra copies
         is_dup = np.zeros((R_, r, N), dtype=bool)
-        is_dup[..., 1:] = idx[..., 1:] == idx[..., :-1]
+        np.equal(idx[..., 1:], idx[..., :-1], out=is_dup[..., 1:])
         is_dup &= do[..., None]
-        if not is_dup.any():
+        # K extra-copy slots, as flat indices into (R, r, N) (C order: by row, then slot)
+        f = np.flatnonzero(is_dup)
+        if f.size == 0:
             return out, n_disc
-        # m-th extra copy (slot order) <-> m-th discarded particle (index order)
-        disc_order = np.argsort(counts > 0, axis=-1, kind="stable")               # discarded indices first
-        rank = np.cumsum(is_dup, axis=-1) - 1
-        A, J, Sl = np.nonzero(is_dup)                                             # K extra-copy slots
-        z_s = z[A, J, disc_order[A, J, rank[A, J, Sl]]]                           # (K, n)
-        new = np.zeros((A.size, n))
+        # m-th extra copy (slot order) <-> m-th discarded particle (index order): a row has as many
+        # extra copies as discarded particles, so the two flat C-order lists pair up one to one
+        is_disc &= do[..., None]
+        z_flat = z.reshape(-1, n)
+        z_s = z_flat[np.flatnonzero(is_disc)]                                    # (K, n)
+        row = f // N                                                              # flat (run, mode) row
+        A, J, Sl = row // r, row % r, f % N
+        idx_flat = idx.reshape(-1)
+        logstep_flat = logstep.reshape(-1)
+        other_flat = other_slots.reshape(-1)[f]
+        new = np.zeros((f.size, n))
         for i in range(r):
             # parent from mode i: the slot's own copy (i == j) or a uniformly drawn slot of mode i
-            slot = np.where(J == i, Sl, other_slots[A, J, Sl])
-            par = idx[A, i, slot]
-            z_a = z[A, i, par]
+            base = rowbase[A, i]
+            slot = np.where(J == i, Sl, other_flat)
+            par = idx_flat[base + slot] + base                                    # flat index of x_a^i
+            z_a = z_flat[par]
             dv = z_s - z_a
             dist = np.sqrt(np.einsum("ki,ki->k", dv, dv))
             # fraction of the way to x_s: d L / ||z_s - z_a||, capped at 1 (never past x_s)
             with np.errstate(divide="ignore", over="ignore"):
-                lam = np.exp(np.minimum(logstep[A, i, par] - np.log(dist), 0.0))
+                lam = np.exp(np.minimum(logstep_flat[par] - np.log(dist), 0.0))
             new += M[A, i, J][:, None] * (z_a + lam[:, None] * dv)               # (23)
-        out[A, J, Sl] = m[A] + np.einsum("kij,kj->ki", L[A], new)
+        out.reshape(-1, n)[f] = m[A] + np.einsum("kij,kj->ki", L[A], new)
         return out, n_disc
 
     def _resample(self, x, w, do, u_next, M_next, rng, k, cost):
