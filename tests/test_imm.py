@@ -14,6 +14,7 @@ from scipy.stats import norm
 
 from pfrepro.filters import BootstrapParticleFilter, KalmanFilter
 from pfrepro.filters.imm import (IMMKalman, IMMParticleFilter, IMMPFOR, _indices_from_counts,
+                                 systematic_indices,
                                  mixing_probabilities, nn_distance_scale, systematic_counts, unit_ball_volume)
 from pfrepro.filters.resampling import resample_counts
 from pfrepro.models import LinearGaussianModel
@@ -66,6 +67,27 @@ def test_systematic_counts_hand_and_bit_identity():
     u = np.random.default_rng(1).random((4, 1))
     ref = resample_counts(w, np.random.default_rng(1))
     assert np.array_equal(systematic_counts(w, u[:, 0], 50), ref)
+
+
+def test_systematic_indices_equal_repeat_of_counts():
+    """The bincount construction of the ancestors equals np.repeat(arange, counts), row by row,
+    for sparse weights (many zero counts), n_out < M and n_out > M; it never mutates W unless asked."""
+    rng = np.random.default_rng(5)
+    for shape, n_out in (((3, 2, 40), 40), ((4, 3, 60), 20), ((2, 7), 30), ((5,), 5)):
+        W = rng.random(shape) ** 6 * (rng.random(shape) < 0.5)
+        W[..., 0] += 1e-3
+        u = rng.random(shape[:-1])
+        counts = systematic_counts(W, u, n_out)
+        rows = counts.reshape(-1, shape[-1])
+        ref = np.stack([np.repeat(np.arange(shape[-1]), c) for c in rows]).reshape(shape[:-1] + (n_out,))
+        W0 = W.copy()
+        assert np.array_equal(systematic_indices(W, u, n_out), ref)
+        assert np.array_equal(W, W0)
+        assert np.array_equal(_indices_from_counts(counts), ref)
+        assert np.array_equal(systematic_indices(W.copy(), u, n_out, overwrite=True), ref)
+    assert systematic_indices(np.array([0.5, 0.25, 0.25]), np.array(0.5), 4).tolist() == [0, 0, 1, 2]
+    with pytest.raises(ValueError, match="non-negative"):
+        _indices_from_counts(np.array([[2, -1, 3]]))
 
 
 def test_interaction_hand_swap():

@@ -65,6 +65,21 @@ def mixing_probabilities(mu, Pi):
     return c, M
 
 
+def _systematic_below(W, u, n_out: int, overwrite: bool = False):
+    """Cumulative systematic counts ceil(n_out C_m - u) (..., M) as integers (see :func:`systematic_counts`).
+
+    ``overwrite=True`` lets the float work happen in ``W`` itself (a float64 temporary of the caller).
+    """
+    Wn = np.divide(W, W.sum(axis=-1, keepdims=True), out=W if overwrite else None)
+    Nc = np.cumsum(Wn, axis=-1, out=Wn)
+    Nc *= n_out / Nc[..., -1:]
+    Nc[..., -1] = n_out
+    Nc -= u[..., None]
+    np.ceil(Nc, out=Nc)
+    np.maximum(Nc, 0.0, out=Nc)
+    return Nc.astype(np.intp)
+
+
 def systematic_counts(W, u, n_out: int):
     """Systematic-resampling offspring counts over the last axis of ``W``.
 
@@ -74,18 +89,36 @@ def systematic_counts(W, u, n_out: int):
     (Kitagawa 1996). With ``n_out == M`` the arithmetic is that of
     :func:`pfrepro.filters.resampling.resample_counts` (bit for bit).
     """
-    Wn = W / W.sum(axis=-1, keepdims=True)
-    Nc = np.cumsum(Wn, axis=-1)
-    Nc *= n_out / Nc[..., -1:]
-    Nc[..., -1] = n_out
-    Nc -= u[..., None]
-    np.ceil(Nc, out=Nc)
-    np.maximum(Nc, 0.0, out=Nc)
-    below = Nc.astype(np.intp)
+    below = _systematic_below(W, u, n_out)
     counts = np.empty(below.shape, dtype=np.intp)
     counts[..., 0] = below[..., 0]
     np.subtract(below[..., 1:], below[..., :-1], out=counts[..., 1:])
     return counts
+
+
+def _indices_from_below(below, n_out: int):
+    """Ancestor indices (..., n_out) from cumulative counts ``below`` (..., M), non-decreasing rows
+    ending at ``n_out``: slot s of a row belongs to the atom m with below[m-1] <= s < below[m],
+    i.e. its index is #{m : below[m] <= s} (one bincount and one cumsum, no per-atom repeat)."""
+    lead, M = below.shape[:-1], below.shape[-1]
+    rows = int(np.prod(lead)) if lead else 1
+    b = below.reshape(rows, M)
+    if rows and (b[:, -1] != n_out).any():
+        raise ValueError(f"offspring counts must be non-negative and sum to n_out = {n_out} in every row")
+    off = b + (np.arange(rows) * (n_out + 1))[:, None]
+    hits = np.bincount(off.ravel(), minlength=rows * (n_out + 1)).reshape(rows, n_out + 1)
+    idx = np.cumsum(hits[:, :n_out], axis=1)
+    return idx.reshape(lead + (n_out,))
+
+
+def systematic_indices(W, u, n_out: int, overwrite: bool = False):
+    """Ancestor indices (..., n_out), sorted per row, of systematic resampling over the last axis of
+    ``W``: the atoms of :func:`systematic_counts` (same arithmetic), each repeated by its count."""
+    below = _systematic_below(W, u, n_out, overwrite)
+    # ceil(n_out C_m - u) can exceed n_out by rounding only when u == 0 (probability 2^-53),
+    # where the counts would turn negative: clip, so every row stays non-decreasing
+    np.minimum(below, n_out, out=below)
+    return _indices_from_below(below, n_out)
 
 
 def _indices_from_counts(counts):
@@ -93,19 +126,20 @@ def _indices_from_counts(counts):
     lead, M = counts.shape[:-1], counts.shape[-1]
     rows = int(np.prod(lead)) if lead else 1
     n_out = int(counts.reshape(rows, M)[0].sum())
-    idx = np.repeat(np.tile(np.arange(M), rows), counts.ravel())
-    return idx.reshape(lead + (n_out,))
+    if counts.size and counts.min() < 0:
+        raise ValueError("offspring counts must be non-negative")
+    return _indices_from_below(np.cumsum(counts, axis=-1), n_out)
 
 
-def _gather_rows(x, a, j, counts):
-    """In place: ``x[a_k, j_k] = x[a_k, j_k][ancestors of counts_k]`` for rows k (one flat gather).
+def _gather_rows(x, a, j, src):
+    """In place: ``x[a_k, j_k] = x[a_k, j_k][src_k]`` for rows k (one flat gather).
 
-    ``x`` (runs, r, N, n) C-contiguous, ``a``, ``j`` (K,) the (run, mode) rows, ``counts`` (K, N).
+    ``x`` (runs, r, N, n), ``a``, ``j`` (K,) the (run, mode) rows, ``src`` (K, N) ancestor
+    indices within each row (overwritten).
     """
     if a.size == 0:
         return x
     _, r, N, n = x.shape
-    src = _indices_from_counts(counts)                     # (K, N) ancestor within the row
     src += ((a * r + j) * N)[:, None]                      # flat particle index
     flat = x.reshape(-1, n)
     x[a, j] = flat[src]
@@ -234,10 +268,9 @@ class IMMParticleFilter(Filter):
         # atom weights of the mixture for target j: W[run, j, i, l] = mu_{i|j} w_l^i
         W = np.swapaxes(M, 1, 2)[..., None] * w[:, None, :, :]
         u = rng.random((runs, r))
-        counts = systematic_counts(W.reshape(runs, r, r * N), u, N)
-        idx = _indices_from_counts(counts)                       # (runs, r, N) into the r N atoms
-        flat = x.reshape(runs, r * N, n)
-        return flat[np.arange(runs)[:, None, None], idx], M
+        idx = systematic_indices(W.reshape(runs, r, r * N), u, N, overwrite=True)   # (runs, r, N) into the r N atoms
+        idx += (np.arange(runs) * (r * N))[:, None, None]                           # flat particle index
+        return x.reshape(-1, n)[idx], M
 
     def model_log_likelihood(self, eps, logw, loglik):
         """Eqs 11-15: log Lambda_j (runs, r) from residuals ``eps`` (runs, r, N, m), previous log-weights.
@@ -289,7 +322,7 @@ class IMMParticleFilter(Filter):
         uu = take_runs(rng, sel).random((sel.size, r))
         # only the (run, mode) rows that resample: each row's counts use its own weights and offset
         a, j = np.nonzero(do)
-        _gather_rows(x, a, j, systematic_counts(w[a, j], uu[np.searchsorted(sel, a), j], N))
+        _gather_rows(x, a, j, systematic_indices(w[a, j], uu[np.searchsorted(sel, a), j], N, overwrite=True))
         w = w.copy()
         w[do] = 1.0 / N
         return x, w, np.zeros((runs, r), dtype=np.intp)
