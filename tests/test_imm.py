@@ -86,6 +86,9 @@ def test_systematic_indices_equal_repeat_of_counts():
         assert np.array_equal(_indices_from_counts(counts), ref)
         assert np.array_equal(systematic_indices(W.copy(), u, n_out, overwrite=True), ref)
     assert systematic_indices(np.array([0.5, 0.25, 0.25]), np.array(0.5), 4).tolist() == [0, 0, 1, 2]
+    # u = 0 (the clipped case): still n_out sorted ancestors in range, every atom of weight 1/3 thrice
+    idx0 = systematic_indices(np.full((2, 3), 1 / 3), np.zeros(2), 9)
+    assert idx0.tolist() == [[0, 0, 0, 1, 1, 1, 2, 2, 2]] * 2
     with pytest.raises(ValueError, match="non-negative"):
         _indices_from_counts(np.array([[2, -1, 3]]))
 

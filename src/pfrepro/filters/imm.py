@@ -76,7 +76,7 @@ def _systematic_below(W, u, n_out: int, overwrite: bool = False):
     Nc[..., -1] = n_out
     Nc -= u[..., None]
     np.ceil(Nc, out=Nc)
-    np.maximum(Nc, 0.0, out=Nc)
+    # n_out C_m >= 0 and u < 1, so ceil(n_out C_m - u) >= -0.0, which converts to 0: no clipping
     return Nc.astype(np.intp)
 
 
@@ -115,9 +115,10 @@ def systematic_indices(W, u, n_out: int, overwrite: bool = False):
     """Ancestor indices (..., n_out), sorted per row, of systematic resampling over the last axis of
     ``W``: the atoms of :func:`systematic_counts` (same arithmetic), each repeated by its count."""
     below = _systematic_below(W, u, n_out, overwrite)
-    # ceil(n_out C_m - u) can exceed n_out by rounding only when u == 0 (probability 2^-53),
-    # where the counts would turn negative: clip, so every row stays non-decreasing
-    np.minimum(below, n_out, out=below)
+    # n_out C_m can exceed n_out by a few ulps of rounding (< 1e-6), so ceil(n_out C_m - u) can
+    # exceed n_out only when u < 1e-6, where the counts would turn negative: clip then
+    if np.any(np.asarray(u) < 1e-6):
+        np.minimum(below, n_out, out=below)
     return _indices_from_below(below, n_out)
 
 
