@@ -96,30 +96,33 @@ def systematic_counts(W, u, n_out: int):
     return counts
 
 
-def _indices_from_below(below, n_out: int):
+def _indices_from_below(below, n_out: int, base=None):
     """Ancestor indices (..., n_out) from cumulative counts ``below`` (..., M), non-decreasing rows
-    ending at ``n_out``: slot s of a row belongs to the atom m with below[m-1] <= s < below[m],
-    i.e. its index is #{m : below[m] <= s} (one bincount and one cumsum, no per-atom repeat)."""
+    ending at ``n_out`` (overwritten): slot s of a row belongs to the atom m with
+    below[m-1] <= s < below[m], i.e. its index is #{m : below[m] <= s} (one bincount and one
+    cumsum, no per-atom repeat). ``base`` (rows,) optional integers added to each row's indices."""
     lead, M = below.shape[:-1], below.shape[-1]
     rows = int(np.prod(lead)) if lead else 1
     b = below.reshape(rows, M)
     if rows and (b[:, -1] != n_out).any():
         raise ValueError(f"offspring counts must be non-negative and sum to n_out = {n_out} in every row")
-    off = b + (np.arange(rows) * (n_out + 1))[:, None]
-    hits = np.bincount(off.ravel(), minlength=rows * (n_out + 1)).reshape(rows, n_out + 1)
-    idx = np.cumsum(hits[:, :n_out], axis=1)
-    return idx.reshape(lead + (n_out,))
+    b += (np.arange(rows) * (n_out + 1))[:, None]
+    hits = np.bincount(b.ravel(), minlength=rows * (n_out + 1)).reshape(rows, n_out + 1)[:, :n_out]
+    if base is not None:
+        hits[:, 0] += np.asarray(base, dtype=hits.dtype).reshape(rows)     # the cumsum carries it along the row
+    return np.cumsum(hits, axis=1).reshape(lead + (n_out,))
 
 
-def systematic_indices(W, u, n_out: int, overwrite: bool = False):
+def systematic_indices(W, u, n_out: int, overwrite: bool = False, base=None):
     """Ancestor indices (..., n_out), sorted per row, of systematic resampling over the last axis of
-    ``W``: the atoms of :func:`systematic_counts` (same arithmetic), each repeated by its count."""
+    ``W``: the atoms of :func:`systematic_counts` (same arithmetic), each repeated by its count,
+    plus ``base`` (one integer per row, optional: e.g. the row's offset in a flat array)."""
     below = _systematic_below(W, u, n_out, overwrite)
     # n_out C_m can exceed n_out by a few ulps of rounding (< 1e-6), so ceil(n_out C_m - u) can
     # exceed n_out only when u < 1e-6, where the counts would turn negative: clip then
     if np.any(np.asarray(u) < 1e-6):
         np.minimum(below, n_out, out=below)
-    return _indices_from_below(below, n_out)
+    return _indices_from_below(below, n_out, base)
 
 
 def _indices_from_counts(counts):
@@ -130,21 +133,6 @@ def _indices_from_counts(counts):
     if counts.size and counts.min() < 0:
         raise ValueError("offspring counts must be non-negative")
     return _indices_from_below(np.cumsum(counts, axis=-1), n_out)
-
-
-def _gather_rows(x, a, j, src):
-    """In place: ``x[a_k, j_k] = x[a_k, j_k][src_k]`` for rows k (one flat gather).
-
-    ``x`` (runs, r, N, n), ``a``, ``j`` (K,) the (run, mode) rows, ``src`` (K, N) ancestor
-    indices within each row (overwritten).
-    """
-    if a.size == 0:
-        return x
-    _, r, N, n = x.shape
-    src += ((a * r + j) * N)[:, None]                      # flat particle index
-    flat = x.reshape(-1, n)
-    x[a, j] = flat[src]
-    return x
 
 
 def _init_on_system(filt, system, m0, P0, mode_requirements):
@@ -269,8 +257,9 @@ class IMMParticleFilter(Filter):
         # atom weights of the mixture for target j: W[run, j, i, l] = mu_{i|j} w_l^i
         W = np.swapaxes(M, 1, 2)[..., None] * w[:, None, :, :]
         u = rng.random((runs, r))
-        idx = systematic_indices(W.reshape(runs, r, r * N), u, N, overwrite=True)   # (runs, r, N) into the r N atoms
-        idx += (np.arange(runs) * (r * N))[:, None, None]                           # flat particle index
+        # (runs, r, N) flat particle indices: the run's offset plus the atom among its r N particles
+        base = np.repeat(np.arange(runs) * (r * N), r)
+        idx = systematic_indices(W.reshape(runs, r, r * N), u, N, overwrite=True, base=base)
         return x.reshape(-1, n)[idx], M
 
     def model_log_likelihood(self, eps, logw, loglik):
@@ -323,7 +312,10 @@ class IMMParticleFilter(Filter):
         uu = take_runs(rng, sel).random((sel.size, r))
         # only the (run, mode) rows that resample: each row's counts use its own weights and offset
         a, j = np.nonzero(do)
-        _gather_rows(x, a, j, systematic_indices(w[a, j], uu[np.searchsorted(sel, a), j], N, overwrite=True))
+        if a.size:
+            flat = x.reshape(-1, n)
+            x[a, j] = flat[systematic_indices(w[a, j], uu[np.searchsorted(sel, a), j], N, overwrite=True,
+                                              base=(a * r + j) * N)]
         w = w.copy()
         w[do] = 1.0 / N
         return x, w, np.zeros((runs, r), dtype=np.intp)
