@@ -501,8 +501,14 @@ class IMMPFOR(IMMParticleFilter):
             dist = np.sqrt(np.einsum("ki,ki->k", dv, dv))
             # fraction of the way to x_s: d L / ||z_s - z_a||, capped at 1 (never past x_s)
             with np.errstate(divide="ignore", over="ignore"):
-                lam = np.exp(np.minimum(logstep_flat[par] - np.log(dist), 0.0))
-            new += M[A, i, J][:, None] * (z_a + lam[:, None] * dv)               # (23)
+                lam = np.log(dist, out=dist)
+                np.subtract(logstep_flat[par], lam, out=lam)
+                np.minimum(lam, 0.0, out=lam)
+                np.exp(lam, out=lam)
+            dv *= lam[:, None]                                                    # (23): in place,
+            dv += z_a                                                             # M (z_a + lam dv)
+            dv *= M[A, i, J][:, None]
+            new += dv
         out.reshape(-1, n)[f] = m[A] + np.einsum("kij,kj->ki", L[A], new)
         return out, n_disc
 
