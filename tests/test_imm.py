@@ -311,6 +311,11 @@ def test_replacement_matches_hand_loop_and_invariants():
     first = np.ones(idx.shape, bool); first[..., 1:] = idx[..., 1:] != idx[..., :-1]
     res = np.take_along_axis(x, idx[..., None], axis=2)
     assert np.array_equal(new[first], res[first])
+    # a subset of modes: those rows exactly as with all modes, the others untouched; idx passed in = computed
+    do = np.array([[True, False, True], [False, True, False]])
+    part, _ = f.replacement(x, w, u, M, counts, other, do)
+    assert np.array_equal(part[do], new[do]) and np.array_equal(part[~do], x[~do])
+    assert np.array_equal(f.replacement(x, w, u, M, counts, other, do, idx=idx)[0], part)
 
 
 def test_replacement_limits():
@@ -391,9 +396,9 @@ def test_immpfor_replacement_gets_updated_probabilities(monkeypatch):
     calls = []
     orig = IMMPFOR.replacement
 
-    def spy(self, x, w, u, M, counts, other, do=None):
+    def spy(self, x, w, u, M, counts, other, do=None, **kw):
         calls.append((u.copy(), M.copy()))
-        return orig(self, x, w, u, M, counts, other, do)
+        return orig(self, x, w, u, M, counts, other, do, **kw)
 
     monkeypatch.setattr(IMMPFOR, "replacement", spy)
     res = f.filter(sim.y, RunStreams.from_entropy(5, 2))

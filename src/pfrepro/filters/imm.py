@@ -89,7 +89,11 @@ def systematic_counts(W, u, n_out: int):
     (Kitagawa 1996). With ``n_out == M`` the arithmetic is that of
     :func:`pfrepro.filters.resampling.resample_counts` (bit for bit).
     """
-    below = _systematic_below(W, u, n_out)
+    return _counts_from_below(_systematic_below(W, u, n_out))
+
+
+def _counts_from_below(below):
+    """Counts (..., M) from cumulative counts ``below`` (..., M): first entry, then differences."""
     counts = np.empty(below.shape, dtype=np.intp)
     counts[..., 0] = below[..., 0]
     np.subtract(below[..., 1:], below[..., :-1], out=counts[..., 1:])
@@ -449,7 +453,7 @@ class IMMPFOR(IMMParticleFilter):
         z = dev @ np.swapaxes(Linv, -1, -2)
         return m, L, z.reshape(R_, r, N, n)
 
-    def replacement(self, x, w, u, M, counts, other_slots, do=None):
+    def replacement(self, x, w, u, M, counts, other_slots, do=None, idx=None):
         """Eqs 22-25 for the modes of ``R`` runs; returns the new particle sets (R, r, N, n) and ``|S^j|``.
 
         ``x`` (R, r, N, n) particles after weighting, ``w`` (R, r, N) their weights, ``u`` (R, r)
@@ -457,6 +461,7 @@ class IMMPFOR(IMMParticleFilter):
         ``counts`` (R, r, N) systematic offspring counts of every mode, ``other_slots``
         (R, r, N) uniform slot indices that pick the parents x_a^i, i != j; ``do`` (R, r)
         the modes to resample (default all). Modes not in ``do`` are returned unchanged.
+        ``idx`` (R, r, N) optional: the ancestor indices of ``counts`` if the caller has them.
         Only the extra-copy slots are computed (flat arrays over all of them at once).
         """
         R_, r, N, n = x.shape
@@ -465,7 +470,8 @@ class IMMPFOR(IMMParticleFilter):
         logp = -0.5 * np.einsum("arni,arni->arn", z, z) - 0.5 * n * np.log(2 * np.pi)
         logL = math.lgamma(1 + 1 / n) - (np.log(r * N) + logp + np.log(unit_ball_volume(n))) / n   # (22), (25)
         logstep = np.log(self.d) + logL                                          # (R, r, N) per particle
-        idx = _indices_from_counts(counts)                                       # (R, r, N) ancestors
+        if idx is None:
+            idx = _indices_from_counts(counts)                                   # (R, r, N) ancestors
         out = x.copy(order="C")
         a, j = np.nonzero(do)
         rowbase = (np.arange(R_)[:, None] * r + np.arange(r)) * N                 # (R, r) flat row offsets
@@ -521,9 +527,12 @@ class IMMPFOR(IMMParticleFilter):
         rs = take_runs(rng, sel)
         uu = rs.random((sel.size, r))
         other = rs.integers(0, N, size=(sel.size, r, N))
-        counts = systematic_counts(w[sel], uu, N)
+        ws = w[sel]
+        below = _systematic_below(ws, uu, N)
+        counts = _counts_from_below(below)                                        # = systematic_counts(ws, uu, N)
+        idx = _indices_from_below(below, N)
         dsel = do[sel]
-        new, n_disc = self.replacement(x[sel], w[sel], u_next[sel], M_next[sel], counts, other, dsel)
+        new, n_disc = self.replacement(x[sel], ws, u_next[sel], M_next[sel], counts, other, dsel, idx=idx)
         cost["density"][sel] += r * N
         x[sel] = new
         replaced[sel] = np.where(dsel, n_disc, 0)
