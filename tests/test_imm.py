@@ -13,7 +13,7 @@ from scipy.special import gamma as G
 from scipy.stats import norm
 
 from pfrepro.filters import BootstrapParticleFilter, KalmanFilter
-from pfrepro.filters.imm import (IMMKalman, IMMParticleFilter, IMMPFOR, _indices_from_counts,
+from pfrepro.filters.imm import (IMMKalman, IMMParticleFilter, IMMPFOR, _indices_from_counts, _var_axis1,
                                  systematic_indices,
                                  mixing_probabilities, nn_distance_scale, systematic_counts, unit_ball_volume)
 from pfrepro.filters.resampling import resample_counts
@@ -91,6 +91,15 @@ def test_systematic_indices_equal_repeat_of_counts():
     assert idx0.tolist() == [[0, 0, 0, 1, 1, 1, 2, 2, 2]] * 2
     with pytest.raises(ValueError, match="non-negative"):
         _indices_from_counts(np.array([[2, -1, 3]]))
+
+
+def test_var_axis1_is_numpy_var_bit_for_bit():
+    """The transposed variance used by IMMPFOR's whitening is np.var(a, axis=1) exactly."""
+    for R, K, n in ((1, 50, 6), (2, 600, 6), (7, 1500, 6), (3, 7, 2), (4, 1, 3)):
+        a = np.random.default_rng(R * K).normal(size=(R, K, n)) * 1e4 + 3e4
+        a0 = a.copy()
+        assert np.array_equal(_var_axis1(a), np.var(a, axis=1))
+        assert np.array_equal(a, a0)
 
 
 def test_interaction_hand_swap():

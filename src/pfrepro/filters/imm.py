@@ -139,6 +139,25 @@ def _indices_from_counts(counts):
     return _indices_from_below(np.cumsum(counts, axis=-1), n_out)
 
 
+def _var_axis1(a):
+    """``np.var(a, axis=1)`` of ``a`` (R, K, n), bit for bit, faster when R > 1.
+
+    numpy reduces a middle axis sequentially (row after row, vectorised over the n entries of a
+    row); the same sums over axis 0 of the (K, R n) transposed copy run the identical sequence
+    of additions with R n entries per row instead of n, several times faster."""
+    R, K, n = a.shape
+    if R == 1:
+        return np.var(a, axis=1)
+    t = np.array(np.swapaxes(a, 0, 1), order="C").reshape(K, R * n)     # a copy: worked in place
+    mean = np.add.reduce(t, axis=0, keepdims=True)
+    mean /= K
+    np.subtract(t, mean, out=t)
+    np.multiply(t, t, out=t)
+    out = np.add.reduce(t, axis=0)
+    out /= K
+    return out.reshape(R, n)
+
+
 def _init_on_system(filt, system, m0, P0, mode_requirements):
     """Filter set-up on a jump-Markov system: every mode model must meet the model contract.
 
@@ -446,7 +465,7 @@ class IMMPFOR(IMMParticleFilter):
         # regularisation: the weighted covariance is singular when the weight sits on a few
         # particles (or on copies of one); add 1e-6 of the unweighted spread of all r N particles
         # (never degenerate: every mode's prediction adds noise) plus an absolute floor
-        spread = np.var(flat, axis=1)
+        spread = _var_axis1(flat)
         C = C + np.einsum("ai,ij->aij", 1e-6 * spread + 1e-12, np.eye(n))
         L = np.linalg.cholesky(C)
         Linv = np.linalg.inv(L)
