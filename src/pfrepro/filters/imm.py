@@ -492,6 +492,7 @@ class IMMPFOR(IMMParticleFilter):
         """
         R_, r, N, n = x.shape
         do = np.ones((R_, r), dtype=bool) if do is None else np.asarray(do, bool)
+        M = np.asarray(M, dtype=float)
         m, L, z = self.joint_whitening(x, w, u)                                   # (24)
         logp = -0.5 * np.einsum("arni,arni->arn", z, z) - 0.5 * n * np.log(2 * np.pi)
         logL = math.lgamma(1 + 1 / n) - (np.log(r * N) + logp + np.log(unit_ball_volume(n))) / n   # (22), (25)
@@ -525,21 +526,21 @@ class IMMPFOR(IMMParticleFilter):
         new = np.zeros((f.size, n))
         for i in range(r):
             # parent from mode i: the slot's own copy (i == j) or a uniformly drawn slot of mode i
-            base = rowbase[A, i]
+            base = np.take(rowbase[:, i], A)
             slot = np.where(J == i, Sl, other_flat)
-            par = idx_flat[base + slot] + base                                    # flat index of x_a^i
+            par = np.take(idx_flat, base + slot) + base                                   # flat index of x_a^i
             z_a = np.take(z_flat, par, axis=0)
             dv = z_s - z_a
             dist = np.sqrt(np.einsum("ki,ki->k", dv, dv))
             # fraction of the way to x_s: d L / ||z_s - z_a||, capped at 1 (never past x_s)
             with np.errstate(divide="ignore", over="ignore"):
                 lam = np.log(dist, out=dist)
-                np.subtract(logstep_flat[par], lam, out=lam)
+                np.subtract(np.take(logstep_flat, par), lam, out=lam)
                 np.minimum(lam, 0.0, out=lam)
                 np.exp(lam, out=lam)
             dv *= lam[:, None]                                                    # (23): in place,
             dv += z_a                                                             # M (z_a + lam dv)
-            dv *= M[A, i, J][:, None]
+            dv *= np.take(M.reshape(-1), (A * r + i) * r + J)[:, None]            # mu_{i|j}
             new += dv
         _put_rows(out.reshape(-1, n), f, np.take(m, A, axis=0) + np.einsum("kij,kj->ki", np.take(L, A, axis=0), new))
         return out, n_disc
