@@ -199,6 +199,10 @@ def test_wrap_angle_fast_path_is_bit_identical_to_the_formula():
         assert got.shape == ref.shape and got.dtype == ref.dtype
         assert np.array_equal(got.view(np.int64), ref.view(np.int64))    # bitwise, NaN and -0.0 included
     assert wrap_angle(0.1) == np.pi - np.mod(np.pi - 0.1, 2.0 * np.pi)
+    # in place on a strided view (as the radar residual uses it)
+    d = np.random.default_rng(8).uniform(-7, 7, (5, 4, 3))
+    ref = np.pi - np.mod(np.pi - d[..., 2], 2.0 * np.pi)
+    assert wrap_angle(d[..., 2], out=d[..., 2]) is not None and np.array_equal(d[..., 2], ref)
 
 
 def test_bot_residual_wraps():

@@ -272,7 +272,10 @@ class IMMParticleFilter(Filter):
         if self._meas_whiten is None:
             return self.system.measurement_noise.logpdf(eps)
         z = eps @ self._meas_whiten                       # stacked matmul (no tall 2-D BLAS call)
-        return -0.5 * np.einsum("...i,...i->...", z, z) + self._meas_lognorm
+        q = np.einsum("...i,...i->...", z, z)
+        q *= -0.5
+        q += self._meas_lognorm
+        return q
 
     # -- inner steps (each is tested on a hand-computed case) ------------------------------------
     def interact(self, x, w, mu, rng):

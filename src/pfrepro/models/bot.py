@@ -16,16 +16,17 @@ from .base import StateSpaceModel
 __all__ = ["BearingsOnly", "wrap_angle"]
 
 
-def wrap_angle(a):
+def wrap_angle(a, out=None):
     """Wrap angles to (-pi, pi]: ``pi - mod(pi - a, 2 pi)``.
 
     For arrays, ``mod`` (the costly part) is skipped when every ``t = pi - a`` already lies in
     [0, 2 pi), where ``mod(t, 2 pi) = t`` exactly: the result is bit-identical to the formula
-    (residuals of a tracking filter almost never need the wrap).
+    (residuals of a tracking filter almost never need the wrap). ``out`` (arrays only): write
+    the result there (it may be ``a`` itself).
     """
-    if np.ndim(a) == 0:
+    if np.ndim(a) == 0 and out is None:
         return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
-    t = np.subtract(np.pi, a)
+    t = np.subtract(np.pi, a, out=out)
     if t.size and not (t.min() >= 0.0 and t.max() < 2.0 * np.pi):   # NaN fails the test too
         np.mod(t, 2.0 * np.pi, out=t)
     return np.subtract(np.pi, t, out=t)

@@ -191,7 +191,7 @@ class RadarTrackingModel(StateSpaceModel):
     def residual_y(self, y, y_pred):
         """y - y_pred with the bearing difference wrapped to (-pi, pi]."""
         d = y - y_pred
-        d[..., 2] = wrap_angle(d[..., 2])
+        wrap_angle(d[..., 2], out=d[..., 2])
         return d
 
 
