@@ -502,11 +502,10 @@ class IMMPFOR(IMMParticleFilter):
         logstep = np.log(self.d) + logL                                          # (R, r, N) per particle
         if idx is None:
             idx = _indices_from_counts(counts)                                   # (R, r, N) ancestors
-        out = x.copy(order="C")
-        a, j = np.nonzero(do)
         rowbase = (np.arange(R_)[:, None] * r + np.arange(r)) * N                 # (R, r) flat row offsets
-        if a.size:                                                                # standard resampled sets
-            out[a, j] = np.take(x.reshape(-1, n), idx[a, j] + rowbase[a, j][:, None], axis=0)
+        # the standard resampled sets of the modes in do, the others unchanged: one row gather
+        src = np.where(do[..., None], idx, np.arange(N)) + rowbase[..., None]
+        out = np.take(x.reshape(-1, n), src, axis=0)                              # (R, r, N, n), C order
         is_disc = counts == 0
         n_disc = is_disc.sum(axis=-1)                                             # |S^j| = number of extra copies
         is_dup = np.zeros((R_, r, N), dtype=bool)
