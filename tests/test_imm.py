@@ -100,6 +100,7 @@ def test_var_axis1_is_numpy_var_bit_for_bit():
         a0 = a.copy()
         assert np.array_equal(_var_axis1(a), np.var(a, axis=1))
         assert np.array_equal(a, a0)
+        assert np.array_equal(_var_axis1(a)[-1], _var_axis1(a[-1:])[0])      # run i's spread: any batch
 
 
 def test_interaction_hand_swap():
