@@ -13,7 +13,8 @@ from scipy.special import gamma as G
 from scipy.stats import norm
 
 from pfrepro.filters import BootstrapParticleFilter, KalmanFilter
-from pfrepro.filters.imm import (IMMKalman, IMMParticleFilter, IMMPFOR, _indices_from_counts,
+from pfrepro.filters.imm import (IMMKalman, IMMParticleFilter, IMMPFOR, _indices_from_counts, _var_axis1,
+                                 systematic_indices,
                                  mixing_probabilities, nn_distance_scale, systematic_counts, unit_ball_volume)
 from pfrepro.filters.resampling import resample_counts
 from pfrepro.models import LinearGaussianModel
@@ -66,6 +67,40 @@ def test_systematic_counts_hand_and_bit_identity():
     u = np.random.default_rng(1).random((4, 1))
     ref = resample_counts(w, np.random.default_rng(1))
     assert np.array_equal(systematic_counts(w, u[:, 0], 50), ref)
+
+
+def test_systematic_indices_equal_repeat_of_counts():
+    """The bincount construction of the ancestors equals np.repeat(arange, counts), row by row,
+    for sparse weights (many zero counts), n_out < M and n_out > M; it never mutates W unless asked."""
+    rng = np.random.default_rng(5)
+    for shape, n_out in (((3, 2, 40), 40), ((4, 3, 60), 20), ((2, 7), 30), ((5,), 5)):
+        W = rng.random(shape) ** 6 * (rng.random(shape) < 0.5)
+        W[..., 0] += 1e-3
+        u = rng.random(shape[:-1])
+        counts = systematic_counts(W, u, n_out)
+        rows = counts.reshape(-1, shape[-1])
+        ref = np.stack([np.repeat(np.arange(shape[-1]), c) for c in rows]).reshape(shape[:-1] + (n_out,))
+        W0 = W.copy()
+        assert np.array_equal(systematic_indices(W, u, n_out), ref)
+        assert np.array_equal(W, W0)
+        assert np.array_equal(_indices_from_counts(counts), ref)
+        assert np.array_equal(systematic_indices(W.copy(), u, n_out, overwrite=True), ref)
+    assert systematic_indices(np.array([0.5, 0.25, 0.25]), np.array(0.5), 4).tolist() == [0, 0, 1, 2]
+    # u = 0 (the clipped case): still n_out sorted ancestors in range, every atom of weight 1/3 thrice
+    idx0 = systematic_indices(np.full((2, 3), 1 / 3), np.zeros(2), 9)
+    assert idx0.tolist() == [[0, 0, 0, 1, 1, 1, 2, 2, 2]] * 2
+    with pytest.raises(ValueError, match="non-negative"):
+        _indices_from_counts(np.array([[2, -1, 3]]))
+
+
+def test_var_axis1_is_numpy_var_bit_for_bit():
+    """The transposed variance used by IMMPFOR's whitening is np.var(a, axis=1) exactly."""
+    for R, K, n in ((1, 50, 6), (2, 600, 6), (7, 1500, 6), (3, 7, 2), (4, 1, 3)):
+        a = np.random.default_rng(R * K).normal(size=(R, K, n)) * 1e4 + 3e4
+        a0 = a.copy()
+        assert np.array_equal(_var_axis1(a), np.var(a, axis=1))
+        assert np.array_equal(a, a0)
+        assert np.array_equal(_var_axis1(a)[-1], _var_axis1(a[-1:])[0])      # run i's spread: any batch
 
 
 def test_interaction_hand_swap():
@@ -286,6 +321,11 @@ def test_replacement_matches_hand_loop_and_invariants():
     first = np.ones(idx.shape, bool); first[..., 1:] = idx[..., 1:] != idx[..., :-1]
     res = np.take_along_axis(x, idx[..., None], axis=2)
     assert np.array_equal(new[first], res[first])
+    # a subset of modes: those rows exactly as with all modes, the others untouched; idx passed in = computed
+    do = np.array([[True, False, True], [False, True, False]])
+    part, _ = f.replacement(x, w, u, M, counts, other, do)
+    assert np.array_equal(part[do], new[do]) and np.array_equal(part[~do], x[~do])
+    assert np.array_equal(f.replacement(x, w, u, M, counts, other, do, idx=idx)[0], part)
 
 
 def test_replacement_limits():
@@ -366,9 +406,9 @@ def test_immpfor_replacement_gets_updated_probabilities(monkeypatch):
     calls = []
     orig = IMMPFOR.replacement
 
-    def spy(self, x, w, u, M, counts, other, do=None):
+    def spy(self, x, w, u, M, counts, other, do=None, **kw):
         calls.append((u.copy(), M.copy()))
-        return orig(self, x, w, u, M, counts, other, do)
+        return orig(self, x, w, u, M, counts, other, do, **kw)
 
     monkeypatch.setattr(IMMPFOR, "replacement", spy)
     res = f.filter(sim.y, RunStreams.from_entropy(5, 2))

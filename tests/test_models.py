@@ -176,14 +176,6 @@ def test_wrap_angle_fixed_points():
                                atol=1e-12)
 
 
-def test_wrap_angle_keeps_angles_inside_exactly():
-    a = np.linspace(-np.pi, np.pi, 1001)[1:]          # (-pi, pi]
-    assert np.array_equal(wrap_angle(a), a)
-    mixed = np.array([0.3, 4.0, -2.0])                 # one outside: the others still exact
-    w = wrap_angle(mixed)
-    assert w[0] == 0.3 and w[2] == -2.0 and abs(w[1] - (4.0 - 2 * np.pi)) < 1e-15
-
-
 @settings(max_examples=300, derandomize=True, database=None, deadline=None)
 @given(st.floats(-1e4, 1e4, allow_nan=False))
 def test_wrap_angle_range_and_equivalence(a):
@@ -191,6 +183,26 @@ def test_wrap_angle_range_and_equivalence(a):
     assert -np.pi < w <= np.pi
     turns = (a - w) / (2 * np.pi)
     assert abs(turns - round(turns)) < 1e-9
+
+
+def test_wrap_angle_fast_path_is_bit_identical_to_the_formula():
+    """The array fast path (no mod when pi - a lies in [0, 2 pi)) gives the formula's bits exactly."""
+    rng = np.random.default_rng(7)
+    edge = np.array([0.0, -0.0, np.pi, -np.pi, np.nextafter(np.pi, 0), np.nextafter(-np.pi, 0),
+                     np.nextafter(-np.pi, -4), 1e-300, -1e-17, 2 * np.pi, 7.0])
+    for a in (rng.uniform(-np.pi, np.pi, 1000), rng.normal(0, 1e-3, (4, 3, 50)), rng.uniform(-50, 50, 999),
+              edge, np.r_[rng.normal(0, 0.1, 20), np.nan], np.r_[0.1, np.inf], np.zeros(0),
+              rng.normal(0, 1e-2, (5, 7, 3))[..., 2]):
+        with np.errstate(invalid="ignore"):          # the inf case: NaN, as the formula gives
+            ref = np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+            got = wrap_angle(a)
+        assert got.shape == ref.shape and got.dtype == ref.dtype
+        assert np.array_equal(got.view(np.int64), ref.view(np.int64))    # bitwise, NaN and -0.0 included
+    assert wrap_angle(0.1) == np.pi - np.mod(np.pi - 0.1, 2.0 * np.pi)
+    # in place on a strided view (as the radar residual uses it)
+    d = np.random.default_rng(8).uniform(-7, 7, (5, 4, 3))
+    ref = np.pi - np.mod(np.pi - d[..., 2], 2.0 * np.pi)
+    assert wrap_angle(d[..., 2], out=d[..., 2]) is not None and np.array_equal(d[..., 2], ref)
 
 
 def test_bot_residual_wraps():

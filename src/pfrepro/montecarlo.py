@@ -201,18 +201,43 @@ def _one_blas_thread() -> None:
     threadpool_limits(1)
 
 
+def _retain_freed_memory() -> bool:
+    """Pool-worker initialiser: glibc keeps freed memory for reuse instead of handing it back.
+
+    A batched filter allocates and frees arrays of 0.1-30 MB at every time step. By default
+    glibc serves such sizes with fresh ``mmap`` pages, or trims the heap when they are freed,
+    so every step page-faults its temporaries in again: the IMM particle filters spent 6-10 %
+    of their CPU time in the kernel on those faults. ``mallopt`` with the largest mmap
+    threshold (32 MB) and a 1 GB trim threshold keeps them in the heap. It changes no number
+    (only where the memory comes from); returns False, doing nothing, off glibc.
+    """
+    try:
+        import ctypes
+        libc = ctypes.CDLL("libc.so.6")
+        M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
+        return bool(libc.mallopt(M_MMAP_THRESHOLD, 32 << 20)) & bool(libc.mallopt(M_TRIM_THRESHOLD, 1 << 30))
+    except (OSError, AttributeError):  # pragma: no cover - not glibc
+        return False
+
+
+def _init_worker() -> None:
+    """Pool-worker initialiser: :func:`_one_blas_thread` and :func:`_retain_freed_memory`."""
+    _one_blas_thread()
+    _retain_freed_memory()
+
+
 def process_pool(max_workers: int | None = None):
     """A ``ProcessPoolExecutor`` for :func:`run_monte_carlo` / :func:`map_runs`.
 
     ``max_workers`` defaults to the number of cores. Each worker runs BLAS on one thread
     (``_one_blas_thread``): the parallelism is over runs, and BLAS threads on top of
-    it oversubscribe the cores. Use it as a context manager, or leave it to the
-    interpreter's exit.
+    it oversubscribe the cores; and keeps freed memory for reuse (``_retain_freed_memory``).
+    Use it as a context manager, or leave it to the interpreter's exit.
     """
     from concurrent.futures import ProcessPoolExecutor
     if max_workers is not None:
         max_workers = check_positive_int(max_workers, "max_workers")
-    return ProcessPoolExecutor(max_workers=max_workers, initializer=_one_blas_thread)
+    return ProcessPoolExecutor(max_workers=max_workers, initializer=_init_worker)
 
 
 def _n_workers(executor) -> int:

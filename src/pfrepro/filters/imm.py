@@ -65,6 +65,21 @@ def mixing_probabilities(mu, Pi):
     return c, M
 
 
+def _systematic_below(W, u, n_out: int, overwrite: bool = False):
+    """Cumulative systematic counts ceil(n_out C_m - u) (..., M) as integers (see :func:`systematic_counts`).
+
+    ``overwrite=True`` lets the float work happen in ``W`` itself (a float64 temporary of the caller).
+    """
+    Wn = np.divide(W, W.sum(axis=-1, keepdims=True), out=W if overwrite else None)
+    Nc = np.cumsum(Wn, axis=-1, out=Wn)
+    Nc *= n_out / Nc[..., -1:]
+    Nc[..., -1] = n_out
+    Nc -= u[..., None]
+    np.ceil(Nc, out=Nc)
+    # n_out C_m >= 0 and u < 1, so ceil(n_out C_m - u) >= -0.0, which converts to 0: no clipping
+    return Nc.astype(np.intp)
+
+
 def systematic_counts(W, u, n_out: int):
     """Systematic-resampling offspring counts over the last axis of ``W``.
 
@@ -74,18 +89,44 @@ def systematic_counts(W, u, n_out: int):
     (Kitagawa 1996). With ``n_out == M`` the arithmetic is that of
     :func:`pfrepro.filters.resampling.resample_counts` (bit for bit).
     """
-    Wn = W / W.sum(axis=-1, keepdims=True)
-    Nc = np.cumsum(Wn, axis=-1)
-    Nc *= n_out / Nc[..., -1:]
-    Nc[..., -1] = n_out
-    Nc -= u[..., None]
-    np.ceil(Nc, out=Nc)
-    np.maximum(Nc, 0.0, out=Nc)
-    below = Nc.astype(np.intp)
+    return _counts_from_below(_systematic_below(W, u, n_out))
+
+
+def _counts_from_below(below):
+    """Counts (..., M) from cumulative counts ``below`` (..., M): first entry, then differences."""
     counts = np.empty(below.shape, dtype=np.intp)
     counts[..., 0] = below[..., 0]
     np.subtract(below[..., 1:], below[..., :-1], out=counts[..., 1:])
     return counts
+
+
+def _indices_from_below(below, n_out: int, base=None):
+    """Ancestor indices (..., n_out) from cumulative counts ``below`` (..., M), non-decreasing rows
+    ending at ``n_out`` (overwritten): slot s of a row belongs to the atom m with
+    below[m-1] <= s < below[m], i.e. its index is #{m : below[m] <= s} (one bincount and one
+    cumsum, no per-atom repeat). ``base`` (rows,) optional integers added to each row's indices."""
+    lead, M = below.shape[:-1], below.shape[-1]
+    rows = int(np.prod(lead)) if lead else 1
+    b = below.reshape(rows, M)
+    if rows and (b[:, -1] != n_out).any():
+        raise ValueError(f"offspring counts must be non-negative and sum to n_out = {n_out} in every row")
+    b += (np.arange(rows) * (n_out + 1))[:, None]
+    hits = np.bincount(b.ravel(), minlength=rows * (n_out + 1)).reshape(rows, n_out + 1)[:, :n_out]
+    if base is not None:
+        hits[:, 0] += np.asarray(base, dtype=hits.dtype).reshape(rows)     # the cumsum carries it along the row
+    return np.cumsum(hits, axis=1).reshape(lead + (n_out,))
+
+
+def systematic_indices(W, u, n_out: int, overwrite: bool = False, base=None):
+    """Ancestor indices (..., n_out), sorted per row, of systematic resampling over the last axis of
+    ``W``: the atoms of :func:`systematic_counts` (same arithmetic), each repeated by its count,
+    plus ``base`` (one integer per row, optional: e.g. the row's offset in a flat array)."""
+    below = _systematic_below(W, u, n_out, overwrite)
+    # n_out C_m can exceed n_out by a few ulps of rounding (< 1e-6), so ceil(n_out C_m - u) can
+    # exceed n_out only when u < 1e-6, where the counts would turn negative: clip then
+    if np.any(np.asarray(u) < 1e-6):
+        np.minimum(below, n_out, out=below)
+    return _indices_from_below(below, n_out, base)
 
 
 def _indices_from_counts(counts):
@@ -93,8 +134,35 @@ def _indices_from_counts(counts):
     lead, M = counts.shape[:-1], counts.shape[-1]
     rows = int(np.prod(lead)) if lead else 1
     n_out = int(counts.reshape(rows, M)[0].sum())
-    idx = np.repeat(np.tile(np.arange(M), rows), counts.ravel())
-    return idx.reshape(lead + (n_out,))
+    if counts.size and counts.min() < 0:
+        raise ValueError("offspring counts must be non-negative")
+    return _indices_from_below(np.cumsum(counts, axis=-1), n_out)
+
+
+def _put_rows(a, rows, values):
+    """``a[rows] = values`` for a C-contiguous 2-D float array ``a`` (rows as opaque records: a
+    plain byte copy per row, several times faster than numpy's row-wise fancy assignment)."""
+    rec = np.dtype((np.void, a.shape[1] * a.itemsize))
+    a.view(rec)[:, 0][rows] = np.ascontiguousarray(values, dtype=a.dtype).view(rec)[:, 0]
+
+
+def _var_axis1(a):
+    """``np.var(a, axis=1)`` of ``a`` (R, K, n), bit for bit, faster when R > 1.
+
+    numpy reduces a middle axis sequentially (row after row, vectorised over the n entries of a
+    row); the same sums over axis 0 of the (K, R n) transposed copy run the identical sequence
+    of additions with R n entries per row instead of n, several times faster."""
+    R, K, n = a.shape
+    if R == 1:
+        return np.var(a, axis=1)
+    t = np.array(np.swapaxes(a, 0, 1), order="C").reshape(K, R * n)     # a copy: worked in place
+    mean = np.add.reduce(t, axis=0, keepdims=True)
+    mean /= K
+    np.subtract(t, mean, out=t)
+    np.multiply(t, t, out=t)
+    out = np.add.reduce(t, axis=0)
+    out /= K
+    return out.reshape(R, n)
 
 
 def _init_on_system(filt, system, m0, P0, mode_requirements):
@@ -204,7 +272,10 @@ class IMMParticleFilter(Filter):
         if self._meas_whiten is None:
             return self.system.measurement_noise.logpdf(eps)
         z = eps @ self._meas_whiten                       # stacked matmul (no tall 2-D BLAS call)
-        return -0.5 * np.einsum("...i,...i->...", z, z) + self._meas_lognorm
+        q = np.einsum("...i,...i->...", z, z)
+        q *= -0.5
+        q += self._meas_lognorm
+        return q
 
     # -- inner steps (each is tested on a hand-computed case) ------------------------------------
     def interact(self, x, w, mu, rng):
@@ -219,24 +290,36 @@ class IMMParticleFilter(Filter):
         # atom weights of the mixture for target j: W[run, j, i, l] = mu_{i|j} w_l^i
         W = np.swapaxes(M, 1, 2)[..., None] * w[:, None, :, :]
         u = rng.random((runs, r))
-        counts = systematic_counts(W.reshape(runs, r, r * N), u, N)
-        idx = _indices_from_counts(counts)                       # (runs, r, N) into the r N atoms
-        flat = x.reshape(runs, r * N, n)
-        return flat[np.arange(runs)[:, None, None], idx], M
+        # (runs, r, N) flat particle indices: the run's offset plus the atom among its r N particles
+        base = np.repeat(np.arange(runs) * (r * N), r)
+        idx = systematic_indices(W.reshape(runs, r, r * N), u, N, overwrite=True, base=base)
+        return np.take(x.reshape(-1, n), idx, axis=0), M                         # (take: a fast row gather)
 
     def model_log_likelihood(self, eps, logw, loglik):
-        """Eqs 11-15: log Lambda_j (runs, r) from residuals ``eps`` (runs, r, N, m), previous log-weights."""
+        """Eqs 11-15: log Lambda_j (runs, r) from residuals ``eps`` (runs, r, N, m), previous log-weights.
+
+        ``logw=None`` means uniform weights 1/N (the filter's case: after the interaction every
+        particle weighs 1/N), with the same arithmetic as ``logw = full(-log N)``.
+        """
+        N = eps.shape[-2]
         if self.model_likelihood == "mean":
-            a = logw + loglik
+            a = loglik + (-np.log(N)) if logw is None else logw + loglik
             m = np.max(a, axis=-1, keepdims=True)
             m = np.where(np.isfinite(m), m, 0.0)
             with np.errstate(divide="ignore"):
                 return (m[..., 0] + np.log(np.sum(np.exp(a - m), axis=-1)))
-        w = np.exp(logw - logw.max(axis=-1, keepdims=True))
-        w /= w.sum(axis=-1, keepdims=True)
-        ebar = (w[..., None, :] @ eps)[..., 0, :]                                # (11)
-        d = eps - ebar[..., None, :]
-        dw = d * np.sqrt(w)[..., None]
+        if logw is None:
+            # exp(logw - max) = 1 exactly and the N ones sum to N exactly: the weights are 1.0 / N
+            w = np.full(eps.shape[:-1], 1.0 / N)
+            ebar = (w[..., None, :] @ eps)[..., 0, :]                            # (11)
+            dw = eps - ebar[..., None, :]
+            dw *= math.sqrt(1.0 / N)                                             # d sqrt(w), in place
+        else:
+            w = np.exp(logw - logw.max(axis=-1, keepdims=True))
+            w /= w.sum(axis=-1, keepdims=True)
+            ebar = (w[..., None, :] @ eps)[..., 0, :]                            # (11)
+            d = eps - ebar[..., None, :]
+            dw = d * np.sqrt(w)[..., None]
         S = self.system.R + np.swapaxes(dw, -1, -2) @ dw                         # (12) + (14)
         return gaussian_loglik(ebar, S)                                          # (15)
 
@@ -260,13 +343,12 @@ class IMMParticleFilter(Filter):
         if sel.size == 0:
             return x, w, np.zeros((runs, r), dtype=np.intp)
         uu = take_runs(rng, sel).random((sel.size, r))
-        counts = systematic_counts(w[sel], uu, N)
-        idx = _indices_from_counts(counts)
-        xs = x[sel]
-        new = xs[np.arange(sel.size)[:, None, None], np.arange(r)[None, :, None], idx]
-        dsel = do[sel]
-        xs[dsel] = new[dsel]
-        x[sel] = xs
+        # only the (run, mode) rows that resample: each row's counts use its own weights and offset
+        a, j = np.nonzero(do)
+        if a.size:
+            flat = x.reshape(-1, n)
+            anc = systematic_indices(w[a, j], uu[np.searchsorted(sel, a), j], N, overwrite=True, base=(a * r + j) * N)
+            x[a, j] = np.take(flat, anc, axis=0)
         w = w.copy()
         w[do] = 1.0 / N
         return x, w, np.zeros((runs, r), dtype=np.intp)
@@ -278,7 +360,9 @@ class IMMParticleFilter(Filter):
         sysm = self.system
         r, N, n = sysm.r, self.n_particles, sysm.dim_x
         x = self.sample_prior(rng, (runs, r, N))
-        logw = np.full((runs, r, N), -np.log(N))
+        # the weights entering every step are uniform (the prior at k = 1, the interaction's
+        # equally weighted draws after): log w = -log N, passed on as ``None``/a scalar
+        lognorm = -np.log(N)
         w = np.full((runs, r, N), 1.0 / N)
         mu = np.broadcast_to(sysm.initial_probs, (runs, r)).copy()
         xs = np.empty((runs, T, n))
@@ -294,18 +378,17 @@ class IMMParticleFilter(Filter):
             c, _ = mixing_probabilities(mu, sysm.Pi)
             if k > 1:
                 x, _ = self.interact(x, w, mu, rng)
-                logw = np.full((runs, r, N), -np.log(N))
             for j, m in enumerate(sysm.models):                                   # (8)
                 x[:, j] = m.sample_transition(x[:, j], k, rng)
-            if not np.all(np.isfinite(x)):
+            if not (np.isfinite(x.min()) and np.isfinite(x.max())):              # (min/max propagate NaN)
                 raise FilterDivergenceError(f"{self.name}: particles became non-finite at step {k}")
             yk = y[:, k - 1][:, None, None, :]
             eps = sysm.residual_y(yk, sysm.h(x))                                 # (9)-(10)
             ll = self.particle_log_likelihood(eps)                                # (13)
             cost["likelihood"] += r * N
-            lam = self.model_log_likelihood(eps, logw, ll)                        # (11)-(15)
+            lam = self.model_log_likelihood(eps, None, ll)                        # (11)-(15)
             u = self.update_mode_probabilities(c, lam)                            # (16)
-            w, _, coll = normalize_log_weights((logw + ll).reshape(runs * r, N))  # (17)-(18)
+            w, _, coll = normalize_log_weights((ll + lognorm).reshape(runs * r, N))  # (17)-(18)
             w = w.reshape(runs, r, N)
             collapsed[:, k - 1] = coll.reshape(runs, r)
             e = 1.0 / np.sum(w * w, axis=-1)                                      # (19)
@@ -320,9 +403,6 @@ class IMMParticleFilter(Filter):
             xs[:, k - 1] = np.einsum("ar,ari->ai", u, est)                        # (21)
             probs[:, k - 1] = u
             loglam[:, k - 1] = lam
-            with np.errstate(divide="ignore"):
-                logw = np.log(w)
-            logw[resampled[:, k - 1]] = -np.log(N)
             mu = u
         return FilterResult(xs, None, diagnostics={
             "mode_probs": probs, "model_estimates": xj, "log_model_likelihood": loglam, "ess": ess,
@@ -395,14 +475,14 @@ class IMMPFOR(IMMParticleFilter):
         # regularisation: the weighted covariance is singular when the weight sits on a few
         # particles (or on copies of one); add 1e-6 of the unweighted spread of all r N particles
         # (never degenerate: every mode's prediction adds noise) plus an absolute floor
-        spread = np.var(flat, axis=1)
+        spread = _var_axis1(flat)
         C = C + np.einsum("ai,ij->aij", 1e-6 * spread + 1e-12, np.eye(n))
         L = np.linalg.cholesky(C)
         Linv = np.linalg.inv(L)
         z = dev @ np.swapaxes(Linv, -1, -2)
         return m, L, z.reshape(R_, r, N, n)
 
-    def replacement(self, x, w, u, M, counts, other_slots, do=None):
+    def replacement(self, x, w, u, M, counts, other_slots, do=None, idx=None):
         """Eqs 22-25 for the modes of ``R`` runs; returns the new particle sets (R, r, N, n) and ``|S^j|``.
 
         ``x`` (R, r, N, n) particles after weighting, ``w`` (R, r, N) their weights, ``u`` (R, r)
@@ -410,43 +490,61 @@ class IMMPFOR(IMMParticleFilter):
         ``counts`` (R, r, N) systematic offspring counts of every mode, ``other_slots``
         (R, r, N) uniform slot indices that pick the parents x_a^i, i != j; ``do`` (R, r)
         the modes to resample (default all). Modes not in ``do`` are returned unchanged.
+        ``idx`` (R, r, N) optional: the ancestor indices of ``counts`` if the caller has them.
         Only the extra-copy slots are computed (flat arrays over all of them at once).
         """
         R_, r, N, n = x.shape
         do = np.ones((R_, r), dtype=bool) if do is None else np.asarray(do, bool)
+        M = np.asarray(M, dtype=float)
         m, L, z = self.joint_whitening(x, w, u)                                   # (24)
         logp = -0.5 * np.einsum("arni,arni->arn", z, z) - 0.5 * n * np.log(2 * np.pi)
         logL = math.lgamma(1 + 1 / n) - (np.log(r * N) + logp + np.log(unit_ball_volume(n))) / n   # (22), (25)
         logstep = np.log(self.d) + logL                                          # (R, r, N) per particle
-        idx = _indices_from_counts(counts)                                       # (R, r, N) ancestors
-        a_ = np.arange(R_)[:, None, None]
-        r_ = np.arange(r)[None, :, None]
-        out = x.copy()
-        out[do] = x[a_, r_, idx][do]                                             # standard resampled sets
-        n_disc = (counts == 0).sum(axis=-1)                                       # |S^j| = number of extra copies
+        if idx is None:
+            idx = _indices_from_counts(counts)                                   # (R, r, N) ancestors
+        rowbase = (np.arange(R_)[:, None] * r + np.arange(r)) * N                 # (R, r) flat row offsets
+        # the standard resampled sets of the modes in do, the others unchanged: one row gather
+        src = np.where(do[..., None], idx, np.arange(N)) + rowbase[..., None]
+        out = np.take(x.reshape(-1, n), src, axis=0)                              # (R, r, N, n), C order
+        is_disc = counts == 0
+        n_disc = is_disc.sum(axis=-1)                                             # |S^j| = number of extra copies
         is_dup = np.zeros((R_, r, N), dtype=bool)
-        is_dup[..., 1:] = idx[..., 1:] == idx[..., :-1]
+        np.equal(idx[..., 1:], idx[..., :-1], out=is_dup[..., 1:])
         is_dup &= do[..., None]
-        if not is_dup.any():
+        # K extra-copy slots, as flat indices into (R, r, N) (C order: by row, then slot)
+        f = np.flatnonzero(is_dup)
+        if f.size == 0:
             return out, n_disc
-        # m-th extra copy (slot order) <-> m-th discarded particle (index order)
-        disc_order = np.argsort(counts > 0, axis=-1, kind="stable")               # discarded indices first
-        rank = np.cumsum(is_dup, axis=-1) - 1
-        A, J, Sl = np.nonzero(is_dup)                                             # K extra-copy slots
-        z_s = z[A, J, disc_order[A, J, rank[A, J, Sl]]]                           # (K, n)
-        new = np.zeros((A.size, n))
+        # m-th extra copy (slot order) <-> m-th discarded particle (index order): a row has as many
+        # extra copies as discarded particles, so the two flat C-order lists pair up one to one
+        is_disc &= do[..., None]
+        z_flat = z.reshape(-1, n)
+        z_s = np.take(z_flat, np.flatnonzero(is_disc), axis=0)                                 # (K, n)
+        row = f // N                                                              # flat (run, mode) row
+        A, J, Sl = row // r, row % r, f % N
+        idx_flat = idx.reshape(-1)
+        logstep_flat = logstep.reshape(-1)
+        other_flat = other_slots.reshape(-1)[f]
+        new = np.zeros((f.size, n))
         for i in range(r):
             # parent from mode i: the slot's own copy (i == j) or a uniformly drawn slot of mode i
-            slot = np.where(J == i, Sl, other_slots[A, J, Sl])
-            par = idx[A, i, slot]
-            z_a = z[A, i, par]
+            base = np.take(rowbase[:, i], A)
+            slot = np.where(J == i, Sl, other_flat)
+            par = np.take(idx_flat, base + slot) + base                                   # flat index of x_a^i
+            z_a = np.take(z_flat, par, axis=0)
             dv = z_s - z_a
             dist = np.sqrt(np.einsum("ki,ki->k", dv, dv))
             # fraction of the way to x_s: d L / ||z_s - z_a||, capped at 1 (never past x_s)
             with np.errstate(divide="ignore", over="ignore"):
-                lam = np.exp(np.minimum(logstep[A, i, par] - np.log(dist), 0.0))
-            new += M[A, i, J][:, None] * (z_a + lam[:, None] * dv)               # (23)
-        out[A, J, Sl] = m[A] + np.einsum("kij,kj->ki", L[A], new)
+                lam = np.log(dist, out=dist)
+                np.subtract(np.take(logstep_flat, par), lam, out=lam)
+                np.minimum(lam, 0.0, out=lam)
+                np.exp(lam, out=lam)
+            dv *= lam[:, None]                                                    # (23): in place,
+            dv += z_a                                                             # M (z_a + lam dv)
+            dv *= np.take(M.reshape(-1), (A * r + i) * r + J)[:, None]            # mu_{i|j}
+            new += dv
+        _put_rows(out.reshape(-1, n), f, np.take(m, A, axis=0) + np.einsum("kij,kj->ki", np.take(L, A, axis=0), new))
         return out, n_disc
 
     def _resample(self, x, w, do, u_next, M_next, rng, k, cost):
@@ -458,9 +556,12 @@ class IMMPFOR(IMMParticleFilter):
         rs = take_runs(rng, sel)
         uu = rs.random((sel.size, r))
         other = rs.integers(0, N, size=(sel.size, r, N))
-        counts = systematic_counts(w[sel], uu, N)
+        ws = np.take(w, sel, axis=0)
+        below = _systematic_below(ws, uu, N)
+        counts = _counts_from_below(below)                                        # = systematic_counts(ws, uu, N)
+        idx = _indices_from_below(below, N)
         dsel = do[sel]
-        new, n_disc = self.replacement(x[sel], w[sel], u_next[sel], M_next[sel], counts, other, dsel)
+        new, n_disc = self.replacement(np.take(x, sel, axis=0), ws, u_next[sel], M_next[sel], counts, other, dsel, idx=idx)
         cost["density"][sel] += r * N
         x[sel] = new
         replaced[sel] = np.where(dsel, n_disc, 0)

@@ -16,14 +16,20 @@ from .base import StateSpaceModel
 __all__ = ["BearingsOnly", "wrap_angle"]
 
 
-def wrap_angle(a):
-    """Wrap angles to (-pi, pi]; angles already in (-pi, pi] are returned unchanged."""
-    a = np.asarray(a, dtype=float)
-    inside = (a > -np.pi) & (a <= np.pi)
-    # the common case (residuals of a tracking filter): no floating-point mod at all,
-    # which both saves its cost and keeps those angles exact
-    out = a.copy() if inside.all() else np.where(inside, a, np.pi - np.mod(np.pi - a, 2.0 * np.pi))
-    return out[()] if out.ndim == 0 else out
+def wrap_angle(a, out=None):
+    """Wrap angles to (-pi, pi]: ``pi - mod(pi - a, 2 pi)``.
+
+    For arrays, ``mod`` (the costly part) is skipped when every ``t = pi - a`` already lies in
+    [0, 2 pi), where ``mod(t, 2 pi) = t`` exactly: the result is bit-identical to the formula
+    (residuals of a tracking filter almost never need the wrap). ``out`` (arrays only): write
+    the result there (it may be ``a`` itself).
+    """
+    if np.ndim(a) == 0 and out is None:
+        return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+    t = np.subtract(np.pi, a, out=out)
+    if t.size and not (t.min() >= 0.0 and t.max() < 2.0 * np.pi):   # NaN fails the test too
+        np.mod(t, 2.0 * np.pi, out=t)
+    return np.subtract(np.pi, t, out=t)
 
 
 class BearingsOnly(StateSpaceModel):

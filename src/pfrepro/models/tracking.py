@@ -105,8 +105,13 @@ def coupled_ct_matrix(T: float, w: float):
 def radar_h(x):
     """[range, range rate, bearing] of states ``x`` (..., 6), radar at the origin."""
     px, vx, py, vy = x[..., 0], x[..., 1], x[..., 3], x[..., 4]
-    r = np.hypot(px, py)
-    return np.stack([r, (px * vx + py * vy) / r, np.arctan2(py, px)], axis=-1)
+    out = np.empty(x.shape[:-1] + (3,), dtype=x.dtype if x.dtype.kind == "f" else np.float64)
+    r = np.hypot(px, py, out=out[..., 0])
+    rdot = np.multiply(px, vx, out=out[..., 1])          # (px vx + py vy) / r, written in place
+    rdot += py * vy
+    rdot /= r
+    np.arctan2(py, px, out=out[..., 2])
+    return out
 
 
 def radar_jacobian(x):
@@ -186,7 +191,7 @@ class RadarTrackingModel(StateSpaceModel):
     def residual_y(self, y, y_pred):
         """y - y_pred with the bearing difference wrapped to (-pi, pi]."""
         d = y - y_pred
-        d[..., 2] = wrap_angle(d[..., 2])
+        wrap_angle(d[..., 2], out=d[..., 2])
         return d
 
 
