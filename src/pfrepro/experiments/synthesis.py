@@ -73,7 +73,8 @@ __all__ = ["PAPER", "RUNS", "SEEDS", "TIMING_REPEATS", "PF_N", "SCHEMES", "SCHEM
            "TIMING_STEPS", "COUNT_STEPS", "FLAT_FACTOR", "NOT_RUN", "BENCHMARKS", "Method", "Benchmark", "BenchResult",
            "build", "run_benchmark", "run_all", "efficient_frontier", "pf_at_cost", "equal_budget", "distance_table",
            "ranking", "verdicts", "frontier", "record_claims", "benchmarks_table", "bot_pcrb", "methods_table",
-           "ranking_compact", "paper_lines", "LW_N", "DPF_N", "PCRB_RUNS", "CLAIM_TEXT"]
+           "ranking_compact", "paper_lines", "LW_N", "DPF_N", "PCRB_RUNS", "CLAIM_TEXT", "ALL_BENCHMARKS", "build_imm",
+           "run_imm"]
 
 PAPER = "synthesis"
 RUNS = 100
