@@ -45,7 +45,8 @@ def frontier_figure(results: dict, axis: str = "count"):
     n = len(results)
     ncol = 3
     nrow = int(np.ceil(n / ncol))
-    fig, axes = new_figure(nrow, ncol, figsize=(7.5, 2.45 * nrow + 0.5), squeeze=False)
+    height = 2.45 * nrow + 1.1
+    fig, axes = new_figure(nrow, ncol, figsize=(7.5, height), squeeze=False)
     col = "evals/step" if axis == "count" else "ms/step"
     handles = {}
     for ax, (key, r) in zip(axes.ravel(), results.items()):
@@ -69,7 +70,10 @@ def frontier_figure(results: dict, axis: str = "count"):
         ax.tick_params(labelsize=7.5)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
-    fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=4, fontsize=7,
+    ncol_leg = 5
+    fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=ncol_leg, fontsize=7,
                frameon=False, bbox_to_anchor=(0.5, 0.0))
-    fig.tight_layout(rect=(0, 0.1 if nrow > 1 else 0.16, 1, 1))
+    # room below the panels for the legend's rows (about 0.17 in each) and the x labels
+    legend_rows = int(np.ceil(len(handles) / ncol_leg))
+    fig.tight_layout(rect=(0, min(0.45, (0.17 * legend_rows + 0.1) / height), 1, 1))
     return fig
