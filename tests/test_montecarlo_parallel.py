@@ -169,3 +169,30 @@ def test_weight_collapse_is_one_clear_warning_not_numpy_noise(make):
     coll = res.diagnostics["collapsed"]
     assert coll[1, 2] and coll[2, 3] and coll.sum() == 2 and res.diagnostics["n_collapsed"] == 2
     assert np.all(np.isfinite(res.x))
+
+
+def test_bootstrap_pf_run_blocks_change_no_number(monkeypatch):
+    """A batch larger than BLOCK_PARTICLES is filtered in blocks of runs (per-run streams): the
+    numbers, the diagnostics and the single collapse warning are those of one batched call."""
+    import warnings
+
+    from pfrepro.filters import particle
+
+    sim = UNG.simulate(15, 7, truth_streams(SEED, 7))
+    pf = BootstrapParticleFilter(UNG, 40, ess_threshold=0.5)
+    one = pf.filter(sim.y, filter_streams(SEED, "pf", 7))
+    monkeypatch.setattr(particle, "BLOCK_PARTICLES", 3 * 40)     # blocks of 3, 3 and 1 runs
+    blocked = pf.filter(sim.y, filter_streams(SEED, "pf", 7))
+    np.testing.assert_array_equal(blocked.x, one.x)
+    for key in ("ess", "resampled", "log_evidence", "collapsed"):
+        np.testing.assert_array_equal(blocked.diagnostics[key], one.diagnostics[key])
+    # an overflowing residual in runs of two different blocks: one warning for the call, with the total
+    y_bad = sim.y.copy()
+    y_bad[1, 2] = 1e200
+    y_bad[5, 4] = -1e200
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        res = pf.filter(y_bad, filter_streams(SEED, "pf", 7))
+    coll = [w for w in rec if issubclass(w.category, particle.WeightCollapseWarning)]
+    assert len(coll) == 1 and "2 of 105 run-steps" in str(coll[0].message)
+    assert res.diagnostics["n_collapsed"] == 2

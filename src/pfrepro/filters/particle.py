@@ -10,11 +10,18 @@ import warnings
 import numpy as np
 
 from ..validation import check_positive_int, check_probability
-from ..rng import take_runs
+from ..rng import RunStreams, take_runs
 from .base import Filter, FilterResult
 from .resampling import check_scheme, resampling_counts_function
 
-__all__ = ["BootstrapParticleFilter", "normalize_log_weights", "WeightCollapseWarning", "warn_collapse"]
+__all__ = ["BootstrapParticleFilter", "normalize_log_weights", "WeightCollapseWarning", "warn_collapse",
+           "BLOCK_PARTICLES"]
+
+#: the most particles (runs x N) one batched step moves at once: a larger batch drawing from
+#: per-run streams is filtered in blocks of whole runs, so that a step's arrays (a few MB) stay in
+#: cache -- at N = 10^5 ten runs in one block ran 8 % slower per run than one run alone. The
+#: blocks change no number (each run draws from its own stream).
+BLOCK_PARTICLES = 1 << 17
 
 
 def normalize_log_weights(logw):
@@ -123,6 +130,22 @@ class BootstrapParticleFilter(Filter):
 
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
         y = self._prepare(y, rng)
+        runs = y.shape[0]
+        per_block = max(1, BLOCK_PARTICLES // self.n_particles)
+        if runs <= per_block or not isinstance(rng, RunStreams):
+            # one shared Generator: blocks would change the draws, so one batched call
+            return self._filter_runs(y, rng)
+        from ..montecarlo import _concat
+
+        parts = [self._filter_runs(y[s:s + per_block], rng.subset(np.arange(s, min(s + per_block, runs))),
+                                   warn=False) for s in range(0, runs, per_block)]
+        res = _concat(parts)
+        if res.diagnostics["n_collapsed"]:
+            warn_collapse(self.name, res.diagnostics["n_collapsed"], runs, y.shape[1])
+        return res
+
+    def _filter_runs(self, y, rng, warn: bool = True) -> FilterResult:
+        """The filter on the runs of ``y`` in one batched call (``warn``: report weight collapse)."""
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
         model, scheme, log_n = self.model, self.resampling, np.log(N)
@@ -188,7 +211,7 @@ class BootstrapParticleFilter(Filter):
             raise FilterDivergenceError(f"PF particles became non-finite at step {k_bad} "
                                         f"in runs {np.flatnonzero(bad[:, k_bad - 1])[:10].tolist()}")
         n_collapsed = int(collapsed.sum())
-        if n_collapsed:
+        if n_collapsed and warn:
             warn_collapse(self.name, n_collapsed, runs, T)
         log_evidence = log_sums.sum(axis=1)
         return FilterResult(xs, Ps, diagnostics={
