@@ -112,6 +112,9 @@ class BootstrapParticleFilter(Filter):
 
     Notes
     -----
+    A batch of more than ``BLOCK_PARTICLES`` particles (runs x N) drawing from per-run
+    streams (:class:`pfrepro.rng.RunStreams`) is filtered in blocks of whole runs, which keeps
+    each step's arrays in cache and changes no number.
     Diagnostics: ``ess`` (runs, T) before resampling, ``resampled`` (runs, T),
     ``log_evidence`` (runs,) — the estimate of log p(y_1:T) — and
     ``collapsed`` (runs, T): steps where every weight underflowed.
@@ -138,14 +141,15 @@ class BootstrapParticleFilter(Filter):
         from ..montecarlo import _concat
 
         parts = [self._filter_runs(y[s:s + per_block], rng.subset(np.arange(s, min(s + per_block, runs))),
-                                   warn=False) for s in range(0, runs, per_block)]
+                                   warn=False, first_run=s) for s in range(0, runs, per_block)]
         res = _concat(parts)
         if res.diagnostics["n_collapsed"]:
             warn_collapse(self.name, res.diagnostics["n_collapsed"], runs, y.shape[1])
         return res
 
-    def _filter_runs(self, y, rng, warn: bool = True) -> FilterResult:
-        """The filter on the runs of ``y`` in one batched call (``warn``: report weight collapse)."""
+    def _filter_runs(self, y, rng, warn: bool = True, first_run: int = 0) -> FilterResult:
+        """The filter on the runs of ``y`` in one batched call (``warn``: report weight collapse;
+        ``first_run``: the number of run 0 of this block, for error messages)."""
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
         model, scheme, log_n = self.model, self.resampling, np.log(N)
@@ -209,7 +213,7 @@ class BootstrapParticleFilter(Filter):
 
             k_bad = int(np.flatnonzero(bad.any(axis=0))[0]) + 1
             raise FilterDivergenceError(f"PF particles became non-finite at step {k_bad} "
-                                        f"in runs {np.flatnonzero(bad[:, k_bad - 1])[:10].tolist()}")
+                                        f"in runs {(first_run + np.flatnonzero(bad[:, k_bad - 1]))[:10].tolist()}")
         n_collapsed = int(collapsed.sum())
         if n_collapsed and warn:
             warn_collapse(self.name, n_collapsed, runs, T)
