@@ -102,7 +102,7 @@ def test_serial_process_pool_and_dask_cluster_are_bit_identical():
         np.testing.assert_array_equal(got[0], ref[0])
         np.testing.assert_array_equal(got[1]["ll"], ref[1]["ll"])
     distributed = pytest.importorskip("distributed")
-    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None,
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0",
                                   silence_logs=50) as cluster, distributed.Client(cluster) as client:
         ex = client.get_executor()
         _same(serial, _mc(ex))
