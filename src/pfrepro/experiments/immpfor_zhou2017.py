@@ -36,7 +36,7 @@ _ENGINE_EXECUTOR = "executor" in _inspect.signature(run_monte_carlo).parameters
 __all__ = ["PAPER", "SCENARIO", "ALTERNATIVES", "SEEDS", "scenario", "truth_system", "filter_system",
            "schedule", "simulate", "immpf", "immpfor", "imm_ekf", "imm_ukf", "run", "Run", "errors",
            "table1", "rmse_curves", "bootstrap_table", "paired", "equal_compute_N", "mode_timeline",
-           "lost_tracks", "SYNTHESIS_FILTERS", "synthesis_record", "synthesis_record_path",
+           "lost_tracks", "PF_BUILDERS", "MAIN_BUILDERS", "equal_compute_name", "fig5_builders", "SYNTHESIS_FILTERS", "synthesis_record", "synthesis_record_path",
            "save_synthesis_record", "load_synthesis_record", "run_synthesis_record"]
 
 #: key of this paper in ``pfrepro.published`` and the claims registry
@@ -161,6 +161,27 @@ def imm_ukf(sc=None) -> IMMKalman:
     # kappa = 3 - n (Julier's rule) would be negative for n = 6; alpha = 1, beta = 2, kappa = 0
     return IMMKalman(fs, [UnscentedKalmanFilter(m, alpha=1.0, beta=2.0, kappa=0.0) for m in fs.models],
                      name="IMM-UKF")
+
+
+# -- the chapter's experiments, as builders for :func:`run` (name -> (builder, keywords)) ----------
+#: the two particle filters the paper compares
+PF_BUILDERS = {"IMMPF": ("immpf", {}), "IMMPFOR": ("immpfor", {})}
+#: the paper-scale runs of Table 1 and Figs. 1-4: the two particle filters and the IMM-EKF/UKF
+MAIN_BUILDERS = {**PF_BUILDERS, "IMM-EKF": ("imm_ekf", {}), "IMM-UKF": ("imm_ukf", {})}
+
+
+def equal_compute_name(N_eq: int) -> str:
+    """Name of the IMMPF with IMMPFOR's cost (:func:`equal_compute_N`) in :func:`fig5_builders`."""
+    return f"IMMPF (N = {N_eq})"
+
+
+def fig5_builders(N_eq: int | None = None) -> dict:
+    """Fig. 5's two particle filters at ``N_fig5`` per mode and, given ``N_eq``, the IMMPF with
+    IMMPFOR(N)'s cost (named :func:`equal_compute_name`)."""
+    out = {name: (fn, {**kw, "N": SCENARIO["N_fig5"]}) for name, (fn, kw) in PF_BUILDERS.items()}
+    if N_eq is not None:
+        out[equal_compute_name(N_eq)] = ("immpf", {"N": N_eq})
+    return out
 
 
 @dataclass
@@ -338,7 +359,7 @@ def synthesis_record(main: Run, fig5: Run, N_eq: int) -> dict:
     if not np.array_equal(main.sim.y, fig5.sim.y):
         raise ValueError("main and fig5 must be runs on the same truths")
     res = {"IMMPF(500)": main.results["IMMPF"], "IMMPFOR(500)": main.results["IMMPFOR"],
-           "IMMPF(N_eq)": fig5.results[f"IMMPF (N = {N_eq})"], "IMM-EKF": main.results["IMM-EKF"],
+           "IMMPF(N_eq)": fig5.results[equal_compute_name(N_eq)], "IMM-EKF": main.results["IMM-EKF"],
            "IMM-UKF": main.results["IMM-UKF"], "IMMPF(2000)": fig5.results["IMMPF"]}
     T, r = main.sim.y.shape[1], len(filter_system().models)
     N = {"IMMPF(500)": SCENARIO["N"], "IMMPFOR(500)": SCENARIO["N"], "IMMPF(N_eq)": N_eq,
@@ -391,9 +412,8 @@ def load_synthesis_record(path=None, runs: int | None = None) -> dict | None:
 def run_synthesis_record(runs: int | None = None, executor=None) -> dict:
     """Run what :func:`synthesis_record` needs, as this chapter does (same seeds, same truths):
     the fallback of the synthesis chapter when it runs without this chapter before it."""
-    main = run({"IMMPF": ("immpf", {}), "IMMPFOR": ("immpfor", {}), "IMM-EKF": ("imm_ekf", {}),
-                "IMM-UKF": ("imm_ukf", {})}, runs=runs, executor=executor)
+    main = run(MAIN_BUILDERS, runs=runs, executor=executor)
     N_eq = equal_compute_N(main.results["IMMPFOR"], SCENARIO["N"])
-    fig5 = run({"IMMPF": ("immpf", {"N": SCENARIO["N_fig5"]}), f"IMMPF (N = {N_eq})": ("immpf", {"N": N_eq})},
-               runs=runs, executor=executor)
+    # Fig. 5's filters except IMMPFOR(N_fig5), which the record does not use
+    fig5 = run({k: v for k, v in fig5_builders(N_eq).items() if k != "IMMPFOR"}, runs=runs, executor=executor)
     return synthesis_record(main, fig5, N_eq)

@@ -22,7 +22,7 @@ FIGURES = ("Fig. 1", "Fig. 2", "Fig. 3", "Fig. 4", "Fig. 5")
 #: experiments :func:`reproduce` runs (for a progress bar)
 N_STEPS = 3
 #: the two particle filters the paper compares (builders of :func:`pfrepro.experiments.immpfor_zhou2017.run`)
-PF_NAMES = {"IMMPF": ("immpf", {}), "IMMPFOR": ("immpfor", {})}
+PF_NAMES = E.PF_BUILDERS
 #: the Kalman references and the second reading of eq (15) shown in Table 1
 EXTRA_ROWS = ("IMMPF (mean lik.)", "IMMPFOR (mean lik.)", "IMM-EKF", "IMM-UKF")
 
@@ -135,16 +135,14 @@ def reproduce(runs: int | None = None, seed: int | None = None, executor=None, s
     n_lik = min(S["runs_lik"], n_runs)
     sd = E.SEEDS["main"] if seed is None else int(seed)
     step(f"Table 1, Figs. 1-4 ({n_runs} runs)")
-    main = E.run({**PF_NAMES, "IMM-EKF": ("imm_ekf", {}), "IMM-UKF": ("imm_ukf", {})}, runs=n_runs, seed=sd,
-                 executor=executor)
+    main = E.run(E.MAIN_BUILDERS, runs=n_runs, seed=sd, executor=executor)
     step(f"Table 1, mean model likelihood ({n_lik} runs)")
     lik = E.run({"IMMPF (mean lik.)": ("immpf", {"model_likelihood": "mean"}),
                  "IMMPFOR (mean lik.)": ("immpfor", {"model_likelihood": "mean"})}, runs=n_lik, seed=sd,
                 executor=executor)
     lik_pair = E.Run(lik.sim, {**lik.results, **main.head(n_lik).results}, lik.seed)
     step(f"Fig. 5, N = {S['N_fig5']} ({n_runs} runs)")
-    f5 = E.run({"IMMPF": ("immpf", {"N": S["N_fig5"]}), "IMMPFOR": ("immpfor", {"N": S["N_fig5"]})},
-               runs=n_runs, seed=sd, executor=executor)
+    f5 = E.run(E.fig5_builders(), runs=n_runs, seed=sd, executor=executor)
     tab1 = table1_frame(main, lik_pair)
     cells = []
     for n in PF_NAMES:
