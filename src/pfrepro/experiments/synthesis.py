@@ -205,12 +205,13 @@ def run_imm(runs: int = RUNS, *, executor=None, timing_repeats: int = TIMING_REP
     N_eq = int(rec["N_eq"])
     bench = build_imm(N_eq)
     names = _imm_names(N_eq)
+    record_key = {v: k for k, v in names.items()}
     err = pd.DataFrame({names[k]: rec[f"mse/{k}"] for k in IMM.SYNTHESIS_FILTERS})
     y1 = IMM.simulate(runs=1).y            # run 0 (per-run streams: the record's run 0)
     rows = {}
     steps = min(COUNT_STEPS, y1.shape[1])
     for m in bench.methods + [bench.reference]:
-        key = next(k for k, v in names.items() if v == m.name)
+        key = record_key[m.name]
         if f"cost/{key}" in rec:
             rows[m.name] = {"model evals / step": float(rec[f"cost/{key}"]), "likelihoods / step": np.nan}
         else:   # IMM-EKF/UKF: the model evaluations of its mode filters, one per mode, each step

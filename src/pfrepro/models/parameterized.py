@@ -68,13 +68,9 @@ class ParameterizedModel:
         self.bounds = (lo, hi)
         self.has_process_noise = bool(np.any(self.Q != 0.0))
 
-    @property
-    def Q(self) -> np.ndarray:
-        return self.process_noise.cov
-
-    @property
-    def R(self) -> np.ndarray:
-        return self.measurement_noise.cov
+    # the same covariances a Gaussian filter is given as StateSpaceModel's (set by init_noise_and_prior)
+    Q = StateSpaceModel.Q
+    R = StateSpaceModel.R
 
     # -- to be implemented ------------------------------------------------------------
     def f(self, x, k, theta):
