@@ -166,7 +166,7 @@ def imm_ukf(sc=None) -> IMMKalman:
 # -- the chapter's experiments, as builders for :func:`run` (name -> (builder, keywords)) ----------
 #: the two particle filters the paper compares
 PF_BUILDERS = {"IMMPF": ("immpf", {}), "IMMPFOR": ("immpfor", {})}
-#: the paper-scale runs of Table 1 and Figs. 1-4: the two particle filters and the IMM-EKF/UKF
+#: the two particle filters and the IMM-EKF/UKF, for the paper-scale runs of Table 1 and Figs. 1-4
 MAIN_BUILDERS = {**PF_BUILDERS, "IMM-EKF": ("imm_ekf", {}), "IMM-UKF": ("imm_ukf", {})}
 
 
