@@ -41,7 +41,14 @@ and ``None`` (the count does not decide) gives ``inconclusive``.
 A conclusion that depends on an ambiguous reading of the paper passes ``readings``,
 a mapping from each admissible reading to whether the statement holds under it
 (True / False / None); the claim holds if it holds under every reading, fails if it
-fails under every reading, and is ``inconclusive`` otherwise.
+fails under every reading, and is ``inconclusive`` otherwise. A published *number*
+judged under several readings passes ``reading_values`` (reading -> ``(ours, se)``
+under it, besides the main reading's ``reproduced``/``se``): it is ``reproduced`` only
+if it is matched under every reading, and ``inconclusive`` if some readings match it
+and others do not. Which free choices a claim rests on is declared in ``depends_on``
+and checked against the chapter's assumptions table (:mod:`pfrepro.choices`). An
+absolute number that the paper's unpublished settings decide passes
+``not_checkable="<why>"``: its verdict is ``not checkable`` whatever the numbers.
 
 :func:`claims_table` turns a chapter's claims (or the scorecard's) into the compact
 table every page shows: the claim, ours ± SE, published (± its SE), the verdict and
@@ -64,7 +71,7 @@ import pandas as pd
 
 __all__ = ["Claim", "ClaimsRegistry", "verdict", "VERDICTS", "claims_dir", "load_all_claims",
            "DEFAULT_REL_TOL", "Z_CRIT", "paired_difference", "ordering_holds", "weakest_ordering",
-           "readings_hold", "claims_table", "BASES"]
+           "readings_hold", "claims_table", "BASES", "number_matches", "check_saved_claims"]
 
 VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive")
 #: relative tolerance for numeric claims when none is stated
@@ -142,44 +149,77 @@ def readings_hold(readings):
     return None
 
 
+def number_matches(published, reproduced, se=None, published_se=None, rel_tol=DEFAULT_REL_TOL) -> bool:
+    """Is the published number matched by ours: inside ``Z_CRIT`` combined standard errors
+    (``|ours - published| <= Z_CRIT * sqrt(se**2 + published_se**2)``) or within ``rel_tol``
+    of the published value (``rel_tol=None``: exact agreement only)."""
+    diff = abs(reproduced - published)
+    ses = [s for s in (se, published_se) if _isnum(s) and s > 0]
+    total_se = math.sqrt(sum(s * s for s in ses)) if ses else 0.0
+    inside = total_se > 0 and diff <= Z_CRIT * total_se
+    return bool(inside or diff <= (rel_tol or 0.0) * abs(published))
+
+
+def _reading_pair(v):
+    """``(value, se)`` from a reading_values entry: a number, or a pair (value, se)."""
+    if _isnum(v):
+        return float(v), None
+    try:
+        value, se = v
+    except (TypeError, ValueError):
+        raise ValueError(f"reading_values entries must be a number or a pair (value, se), got {v!r}") from None
+    return value, se
+
+
 def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, qualitative=None,
-            diff=None, diff_se=None, published_se=None, basis="", readings=None) -> str:
+            diff=None, diff_se=None, published_se=None, basis="", readings=None,
+            reading_values=None, not_checkable="") -> str:
     """The verdict rule (see module docstring). All inputs are numbers or None/bool.
 
     ``diff``/``diff_se`` (an ordering decided on paired differences) or ``readings``
-    (a mapping reading -> holds) take the place of ``qualitative`` when given; an
+    (a mapping reading -> holds; with a ``diff`` beside them the readings decide and the
+    diff is the main reading's, for display) take the place of ``qualitative`` when given; an
     undecided ordering or disagreeing readings give ``inconclusive`` unless the
     published number itself is matched. ``published_se`` (the paper's own standard
     error) widens the interval: inside iff
     ``|reproduced - published| <= Z_CRIT * sqrt(se**2 + published_se**2)``.
     ``basis="count"``: a cost claim decided by ``qualitative`` alone (the count's answer);
-    ``None`` gives ``inconclusive``.
+    ``None`` gives ``inconclusive``. ``reading_values`` (reading -> ``(ours, se)``): the
+    published number must be matched under the main reading and every other one
+    (mixed: ``inconclusive``). ``not_checkable`` (a reason): ``not checkable``.
     """
+    if not_checkable:
+        return "not checkable"
     basis = basis or ""
     if basis not in BASES:
         raise ValueError(f"basis must be one of {BASES}, got {basis!r}")
     undecided = False
-    given = sum(x is not None for x in (qualitative, readings)) + (diff is not None or diff_se is not None)
-    if given > 1:
+    has_diff = diff is not None or diff_se is not None
+    if qualitative is not None and (has_diff or readings is not None):
         raise ValueError("give either qualitative or diff/diff_se or readings, not more than one")
-    if diff is not None or diff_se is not None:
-        qualitative = ordering_holds(diff, diff_se)
-        undecided = qualitative is None
-    elif readings is not None:
+    if readings is not None:
+        # the readings decide (the main reading is one of them); a diff given beside them
+        # is the main reading's paired difference, shown but not deciding on its own
         qualitative = readings_hold(readings)
+        undecided = qualitative is None
+    elif has_diff:
+        qualitative = ordering_holds(diff, diff_se)
         undecided = qualitative is None
     if basis == "count":
         if qualitative is None:
             return "inconclusive"
         return "reproduced" if bool(qualitative) else "not reproduced"
+    if reading_values and not (_isnum(published) and _isnum(reproduced)):
+        raise ValueError("reading_values judge a published number: give published and reproduced too")
     if _isnum(published) and _isnum(reproduced):
-        diff = abs(reproduced - published)
-        ses = [s for s in (se, published_se) if _isnum(s) and s > 0]
-        total_se = math.sqrt(sum(s * s for s in ses)) if ses else 0.0
-        inside = total_se > 0 and diff <= Z_CRIT * total_se
-        close = diff <= (rel_tol or 0.0) * abs(published)  # rel_tol None: exact agreement only
-        if inside or close:
+        matched = [number_matches(published, reproduced, se, published_se, rel_tol)]
+        for v in (reading_values or {}).values():
+            value, value_se = _reading_pair(v)
+            matched.append(_isnum(value) and number_matches(published, value, value_se, published_se, rel_tol))
+        if all(matched):
             return "reproduced"
+        if any(matched):
+            return "inconclusive"  # the readings disagree about the number
         if qualitative is not None and bool(qualitative):  # also numpy.bool_(True)
             return "qualitatively reproduced"
         return "inconclusive" if undecided else "not reproduced"
@@ -209,22 +249,31 @@ class Claim:
     published_se: float | None = None  # the paper's own standard error (printed spread / per-run rows)
     basis: str = ""               # "count": a cost claim decided on a deterministic cost count
     readings: dict | None = None  # reading of the paper -> does the statement hold under it
+    reading_values: dict | None = None  # reading -> [ours, se] of a published number under it
+    depends_on: list | None = None      # free choices (pfrepro.choices) the verdict rests on
+    not_checkable: str = ""             # why the paper's unpublished settings decide this number
 
     @property
     def verdict(self) -> str:
         """The verdict, recomputed from the stored numbers by :func:`verdict` (never stored as text)."""
         return verdict(self.published, self.reproduced, self.se, self.rel_tol, self.qualitative,
-                       self.diff, self.diff_se, self.published_se, self.basis, self.readings)
+                       self.diff, self.diff_se, self.published_se, self.basis, self.readings,
+                       self.reading_values, self.not_checkable)
 
     def test_text(self) -> str:
         """The rule that decided this claim, in a few words (for the verdict tables)."""
         parts = []
+        if self.not_checkable:
+            parts.append(f"not checkable: {self.not_checkable}")
         if self.basis == "count":
             parts.append("cost count (load-independent); published/measured time: context")
         elif _isnum(self.published) and _isnum(self.reproduced):
             se_txt = "√(se²+se_pub²)" if _isnum(self.published_se) else "se"
             tol = f" or ≤ {self.rel_tol:.0%}" if self.rel_tol else ""
             parts.append(f"|ours − pub| ≤ {Z_CRIT:g}·{se_txt}{tol}")
+        if self.reading_values:
+            parts.append("under other readings: " + "; ".join(
+                f"{k}: {_pm(*_reading_pair(v))}" for k, v in self.reading_values.items()))
         if self.diff is not None:
             z = _z(self.diff, self.diff_se)
             parts.append(f"paired diff {_fmt(self.diff)} ± {_fmt(self.diff_se)} (z = {z:.1f}; decided at |z| > {Z_CRIT:g})")
@@ -334,13 +383,19 @@ def _clean(v):
 class ClaimsRegistry:
     """Collects a chapter's claims and saves them for the scorecard."""
 
-    def __init__(self, paper: str):
+    def __init__(self, paper: str, choices=None):
+        """``choices``: the chapter's free choices (:class:`pfrepro.choices.FreeChoice` rows),
+        against which every claim's ``depends_on`` is checked."""
+        from . import choices as _choices
+
         self.paper = paper
+        self.choices = _choices.as_choice_map(choices)
         self.claims: list[Claim] = []
 
     def add(self, claim_id: str, text: str, *, published=None, reproduced=None, se=None,
             rel_tol=DEFAULT_REL_TOL, qualitative=None, source="", note="", diff=None,
-            diff_se=None, published_se=None, basis="", readings=None) -> Claim:
+            diff_se=None, published_se=None, basis="", readings=None, reading_values=None,
+            depends_on=None, not_checkable="") -> Claim:
         """Record one claim of the paper and check now that its verdict can be computed.
 
         Parameters
@@ -368,6 +423,19 @@ class ClaimsRegistry:
             ``"count"``: a cost claim decided on a deterministic cost count.
         readings : dict, optional
             Reading of the paper -> whether the statement holds under it (bool or None).
+            Names of readings of a free choice are tagged ``"<choice>=<value>"``
+            (:func:`pfrepro.choices.over`).
+        reading_values : dict, optional
+            Reading -> ``(ours, se)`` of the published number under that reading (besides
+            ``reproduced``/``se`` under the main one); matched under some but not all:
+            ``inconclusive``.
+        depends_on : sequence of str, optional
+            The free choices of the chapter's assumptions table the verdict rests on;
+            each one not fixed by the paper must be covered by tagged readings
+            (:func:`pfrepro.choices.check_claim`, ``FreeChoiceError`` otherwise).
+        not_checkable : str, optional
+            Why the number is decided by the paper's unpublished settings; the verdict is
+            then ``not checkable``.
 
         Returns
         -------
@@ -380,9 +448,17 @@ class ClaimsRegistry:
             qualitative = bool(qualitative)
         if readings is not None:
             readings = {str(k): (None if v is None else bool(v)) for k, v in dict(readings).items()}
+        if reading_values is not None:
+            reading_values = {str(k): [_clean(x) for x in _reading_pair(v)]
+                              for k, v in dict(reading_values).items()}
+        if depends_on is not None:
+            depends_on = [depends_on] if isinstance(depends_on, str) else [str(d) for d in depends_on]
+        from .choices import check_claim
+
+        check_claim(claim_id, depends_on, readings, reading_values, self.choices)
         c = Claim(self.paper, claim_id, text, _clean(published), _clean(reproduced), _clean(se),
                   _clean(rel_tol), qualitative, source, note, _clean(diff), _clean(diff_se),
-                  _clean(published_se), basis, readings)
+                  _clean(published_se), basis, readings, reading_values, depends_on, str(not_checkable or ""))
         c.verdict  # validate now (e.g. both qualitative and diff given), not at the scorecard
         self.claims.append(c)
         return c
@@ -412,6 +488,9 @@ class ClaimsRegistry:
         d.mkdir(parents=True, exist_ok=True)
         path = d / f"{self.paper}.json"
         path.write_text(json.dumps([c.as_row() for c in self.claims], indent=1), encoding="utf-8")
+        from .choices import save_choices
+
+        save_choices(self.paper, self.choices.values(), d)
         return path
 
 
@@ -425,3 +504,21 @@ def load_all_claims(directory: Path | None = None) -> pd.DataFrame:
             rows.append(Claim(**row).as_row())
     cols = list(Claim.__dataclass_fields__) + ["verdict"]
     return pd.DataFrame(rows, columns=cols)
+
+
+def check_saved_claims(directory: Path | None = None) -> int:
+    """Check every saved claim's free-choice dependencies against its chapter's saved
+    assumptions (:func:`pfrepro.choices.check_claim`); returns the number of claims
+    checked, raises :class:`pfrepro.choices.FreeChoiceError` on the first uncovered one."""
+    from .choices import check_claim, load_choices
+
+    d = Path(directory) if directory is not None else claims_dir()
+    n = 0
+    for path in sorted(d.glob("*.json")):
+        paper = path.stem
+        choices = load_choices(paper, d)
+        for row in json.loads(path.read_text(encoding="utf-8")):
+            check_claim(f"{paper}:{row['claim_id']}", row.get("depends_on"), row.get("readings"),
+                        row.get("reading_values"), choices)
+            n += 1
+    return n
