@@ -161,3 +161,75 @@ def test_cost_ratios_need_the_ekf():
         ex.cost_ratios(1, sim, include=("PF",), repeats=1)
     with pytest.raises(ValueError, match="exact"):
         ex.rmse_and_cost_vs_n(1, sim, 5, n_values=(10,), exact=np.ones(3), repeats=1)
+
+
+# ------------------------------------------------------------------ free choices, readings, SIS ---
+def test_choices_rows():
+    from pfrepro.choices import FIXED, READING, SWEEP, choices_table
+
+    by = {c.name: c for c in ex.CHOICES}
+    assert by["P0"].status == SWEEP and by["resampling"].status == SWEEP
+    assert by["statistic"].status == READING and by["statistic"].value in ex.STATISTICS
+    assert by["few"].status == READING and by["ekf_linearisation"].status == FIXED
+    assert len(choices_table(ex.CHOICES)) == len(ex.CHOICES)
+
+
+def test_statistic_readings_and_jackknife():
+    res = ex.run(1, 8, 3, ("EKF", "PF"), n_particles=100)
+    e = np.sqrt(((res.results["PF"].x - res.x_true) ** 2)[..., 0].mean(axis=1))
+    v, se = ex.statistic_reading(res, "PF", "mean_run_rmse")
+    assert v == pytest.approx(e.mean()) and se == pytest.approx(e.std(ddof=1) / np.sqrt(8))
+    # the jackknife of a mean is the usual standard error
+    e2 = ((res.results["PF"].x - res.x_true) ** 2)[..., 0]
+    assert ex._jackknife_se([e2], lambda a: np.sqrt(a.mean(axis=1)).mean()) == pytest.approx(se)
+    st = ex.statistic_readings(res, ["EKF", "PF"])
+    for s_ in ex.STATISTICS:
+        v, se = ex.statistic_reading(res, "EKF", s_)
+        assert v == pytest.approx(st.loc["EKF", s_]) and se > 0
+        r, r_se = ex.ratio_reading(res, "EKF", "PF", s_)
+        assert r == pytest.approx(st.loc["EKF", s_] / st.loc["PF", s_]) and r_se > 0
+    with pytest.raises(ValueError):
+        ex.statistic_reading(res, "PF", "median")
+
+
+def test_ratio_claims_test_the_papers_words():
+    assert ex.RATIO_STRONG_MIN == 7.0  # "more than 7 times" (sec 2)
+    assert ex.ratio_claim_holds(1, 4.2, 0.2) is False and ex.ratio_claim_holds(1, 7.7, 0.2) is True
+    assert ex.ratio_claim_holds(1, 7.1, 0.2) is None
+    assert ex.ratio_claim_holds(2, 1.11, 0.01) is True and ex.ratio_claim_holds(2, 1.5, 0.01) is False
+
+
+def test_sis_never_resamples_and_degenerates():
+    res = ex.run(1, 5, 4, ("SIS", "PF"), n_particles=300)
+    sis, pf = res.results["SIS"].diagnostics, res.results["PF"].diagnostics
+    assert not sis["resampled"].any() and pf["resampled"].all()
+    d = ex.degeneracy(res, n_particles=300)
+    t = d["ess_over_time"]
+    assert t.shape == (ex.T, 6) and t.index[0] == 1
+    assert np.all(t[("SIS", "median")] <= 1.0 + 1e-12) and np.all(t[("SIS", "q10")] <= t[("SIS", "q90")])
+    assert d["SIS"]["late"].shape == (5,) and np.all(d["SIS"]["late"] < d["PF"]["late"])
+    assert np.all(d["SIS"]["late"] >= 1.0 - 1e-9)  # ESS >= 1 always
+    with pytest.raises(ValueError, match="window"):
+        ex.late_ess(res, "SIS", window=(0, 10))
+
+
+def test_sensitivity_with_sis_columns():
+    sims = {w: ex.simulate(w, 4, 21) for w in (1, 2)}
+    sens = ex.sensitivity(sims, 21, P0_values=(2.0, 5.0), schemes=("multinomial",), sis_runs=3)
+    rows = sens[sens["setting"].isin(["P0", "resampling"])]
+    assert rows[["SIS_ess", "PF_ess", "ess_gain", "ess_gain_se"]].notna().all().all()
+    assert np.allclose(rows["ess_gain"], rows["PF_ess"] - rows["SIS_ess"])
+    assert np.all(sens["diff_se"] > 0)
+
+
+def test_ekf_seed_spread_small():
+    sp = ex.ekf_seed_spread(seeds=(1, 2), runs=3)
+    assert len(sp) == 2 * 2 * 2 and set(sp["filter"]) == {"EKF", "EKF-prev"}
+    one = sp[(sp["model"] == "Model 1") & (sp["seed"] == 2) & (sp["filter"] == "EKF")]["mean"].iloc[0]
+    sim = ex.simulate(1, 3, 2)
+    ekf = ex.make_filters(ex.make_model(1), ("EKF",))["EKF"]
+    assert one == pytest.approx(float(np.sqrt(((ekf.filter(sim.y).x - sim.x[:, 1:]) ** 2).mean(axis=(1, 2))).mean()))
+
+
+def test_table1_published_text_is_printed():
+    assert ex.published_text("EKF", 1) == "30.1709" and ex.published_text("PF", 2) == "1.0479"

@@ -252,6 +252,7 @@ class Claim:
     reading_values: dict | None = None  # reading -> [ours, se] of a published number under it
     depends_on: list | None = None      # free choices (pfrepro.choices) the verdict rests on
     not_checkable: str = ""             # why the paper's unpublished settings decide this number
+    published_text: str | None = None   # ``published`` exactly as the paper prints it (pfrepro.published.printed)
 
     @property
     def verdict(self) -> str:
@@ -317,6 +318,17 @@ def _pm(value, se) -> str:
     return f"{_fmt(value)} ± {_fmt(se, 2)}"
 
 
+def _published_cell(c: Claim) -> str:
+    """The claims table's ``published`` cell: the printed string when the claim carries one
+    (``published_text``, the paper's digits), else the number rounded by :func:`_pm`."""
+    text = c.published_text
+    if isinstance(text, str) and text:
+        if _isnum(c.published_se) and c.published_se > 0:
+            return f"{text} ± {_fmt(c.published_se, 2)}"
+        return text
+    return _pm(c.published, c.published_se)
+
+
 def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFrame:
     """The compact verdict table every chapter and the scorecard show.
 
@@ -353,7 +365,7 @@ def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFra
             row["paper"] = c.paper
         if ids:
             row["id"] = c.claim_id
-        row.update({"claim": c.text, "ours": ours, "published": _pm(c.published, c.published_se),
+        row.update({"claim": c.text, "ours": ours, "published": _published_cell(c),
                     "verdict": c.verdict, "test": c.test_text()})
         rows.append(row)
     cols = (["paper"] if paper else []) + (["id"] if ids else []) + ["claim", "ours", "published", "verdict", "test"]
@@ -395,7 +407,7 @@ class ClaimsRegistry:
     def add(self, claim_id: str, text: str, *, published=None, reproduced=None, se=None,
             rel_tol=DEFAULT_REL_TOL, qualitative=None, source="", note="", diff=None,
             diff_se=None, published_se=None, basis="", readings=None, reading_values=None,
-            depends_on=None, not_checkable="") -> Claim:
+            depends_on=None, not_checkable="", published_text=None) -> Claim:
         """Record one claim of the paper and check now that its verdict can be computed.
 
         Parameters
@@ -436,6 +448,10 @@ class ClaimsRegistry:
         not_checkable : str, optional
             Why the number is decided by the paper's unpublished settings; the verdict is
             then ``not checkable``.
+        published_text : str, optional
+            ``published`` exactly as the paper prints it (:func:`pfrepro.published.printed`),
+            shown by :func:`claims_table` instead of a rounded number; must parse to
+            ``published`` (``ValueError`` otherwise). Omitted: the table rounds the number.
 
         Returns
         -------
@@ -453,12 +469,23 @@ class ClaimsRegistry:
                               for k, v in dict(reading_values).items()}
         if depends_on is not None:
             depends_on = [depends_on] if isinstance(depends_on, str) else [str(d) for d in depends_on]
+        if published_text is not None:
+            published_text = str(published_text).strip()
+            try:
+                ok = _isnum(published) and abs(float(published_text) - float(published)) <= 1e-12 * max(
+                    1.0, abs(float(published)))
+            except ValueError:
+                ok = False
+            if not ok:
+                raise ValueError(f"claim {claim_id!r}: published_text {published_text!r} is not the "
+                                 f"printed form of published={published!r}")
         from .choices import check_claim
 
         check_claim(claim_id, depends_on, readings, reading_values, self.choices)
         c = Claim(self.paper, claim_id, text, _clean(published), _clean(reproduced), _clean(se),
                   _clean(rel_tol), qualitative, source, note, _clean(diff), _clean(diff_se),
-                  _clean(published_se), basis, readings, reading_values, depends_on, str(not_checkable or ""))
+                  _clean(published_se), basis, readings, reading_values, depends_on, str(not_checkable or ""),
+                  published_text or None)
         c.verdict  # validate now (e.g. both qualitative and diff given), not at the scorecard
         self.claims.append(c)
         return c

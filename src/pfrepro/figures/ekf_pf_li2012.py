@@ -11,7 +11,7 @@ from ..experiments import ekf_pf_li2012 as E
 from . import new_figure
 
 __all__ = ["one_run_panel", "per_time_panel", "figs_1_3", "figs_2_4", "fig1", "fig2", "fig3", "fig4",
-           "table1_plot", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
+           "table1_plot", "table1_shown", "ess_plot", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
 
 #: what :func:`reproduce` makes
 TABLES = ("Table 1",)
@@ -100,6 +100,19 @@ def fig4(figs: dict):
     return _single(4, figs)
 
 
+def table1_shown(t1):
+    """Table 1 as the chapter shows it: :func:`~pfrepro.experiments.ekf_pf_li2012.table1`'s frame
+    with the ``published`` column as the paper prints it (``30.1709``, :func:`pfrepro.published.formatter`),
+    our numbers as floats (rounded by the display)."""
+    from .. import published
+
+    fmt = published.formatter(E.PAPER, "Table 1")
+    show = t1.rename(columns={"published_minus_exact_in_se": "(published − exact)/se(exact)",
+                              "verdict": "verdict (main reading)"}).copy()
+    show["published"] = show["published"].map(fmt)
+    return show
+
+
 def table1_plot(t1):
     """Table 1 as a plot: ours (±2 se) beside the published values and the exact posterior's RMSE.
 
@@ -120,6 +133,29 @@ def table1_plot(t1):
         if w == 1:
             ax.set_yscale("log")
         ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def ess_plot(deg: dict, n_particles: int = E.N_PARTICLES):
+    """The degeneracy of sequential importance sampling (sec 1.3.2): ESS / N over time, median and
+    10-90 % band over the runs, for SIS (no resampling) and the PF (ESS of the weights before each
+    resampling), one panel per model. ``deg`` maps model -> :func:`~pfrepro.experiments.ekf_pf_li2012.degeneracy`."""
+    fig, axes = new_figure(1, len(deg), figsize=(11, 3.8), sharey=True)
+    axes = np.atleast_1d(axes)
+    for ax, (w, d) in zip(axes, deg.items()):
+        t = d["ess_over_time"]
+        for n, c, lab in (("PF", "C0", "PF, resampling every step"), ("SIS", "C3", "SIS, no resampling")):
+            ax.plot(t.index, t[(n, "median")], color=c, lw=2, label=f"{lab} (median)")
+            ax.fill_between(t.index, t[(n, "q10")], t[(n, "q90")], color=c, alpha=0.2, lw=0,
+                            label="10-90 % of runs")
+        ax.axhline(E.FEW_FRACTIONS[0], color="k", ls=":", lw=1, label=f"{E.FEW_FRACTIONS[0]:.0%} of N")
+        ax.set_yscale("log")
+        ax.set_ylim(0.5 / n_particles, 1.2)
+        ax.set_xlabel("time step k")
+        ax.set_title(f"{E.MODEL_LABELS[w]}, N = {n_particles}")
+    axes[0].set_ylabel("effective sample size / N")
+    axes[0].legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     return fig
 

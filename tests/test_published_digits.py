@@ -1,0 +1,138 @@
+"""Published numbers exactly as printed: the data files keep the paper's digits as text
+(``pfrepro.published.printed``), and every table of the book that shows a published cell shows
+that text, not a rounded float. To add a chapter, list its shown tables in ``SHOWN_TABLES`` and
+its paper in ``CLAIMS_WITH_PRINTED_DIGITS``."""
+import math
+from pathlib import Path
+
+import pytest
+
+from pfrepro import published
+from pfrepro.claims import ClaimsRegistry, claims_table, load_all_claims
+
+BOOK = Path(__file__).resolve().parents[1] / "book"
+
+
+# ------------------------------------------------------------------ the API ----------------------
+@pytest.fixture
+def fake_paper(tmp_path, monkeypatch):
+    d = tmp_path / "data" / "published"
+    d.mkdir(parents=True)
+    (d / "fake2001.csv").write_text(
+        "# comment\n"
+        "table,row,column,value,note\n"
+        "Table 1,PF,RMSE,4.6440,trailing zero printed\n"
+        "Table 1,EKF,RMSE,30.1709,\n"
+        "Table 1,UKF,RMSE, 2.50 ,blank around\n"
+        "Table 2,PF,RMSE,4.644,same value printed otherwise\n", encoding="utf-8")
+    monkeypatch.setitem(published.PAPERS, "fake2001", "a test paper")
+    monkeypatch.setattr(published.resources, "files", lambda pkg: tmp_path)
+    published.load.cache_clear(); published.load_printed.cache_clear()
+    yield "fake2001"
+    published.load.cache_clear(); published.load_printed.cache_clear()
+
+
+def test_printed_keeps_the_digits(fake_paper):
+    assert published.printed(fake_paper, "Table 1", "PF", "RMSE") == "4.6440"
+    assert published.printed(fake_paper, "Table 1", "UKF", "RMSE") == "2.50"
+    assert published.value(fake_paper, "Table 1", "PF", "RMSE") == 4.644
+    t = published.printed_table(fake_paper, "Table 1")
+    assert t.loc["EKF", "RMSE"] == "30.1709" and list(t.index) == ["PF", "EKF", "UKF"]
+    df = published.load(fake_paper)
+    assert df["value"].dtype == float and df["value"].tolist() == [4.644, 30.1709, 2.5, 4.644]
+    with pytest.raises(KeyError):
+        published.printed(fake_paper, "Table 1", "PF", "MSE")
+
+
+def test_formatter_maps_floats_back_to_printed_text(fake_paper):
+    fmt = published.formatter(fake_paper, "Table 1")
+    assert fmt(published.value(fake_paper, "Table 1", "PF", "RMSE")) == "4.6440"
+    assert fmt(30.1709) == "30.1709" and fmt(float("nan")) == "–" and fmt(None) == "–"
+    with pytest.raises(KeyError):
+        fmt(30.171)  # a rounded value is not a printed one
+    with pytest.raises(ValueError, match="printed as"):  # 4.644 printed two ways across tables
+        published.formatter(fake_paper)(4.644)
+    assert published.printed_for(fake_paper, 7.0) is None
+
+
+def test_bad_value_is_refused(tmp_path, monkeypatch):
+    d = tmp_path / "data" / "published"
+    d.mkdir(parents=True)
+    (d / "fake2002.csv").write_text("table,row,column,value,note\nTable 1,a,b,n/a,\n", encoding="utf-8")
+    monkeypatch.setitem(published.PAPERS, "fake2002", "x")
+    monkeypatch.setattr(published.resources, "files", lambda pkg: tmp_path)
+    published.load_printed.cache_clear()
+    try:
+        with pytest.raises(ValueError, match="not a number"):
+            published.load_printed("fake2002")
+    finally:
+        published.load_printed.cache_clear(); published.load.cache_clear()
+
+
+def test_claims_table_shows_printed_text():
+    reg = ClaimsRegistry("p")
+    reg.add("a", "x", published=30.1709, published_text="30.1709", reproduced=19.7, se=1.0)
+    reg.add("b", "y", published=4.644, published_text="4.6440", reproduced=4.6, se=0.1, published_se=0.123)
+    reg.add("c", "z", published=30.1709, reproduced=19.7, se=1.0)  # not given: rounded as before
+    t = claims_table(reg)
+    assert t["published"].tolist() == ["30.1709", "4.6440 ± 0.12", "30.2"]
+    with pytest.raises(ValueError, match="printed form"):
+        reg.add("d", "w", published=30.1709, published_text="30.171", reproduced=1.0, se=0.1)
+
+
+def test_printed_text_survives_save_and_load(tmp_path):
+    reg = ClaimsRegistry("p")
+    reg.add("a", "x", published=4.644, published_text="4.6440", reproduced=4.6, se=0.1)
+    reg.save(tmp_path)
+    assert claims_table(load_all_claims(tmp_path))["published"].tolist() == ["4.6440"]
+
+
+# ------------------------------------------------------------------ the chapters' tables ---------
+def _ekf_pf_table1():
+    from pfrepro.experiments import ekf_pf_li2012 as E
+    from pfrepro.figures import ekf_pf_li2012 as F
+
+    res = {w: E.run(w, 2, 7, ("EKF", "PF"), n_particles=50) for w in (1, 2)}
+    shown = F.table1_shown(E.table1(res))
+    return [(r["published"], r["filter"], r["model"]) for _, r in shown.iterrows()]
+
+
+#: paper -> [(published table id, builder)]: the builder makes the table as the chapter shows it
+#: (through the same package function) and returns (shown published cell, data row, data column)
+SHOWN_TABLES = {
+    "ekf_pf_li2012": [("Table 1", _ekf_pf_table1)],
+}
+#: papers whose chapters pass published_text= for every claim on a printed number
+CLAIMS_WITH_PRINTED_DIGITS = ["ekf_pf_li2012"]
+
+
+@pytest.mark.parametrize("paper,table_id,build",
+                         [(p, t, b) for p, tabs in SHOWN_TABLES.items() for t, b in tabs])
+def test_every_published_cell_shown_is_the_printed_one(paper, table_id, build):
+    cells = build()
+    shown = {(row, col): text for text, row, col in cells}
+    for (row, col), text in shown.items():
+        assert isinstance(text, str) and text == published.printed(paper, table_id, row, col), (row, col, text)
+    data = published.load_printed(paper)
+    data = data[data["table"] == table_id]
+    assert set(shown) == set(zip(data["row"], data["column"])), "every published cell of the table is shown"
+
+
+@pytest.mark.parametrize("paper", CLAIMS_WITH_PRINTED_DIGITS)
+def test_claims_of_the_last_build_show_printed_digits(paper):
+    """A claim whose published value is a cell of the data file shows that cell's printed text."""
+    path = BOOK / "_claims" / f"{paper}.json"
+    if not path.exists():
+        pytest.skip("no book build in this checkout")
+    claims = load_all_claims(BOOK / "_claims")
+    claims = claims[claims["paper"] == paper]
+    t = claims_table(claims)
+    n = 0
+    for pub, cell in zip(claims["published"], t["published"]):
+        if pub is None or (isinstance(pub, float) and math.isnan(pub)):
+            continue
+        text = published.printed_for(paper, pub)
+        if text is not None:
+            assert cell.split(" ± ")[0] == text, (pub, cell, text)
+            n += 1
+    assert n > 0
