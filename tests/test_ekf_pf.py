@@ -233,3 +233,21 @@ def test_ekf_seed_spread_small():
 
 def test_table1_published_text_is_printed():
     assert ex.published_text("EKF", 1) == "30.1709" and ex.published_text("PF", 2) == "1.0479"
+
+
+def test_new_figures_and_shown_table_small():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from pfrepro.figures import ekf_pf_li2012 as F
+
+    sims = {w: ex.simulate(w, 3, 8) for w in (1, 2)}
+    sens = ex.sensitivity(sims, 8, P0_values=(2.0,), schemes=("multinomial",), ekf_variants=("EKF",))
+    res = {w: ex.run(w, 3, 8, ("EKF", "PF", "SIS"), n_particles=60) for w in (1, 2)}
+    for fig in (F.sweep_plot(sens), F.ess_plot({w: ex.degeneracy(res[w], n_particles=60) for w in (1, 2)}, 60)):
+        assert len(fig.axes) == 2
+        plt.close(fig)
+    shown = F.table1_shown(ex.table1(res))
+    assert shown["published"].tolist() == ["30.1709", "3.9459", "1.1281", "1.0479"]

@@ -11,7 +11,7 @@ from ..experiments import ekf_pf_li2012 as E
 from . import new_figure
 
 __all__ = ["one_run_panel", "per_time_panel", "figs_1_3", "figs_2_4", "fig1", "fig2", "fig3", "fig4",
-           "table1_plot", "table1_shown", "ess_plot", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
+           "table1_plot", "table1_shown", "ess_plot", "sweep_plot", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
 
 #: what :func:`reproduce` makes
 TABLES = ("Table 1",)
@@ -155,7 +155,33 @@ def ess_plot(deg: dict, n_particles: int = E.N_PARTICLES):
         ax.set_xlabel("time step k")
         ax.set_title(f"{E.MODEL_LABELS[w]}, N = {n_particles}")
     axes[0].set_ylabel("effective sample size / N")
-    axes[0].legend(fontsize=7, loc="lower left")
+    axes[-1].legend(fontsize=7, loc="center right")
+    fig.tight_layout()
+    return fig
+
+
+def sweep_plot(sens):
+    """The swept free choices (prior variance P0, resampling scheme): the Table 1 EKF and PF means
+    (±2 se) and the exact posterior's under every swept value, with the published cells, one panel
+    per model. ``sens`` is :func:`~pfrepro.experiments.ekf_pf_li2012.sensitivity`'s frame."""
+    pub = E.published_table1()
+    fig, axes = new_figure(1, 2, figsize=(11, 3.8))
+    for ax, w in zip(axes, (1, 2)):
+        col = E.MODEL_LABELS[w]
+        sub = sens[(sens["model"] == col) & sens["setting"].isin(["P0", "resampling"])].reset_index(drop=True)
+        x = np.arange(len(sub))
+        labels = [f"P0={v:g}" if st == "P0" else str(v) for st, v in zip(sub["setting"], sub["value"])]
+        for name, c, dx in (("EKF", "C3", -0.12), ("PF", "C0", 0.12)):
+            ax.errorbar(x + dx, sub[name], 2 * sub[f"{name}_se"], fmt="o", color=c, capsize=3, label=f"{name} (±2 se)")
+            ax.axhline(float(pub.loc[name, col]), color=c, ls="--", lw=1, label=f"{name}, published")
+        ex = sub["exact"].to_numpy(float)
+        ax.plot(x[np.isfinite(ex)], ex[np.isfinite(ex)], "s", color="C2", ms=5, label="exact posterior")
+        ax.set_xticks(x, labels, rotation=45, fontsize=7)
+        ax.set_ylabel("mean per-run RMSE")
+        ax.set_title(col)
+        if w == 1:
+            ax.set_yscale("log")
+        ax.legend(fontsize=6, ncol=2)
     fig.tight_layout()
     return fig
 
