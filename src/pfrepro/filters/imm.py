@@ -55,8 +55,10 @@ def mixing_probabilities(mu, Pi):
     column mu (it carries no probability, the value only keeps the arithmetic finite).
     """
     mu = np.asarray(mu, float)
-    c = mu @ Pi
     num = Pi * mu[..., :, None]
+    # c = mu @ Pi, summed row by row: a (runs, r) @ (r, r) BLAS call picks its kernel by the
+    # number of runs (gemv for one, gemm for more), which changed the last bits with the batch
+    c = num.sum(axis=-2)
     with np.errstate(invalid="ignore", divide="ignore"):
         M = num / c[..., None, :]
     zero = c <= 0
