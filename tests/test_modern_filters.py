@@ -226,3 +226,52 @@ def test_jump_markov_pf_batch_identity_and_input_checks():
         JumpMarkovParticleFilter(small_model(), 10)
     with pytest.raises(ValueError, match="n_particles"):
         JumpMarkovParticleFilter(sysm, 0)
+
+
+# -- Gaussian-proposal PFs -----------------------------------------------------------------------
+def test_linearized_proposal_is_optimal_on_a_linear_model():
+    """Linear-Gaussian model: the weight increment is p(y_k | x_{k-1}) = N(y; H F x, H Q H^T + R)
+    whatever x_k is drawn (Doucet et al. 2000, the optimal proposal)."""
+    from pfrepro.filters.gaussian_proposal import GaussianProposalParticleFilter, _log_normal
+
+    model = small_model()
+    f = GaussianProposalParticleFilter(model, 5)
+    rng = np.random.default_rng(3)
+    x_prev = rng.normal(size=(2, 5, 2))
+    y = rng.normal(size=(2, 2))
+    mu = model.f(x_prev, 1)
+    mean, L = f.local_update(mu, y)
+    S = model.H @ model.Q @ model.H.T + model.R
+    expect = _log_normal(y[:, None, :], mu @ model.H.T, np.linalg.cholesky(S))
+    for _ in range(3):
+        x_new = mean + np.einsum("...ij,...j->...i", L, rng.normal(size=(2, 5, 2)))
+        assert np.allclose(f.log_weight_increment(x_new, mu, mean, L, y), expect, rtol=0, atol=1e-10)
+
+
+def test_unscented_proposal_equals_linearized_on_a_linear_model():
+    from pfrepro.filters.gaussian_proposal import GaussianProposalParticleFilter
+
+    model = small_model()
+    rng = np.random.default_rng(4)
+    mu, y = rng.normal(size=(2, 5, 2)), rng.normal(size=(2, 2))
+    a = GaussianProposalParticleFilter(model, 5).local_update(mu, y)
+    b = GaussianProposalParticleFilter(model, 5, proposal="unscented", alpha=0.5).local_update(mu, y)
+    assert np.allclose(a[0], b[0], atol=1e-10) and np.allclose(a[1], b[1], atol=1e-10)
+
+
+@pytest.mark.parametrize("proposal", ["linearized", "unscented"])
+def test_gaussian_proposal_pf_evidence_and_batch_identity(proposal):
+    from pfrepro.filters.gaussian_proposal import GaussianProposalParticleFilter
+
+    model = small_model()
+    runs = 1000
+    sim = model.simulate(6, runs, RunStreams.from_entropy(15, runs))
+    kf = KalmanFilter(model).filter(sim.y)
+    f = GaussianProposalParticleFilter(model, 20, proposal=proposal)
+    res = f.filter(sim.y, RunStreams.from_entropy(16, runs))
+    lr = res.diagnostics["log_evidence"] - kf.diagnostics["log_evidence"]
+    # optimal proposal + resampling every step: the estimate's log-ratio spread is small
+    assert abs(np.exp(lr).mean() - 1) < 4 * np.exp(lr).std(ddof=1) / np.sqrt(runs)
+    assert lr.mean() < 3 * lr.std(ddof=1) / np.sqrt(runs)
+    one = f.filter(sim.y[7:8], RunStreams.from_entropy(16, 1, start=7))
+    assert np.array_equal(res.x[7], one.x[0])
