@@ -173,7 +173,8 @@ class ParticleFlowParticleFilter(Filter):
             if ledh:
                 eta = eta + eps * (np.einsum("rnij,rnj->rni", A, eta) + b)
             else:
-                eta = eta + eps * (np.einsum("rij,rnj->rni", A, eta) + b[:, None, :])
+                # one (N, n) @ (n, n) product per run (same shapes in any batch: batch-independent bits)
+                eta = eta + eps * (eta @ _T(A) + b[:, None, :])
         return eta, (log_det if ledh else np.broadcast_to(log_det[:, None], (runs, N)))
 
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
