@@ -275,3 +275,43 @@ def test_gaussian_proposal_pf_evidence_and_batch_identity(proposal):
     assert lr.mean() < 3 * lr.std(ddof=1) / np.sqrt(runs)
     one = f.filter(sim.y[7:8], RunStreams.from_entropy(16, 1, start=7))
     assert np.array_equal(res.x[7], one.x[0])
+
+
+# -- SMC² ------------------------------------------------------------------------------------------
+def test_smc2_matches_the_exact_theta_posterior():
+    """Linear AR(1) with unknown θ: SMC²'s posterior mean and sd of θ against the exact grid
+    posterior (Kalman evidence per θ), and its evidence estimate against the grid's."""
+    from pfrepro.filters.smc2 import SMC2
+    from pfrepro.filters.theta_grid import ThetaGridReference
+    from pfrepro.models.linear_theta import LinearTheta
+
+    m = LinearTheta(theta_true=0.7, Q=1.0, R=1.0, c=1.0)
+    sim = m.simulate(40, 4, RunStreams.from_entropy(1, 4))
+    g = ThetaGridReference(m, n_theta=201, x_bounds=(-15, 25), n_grid=401).filter(sim.y)
+    s = SMC2(m, 200, 60).filter(sim.y, RunStreams.from_entropy(2, 4))
+    sd = np.sqrt(g.diagnostics["theta_var"][:, -1])
+    assert np.all(np.abs(s.diagnostics["theta"][:, -1] - g.diagnostics["theta"][:, -1]) < 0.5 * sd)
+    assert np.allclose(np.sqrt(s.diagnostics["theta_var"][:, -1]), sd, rtol=0.3)
+    # the grid's log p(y_1:T | θ) on its nodes, averaged over the uniform prior (trapezoid rule)
+    from scipy.special import logsumexp
+
+    wts = np.full(201, 1.0); wts[[0, -1]] = 0.5
+    log_z = logsumexp(g.diagnostics["log_evidence"][:, -1, :], b=wts / wts.sum(), axis=-1)
+    assert np.all(np.abs(s.diagnostics["log_evidence"] - log_z) < 0.5), (s.diagnostics["log_evidence"], log_z)
+    assert s.diagnostics["rejuvenated"].any() and np.nanmin(s.diagnostics["acceptance"]) > 0.1
+
+
+def test_smc2_batch_identity_and_checks():
+    from pfrepro.filters.smc2 import SMC2
+    from pfrepro.models.linear_theta import LinearTheta
+
+    m = LinearTheta(theta_true=0.7, c=1.0)
+    sim = m.simulate(15, 5, RunStreams.from_entropy(3, 5))
+    f = SMC2(m, 30, 20)
+    full = f.filter(sim.y, RunStreams.from_entropy(4, 5))
+    one = f.filter(sim.y[2:3], RunStreams.from_entropy(4, 1, start=2))
+    assert np.array_equal(full.diagnostics["theta"][2], one.diagnostics["theta"][0])
+    with pytest.raises(ValueError, match="n_theta"):
+        SMC2(m, 1, 20)
+    with pytest.raises(ValueError, match="rw_scale"):
+        SMC2(m, 10, 20, rw_scale=0.0)
