@@ -30,6 +30,7 @@ from .auxiliary import repeat_rows
 from .base import Filter, FilterResult
 from .particle import normalize_log_weights, warn_collapse
 from .resampling import check_scheme, resampling_counts_function
+from .small_linalg import inv_small
 
 __all__ = ["GaussianProposalParticleFilter", "PROPOSALS"]
 
@@ -135,7 +136,7 @@ class GaussianProposalParticleFilter(Filter):
             dx = sig - mu[..., None, :]
             S = np.einsum("s,...si,...sj->...ij", wc, dy, dy) + R
             Pxy = np.einsum("s,...si,...sj->...ij", wc, dx, dy)
-        K = _T(np.linalg.solve(S, _T(Pxy)))                           # (runs, N, n, m)
+        K = Pxy @ inv_small(S)                                        # (runs, N, n, m)
         mean = mu + _mv(K, model.residual_y(yb, y_hat))
         cov = Q - K @ S @ _T(K)
         cov = 0.5 * (cov + _T(cov))
@@ -162,8 +163,12 @@ class GaussianProposalParticleFilter(Filter):
             for k in range(1, T + 1):
                 mu = model.f(x, k)
                 mean, L = self.local_update(mu, y[:, k - 1])
-                x = mean + _mv(L, rng.standard_normal((runs, N, n)))
-                lw = self.log_weight_increment(x, mu, mean, L, y[:, k - 1])
+                z = rng.standard_normal((runs, N, n))
+                x = mean + _mv(L, z)
+                # log N(x; mean, L L^T) from the draw z itself (no per-particle solve)
+                log_q = (-0.5 * np.einsum("...i,...i->...", z, z)
+                         - np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1) - 0.5 * n * np.log(2 * np.pi))
+                lw = self.model.log_likelihood(y[:, k - 1], x) + _log_normal(x, mu, self._LQ) - log_q
                 w, log_inc[:, k - 1], collapsed[:, k - 1] = normalize_log_weights(logw + lw)
                 xs[:, k - 1] = np.einsum("rn,rni->ri", w, x)
                 e = 1.0 / np.einsum("rn,rn->r", w, w)

@@ -38,6 +38,7 @@ from .auxiliary import repeat_rows
 from .base import Filter, FilterResult
 from .particle import normalize_log_weights, warn_collapse
 from .resampling import check_scheme, resampling_counts_function
+from .small_linalg import det_small, inv_small
 
 __all__ = ["ParticleFlowParticleFilter", "edh_coefficients", "FLOWS"]
 
@@ -47,32 +48,6 @@ FLOWS = ("edh", "ledh")
 
 def _T(a):
     return np.swapaxes(a, -1, -2)
-
-
-def _inv(S):
-    """Inverse of a stack of small symmetric matrices: closed forms for 1 x 1 and 2 x 2 (LEDH
-    inverts one per particle per pseudo-time step, where LAPACK's per-matrix call overhead
-    dominates), LAPACK otherwise. Each matrix is inverted on its own (batch-independent)."""
-    m = S.shape[-1]
-    if m == 1:
-        return 1.0 / S
-    if m == 2:
-        a, b, c, d = S[..., 0, 0], S[..., 0, 1], S[..., 1, 0], S[..., 1, 1]
-        det = a * d - b * c
-        out = np.empty_like(S)
-        out[..., 0, 0], out[..., 0, 1], out[..., 1, 0], out[..., 1, 1] = d / det, -b / det, -c / det, a / det
-        return out
-    return np.linalg.inv(S)
-
-
-def _det(J):
-    """Determinant of a stack of small matrices (closed forms for 1 x 1 and 2 x 2)."""
-    n = J.shape[-1]
-    if n == 1:
-        return J[..., 0, 0]
-    if n == 2:
-        return J[..., 0, 0] * J[..., 1, 1] - J[..., 0, 1] * J[..., 1, 0]
-    return np.linalg.det(J)
 
 
 def edh_coefficients(P, H, R, innov, eta_bar0, lam, R_inv=None):
@@ -87,7 +62,7 @@ def edh_coefficients(P, H, R, innov, eta_bar0, lam, R_inv=None):
     """
     PHt = P @ _T(H)                                           # (..., n, m)
     S = lam * (H @ PHt) + R
-    G = PHt @ _inv(S)                                         # P H^T S^{-1}
+    G = PHt @ inv_small(S)                                         # P H^T S^{-1}
     A = -0.5 * G @ H
     n = A.shape[-1]
     I = np.eye(n)
@@ -168,7 +143,7 @@ class ParticleFlowParticleFilter(Filter):
             innov = model.residual_y(y[:, None] if ledh else y, model.h(eta_bar)) \
                 + np.einsum("...mn,...n->...m", H, eta_bar)
             A, b = edh_coefficients(Pb, H, R, innov, eta_bar0, lam, self._R_inv)
-            log_det += np.log(np.abs(_det(np.eye(n) + eps * A)))
+            log_det += np.log(np.abs(det_small(np.eye(n) + eps * A)))
             eta_bar = eta_bar + eps * (np.einsum("...ij,...j->...i", A, eta_bar) + b)
             if ledh:
                 eta = eta + eps * (np.einsum("rnij,rnj->rni", A, eta) + b)
