@@ -1,0 +1,218 @@
+"""Every filter of the package on its paper's model: wall time beside operation count.
+
+For each configuration it measures
+
+* ``single``: one run, seconds per time step (median of interleaved repeats), and
+* ``batched``: ``--runs`` runs in one call, seconds per time step per run,
+
+and divides by the particle count (ns per particle-step; the Kalman family per step), then
+sets the time beside the deterministic operation count of :func:`pfrepro.cost.count_model_calls`
+(model evaluations per step: transitions, likelihoods, f, h, Jacobians, flow moves). The
+*time/count ratio* of a filter is its single-run ns per model evaluation divided by the
+bootstrap PF's on the same model (1 = the filter's wall time is what its count predicts;
+> 2 = an outlier to profile or explain). A table goes to ``benchmarks/results/bench_all.md``
+and ``.csv`` with the machine's description and the date.
+
+Run from the repository root with the project's environment active::
+
+    python benchmarks/bench_all.py                 # all filters, a few minutes on 2 cores
+    python benchmarks/bench_all.py --quick         # fewer repeats and steps
+    python benchmarks/bench_all.py --only GPFF     # configurations whose name contains GPFF
+
+It is a script, not a test: the book does not rerun it (the filters chapter shows the saved
+CSV with its date and machine).
+"""
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import gc
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from pfrepro.cost import count_model_calls
+from pfrepro.montecarlo import filter_streams, truth_streams
+
+RESULTS = Path(__file__).resolve().parent / "results"
+
+
+# ----------------------------------------------------------------------------- configurations
+def configurations():
+    """(name, family, model_key, N or None, builder(model)) for every filter of the package."""
+    from pfrepro import filters as F
+    from pfrepro.filters.auxiliary import AuxiliaryParticleFilter
+    from pfrepro.filters.gaussian_proposal import GaussianProposalParticleFilter
+    from pfrepro.filters.jump_markov_pf import JumpMarkovParticleFilter
+    from pfrepro.filters.pfpf import ParticleFlowParticleFilter
+    from pfrepro.filters.regularized import RegularizedParticleFilter
+    from pfrepro.experiments import cmspf_ning2011 as CMS
+    from pfrepro.experiments import dpf_hou2008 as DPF
+    from pfrepro.experiments import immpfor_zhou2017 as IMM
+
+    c = []
+    add = lambda name, fam, key, N, build: c.append((name, fam, key, N, build))  # noqa: E731
+    # Kalman family (per step)
+    add("KF (CWPA)", "Kalman", "cwpa", None, lambda m: F.KalmanFilter(m))
+    add("EKF (BOT)", "Kalman", "bot", None, lambda m: F.ExtendedKalmanFilter(m))
+    add("UKF (BOT)", "Kalman", "bot", None, lambda m: F.UnscentedKalmanFilter(m))
+    add("IMM-EKF", "Kalman", "imm", None, lambda s: IMM.imm_ekf())
+    # bootstrap PF, every scheme (the reference of each model)
+    for scheme in ("systematic", "stratified", "multinomial", "residual"):
+        add(f"PF {scheme} (UNGM)", "PF", "ung", 1000, lambda m, s=scheme: F.BootstrapParticleFilter(m, 1000, resampling=s))
+    add("PF systematic (BOT)", "PF", "bot", 1000, lambda m: F.BootstrapParticleFilter(m, 1000))
+    add("PF systematic (UNGM Ning)", "PF", "ung_ning", 200, lambda m: F.BootstrapParticleFilter(m, 200))
+    # GPFF per field and integrator
+    for field in ("eq41", "eq43"):
+        for integ in ("euler", "midpoint", "rk4"):
+            add(f"GPFF {field} {integ} (UNGM)", "GPFF", "ung", 100,
+                lambda m, f=field, i=integ: F.GaussianParticleFlowFilter(m, 100, field=f, integrator=i,
+                                                                         on_divergence="drop"))
+    add("GPFF eq43 euler (BOT)", "GPFF", "bot", 100, lambda m: F.GaussianParticleFlowFilter(m, 100, on_divergence="drop"))
+    add("GPFF(1000) eq43 euler (UNGM)", "GPFF", "ung", 1000,
+        lambda m: F.GaussianParticleFlowFilter(m, 1000, on_divergence="drop"))
+    # the papers' particle filters
+    add("CMS-PF (UNGM Ning)", "CMS-PF", "ung_ning", 200, lambda m: CMS.cms(m, 200))
+    add("ESPF (UNGM Ning)", "ESPF", "ung_ning", 200, lambda m: CMS.espf(m, 200))
+    add("DPF (UNGM θ)", "DPF", "theta", None, lambda m: DPF.dpf_51(m))
+    add("DEKF (UNGM θ)", "DPF", "theta", None, lambda m: DPF.dekf_51(m))
+    add("Liu-West (UNGM θ)", "DPF", "theta", None, lambda m: DPF.liu_west_51(m))
+    add("IMMPF(500)", "IMM", "imm", 500, lambda s: IMM.immpf(N=500))
+    add("IMMPFOR(500)", "IMM", "imm", 500, lambda s: IMM.immpfor(N=500))
+    # today's methods
+    add("APF (UNGM)", "today", "ung", 1000, lambda m: AuxiliaryParticleFilter(m, 1000))
+    add("RPF (UNGM)", "today", "ung", 1000, lambda m: RegularizedParticleFilter(m, 1000))
+    add("EKF-proposal PF (BOT)", "today", "bot", 1000, lambda m: GaussianProposalParticleFilter(m, 1000))
+    add("UKF-proposal PF (BOT)", "today", "bot", 1000,
+        lambda m: GaussianProposalParticleFilter(m, 1000, proposal="unscented"))
+    add("PFPF(EDH) (BOT)", "today", "bot", 1000, lambda m: ParticleFlowParticleFilter(m, 1000, flow="edh"))
+    add("PFPF(LEDH) (BOT)", "today", "bot", 100, lambda m: ParticleFlowParticleFilter(m, 100, flow="ledh"))
+    add("JMPF (IMM)", "today", "imm", 1500, lambda s: JumpMarkovParticleFilter(IMM.filter_system(), 1500))
+    return c
+
+
+def models():
+    """The paper models by key (built lazily)."""
+    from pfrepro.experiments import cmspf_ning2011 as CMS
+    from pfrepro.experiments import dpf_hou2008 as DPF
+    from pfrepro.experiments import immpfor_zhou2017 as IMM
+    from pfrepro.models import CWPA, UNGM, BearingsOnly
+
+    return {"ung": UNGM.zhang2016, "ung_ning": CMS.model, "bot": BearingsOnly.zhang2016,
+            "cwpa": CWPA, "theta": DPF.model_51, "imm": IMM.filter_system}
+
+
+def _particle_count(filt, N):
+    """Particles per step the count is spread over (DPF: n_x · n_theta; IMM: N per mode · modes)."""
+    if N is not None:
+        r = getattr(getattr(filt, "system", None), "r", None)
+        return N * (r if r and type(filt).__name__.startswith("IMM") else 1)
+    for a, b in (("n_x", "n_theta"),):
+        if hasattr(filt, a) and hasattr(filt, b):
+            return getattr(filt, a) * getattr(filt, b)
+    return getattr(filt, "n_particles", None)
+
+
+def _timed(filt, y, rng_seed, name):
+    runs = y.shape[0]
+    gc.collect()
+    gc.disable()
+    try:
+        rng = filter_streams(rng_seed, name, runs)
+        t0 = time.perf_counter()
+        filt.filter(y, rng)
+        return time.perf_counter() - t0
+    finally:
+        gc.enable()
+
+
+def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
+    built = {}
+    mk = models()
+    sims = {}
+    rows = []
+    for name, fam, key, N, build in configs:
+        if key not in sims:
+            m = mk[key]()
+            sims[key] = (m, m.simulate(T, runs, truth_streams(seed, runs)))
+        m, sim = sims[key]
+        filt = build(m)
+        built[name] = (filt, sim.y, fam, N)
+    # interleaved repeats: a drift of the machine's load hits every filter alike
+    single = {n: [] for n in built}
+    batched = {n: [] for n in built}
+    for n, (filt, y, _, _) in built.items():        # warm-up
+        _timed(filt, y[:1], seed, n)
+    for _ in range(repeats):
+        for n, (filt, y, _, _) in built.items():
+            single[n].append(_timed(filt, y[:1], seed, n))
+            batched[n].append(_timed(filt, y, seed, n))
+    for n, (filt, y, fam, N) in built.items():
+        counts = count_model_calls(filt, y[:1])
+        per_step = counts["model_evaluations"] / T
+        P = _particle_count(filt, N)
+        s = float(np.median(single[n])) / T
+        b = float(np.median(batched[n])) / T / runs
+        rows.append({"filter": n, "family": fam, "particles": P, "count per step": per_step,
+                     "single s/step": s, "batched s/step/run": b,
+                     "single ns/particle-step": 1e9 * s / P if P else np.nan,
+                     "batched ns/particle-step": 1e9 * b / P if P else np.nan,
+                     "single ns/evaluation": 1e9 * s / per_step if per_step else np.nan,
+                     "batched ns/evaluation": 1e9 * b / per_step if per_step else np.nan})
+    df = pd.DataFrame(rows).set_index("filter")
+    ref = df.loc[df.index.str.startswith("PF systematic"), "single ns/evaluation"]
+    base = float(ref.iloc[0]) if len(ref) else np.nan
+    df["time/count vs PF (single)"] = df["single ns/evaluation"] / base
+    refb = df.loc[df.index.str.startswith("PF systematic"), "batched ns/evaluation"]
+    df["time/count vs PF (batched)"] = df["batched ns/evaluation"] / float(refb.iloc[0]) if len(refb) else np.nan
+    return df
+
+
+def machine() -> str:
+    import threadpoolctl
+
+    blas = [f"{i['internal_api']} {i['version']} ({i.get('architecture', '?')}, {i['num_threads']} threads)"
+            for i in threadpoolctl.threadpool_info() if i["user_api"] == "blas"]
+    try:
+        load = os.getloadavg()[0]
+    except OSError:
+        load = float("nan")
+    return (f"{platform.processor() or platform.machine()}, {os.cpu_count()} cores, Python "
+            f"{platform.python_version()}, numpy {np.__version__}, BLAS {'; '.join(blas)}, "
+            f"load average {load:.1f} at start, {_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M} UTC")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="T = 20, 2 repeats, 20 runs")
+    ap.add_argument("--only", default="", help="configurations whose name contains this text")
+    ap.add_argument("--T", type=int, default=50)
+    ap.add_argument("--runs", type=int, default=100)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--out", default=str(RESULTS / "bench_all"), help="path stem of the .md and .csv")
+    a = ap.parse_args(argv)
+    T, runs, repeats = (20, 20, 2) if a.quick else (a.T, a.runs, a.repeats)
+    configs = [c for c in configurations() if a.only in c[0] or c[0].startswith("PF systematic")]
+    info = machine()
+    df = measure(configs, T, runs, repeats)
+    out = Path(a.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    df.to_csv(out.with_suffix(".csv"), float_format="%.6g")
+    with open(out.with_suffix(".md"), "w", encoding="utf-8") as fh:
+        fh.write(f"# Every filter: wall time beside operation count\n\nMachine: {info}.\n"
+                 f"T = {T} steps, single run and {runs} runs batched, median of {repeats} interleaved repeats.\n\n")
+        fh.write(df.round(3).to_markdown())
+        fh.write("\n")
+    print(info)
+    print(df[["count per step", "single ns/particle-step", "batched ns/particle-step",
+              "time/count vs PF (single)", "time/count vs PF (batched)"]].round(2).to_string())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
