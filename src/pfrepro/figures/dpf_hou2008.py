@@ -190,7 +190,7 @@ def fig2(outside_over_time=None, cases=((0.5, 1 / 12), (0.12, 0.01))):
     from scipy.stats import beta as beta_dist, norm
 
     n = len(cases) + (outside_over_time is not None)
-    fig, axs = new_figure(1, n, figsize=(2.5 * n, 2.4))
+    fig, axs = new_figure(1, n, figsize=(2.6 * n, 2.6))
     axs = np.atleast_1d(axs)
     u = np.linspace(-0.4, 1.4, 721)
     for i, (ax, (mu, var)) in enumerate(zip(axs, cases)):
@@ -203,15 +203,15 @@ def fig2(outside_over_time=None, cases=((0.5, 1 / 12), (0.12, 0.01))):
         ax.fill_between(u, 0, g, where=~inside, color="C1", alpha=0.35, lw=0)
         out = norm.cdf(0, mu, np.sqrt(var)) + norm.sf(1, mu, np.sqrt(var))
         ax.axvline(0, color="0.5", lw=0.6); ax.axvline(1, color="0.5", lw=0.6)
-        ax.set_title(f"({'abcd'[i]}) μ = {mu:g}, σ = {np.sqrt(var):.3g}: {100 * out:.1f} % outside", fontsize=8)
+        ax.set_title(f"({'abcd'[i]}) μ = {mu:g}, σ = {np.sqrt(var):.3g}\n{100 * out:.1f} % of the Gaussian outside", fontsize=8)
         ax.set_xlabel("φ = (θ − r_l)/(r_u − r_l)")
     axs[0].set_ylabel("density")
     if outside_over_time is not None:
         ax = axs[-1]
         k = np.arange(1, len(outside_over_time) + 1)
         ax.plot(k, 100 * np.asarray(outside_over_time), color="C1", ls="--")
-        ax.set_yscale("log"); ax.set_xlabel("k"); ax.set_ylabel("% of Gaussian draws outside")
-        ax.set_title(f"({'abcd'[n - 1]}) DPF with a Gaussian law, sec 5.1", fontsize=8)
+        ax.set_xlabel("k"); ax.set_ylabel("% of draws outside")
+        ax.set_title(f"({'abcd'[n - 1]}) DPF with a Gaussian law\n(sec 5.1, mean over runs)", fontsize=8)
     legend_below(fig, axs, ncol=2, fontsize=7)
     return fig
 
