@@ -545,3 +545,13 @@ def test_choices_cover_the_chapter_and_statuses_are_valid():
     assert set(E.Q52) == {"0", "small", "printed"} and E.Q52["0"] is None
     np.testing.assert_array_equal(E.model_52(Q="printed").Q, np.diag([1e6, 4e6]))
     assert not E.model_52().has_process_noise
+
+
+def test_dpf_chapter_pairs_only_through_the_run_set_check():
+    """Every paired comparison of the chapter goes through E.paired (which refuses unequal run sets),
+    never through claims.paired_difference on bare arrays."""
+    from pathlib import Path
+
+    src = (Path(__file__).resolve().parents[1] / "book" / "50_dpf.md").read_text(encoding="utf-8")
+    assert "paired_difference(" not in src
+    assert src.count("paired(") > 10
