@@ -267,6 +267,7 @@ def test_posterior_summary_of_a_gaussian_log_posterior():
     lambda m: DualParticleFilter(m, 50, 40, cap=40.0),
     lambda m: DualParticleFilter(Reentry(n_substeps=4), 50, 40, cap=40.0, roughening=0.2),
     lambda m: LiuWestFilter(m, 60),
+    lambda m: DualParticleFilter(m, 50, 40, cap=40.0, theta_law="gaussian"),
 ])
 def test_run_i_is_identical_in_batches_of_1_and_8(make):
     m = UNGMTheta()
@@ -434,3 +435,123 @@ def test_experiment_runs_are_identical_with_an_executor():
         np.testing.assert_array_equal(serial.results[name].x, par.results[name].x)
         np.testing.assert_array_equal(serial.results[name].diagnostics["theta"], par.results[name].diagnostics["theta"])
     assert serial.results["exact"].x.shape[0] == 3
+
+
+# ----------------------------------------------------------------------------- Beta vs Gaussian law (sec 3.2)
+def test_gaussian_parameter_law_zero_weights_draws_outside_the_range():
+    """theta_law="gaussian": draws from N(μ, σ²) of the fitted Beta; a draw outside [r_l, r_u] weighs
+    nothing, so the refitted mean stays inside; the Beta law never draws outside."""
+    m = UNGMTheta(bounds=(0.0, 1.0))
+    sim = m.simulate(12, 6, truth_streams(3, 6))
+    ga = DualParticleFilter(m, 40, 200, cap=200.0, theta_law="gaussian", weight="plugin")
+    be = DualParticleFilter(m, 40, 200, cap=200.0, weight="plugin")
+    rg = ga.filter(sim.y, filter_streams(3, "g", 6))
+    rb = be.filter(sim.y, filter_streams(3, "b", 6))
+    out = rg.diagnostics["outside"]
+    assert out.shape == (6, 12) and np.all(rb.diagnostics["outside"] == 0.0)
+    # at k = 1 the Gaussian has the uniform's moments: 2 Φ(-0.5 / sqrt(1/12)) = 8.3 % outside
+    assert abs(out[:, 0].mean() - 0.0833) < 0.03
+    assert np.all((rg.diagnostics["theta"] > 0) & (rg.diagnostics["theta"] < 1))
+    with pytest.raises(ValueError, match="theta_law"):
+        DualParticleFilter(m, 10, 10, theta_law="student")
+
+
+def test_gaussian_law_first_step_weights_equal_the_beta_laws_on_inside_draws():
+    """Only the sampling law differs: with every draw inside the range, one parameter step of the
+    Gaussian filter is the weighted moment fit of the same likelihood (checked by hand)."""
+    m = LinearTheta(theta_true=0.5, Q=0.7, R=0.4, c=0.3)
+    f = DualParticleFilter(m, 10, 10, theta_law="gaussian")
+    th = np.array([[0.3, 0.5, 0.6]])
+    lw = f.parameter_loglik(np.array([[2.0]]), th, np.array([[1.3]]), np.array([[[0.6]]]),
+                            np.array([[1.8]]), np.array([0.5]), 1)
+    same = DualParticleFilter(m, 10, 10).parameter_loglik(np.array([[2.0]]), th, np.array([[1.3]]),
+                                                          np.array([[[0.6]]]), np.array([[1.8]]), np.array([0.5]), 1)
+    np.testing.assert_array_equal(lw, same)
+
+
+# ----------------------------------------------------------------------------- common runs, failures
+def test_paired_refuses_unequal_run_sets():
+    """Paired comparisons in the chapter go through E.paired: different run sets are refused."""
+    import pandas as pd
+
+    from pfrepro.experiments import dpf_hou2008 as E
+
+    a = E.per_run(np.arange(100.0))
+    b = E.per_run(np.arange(40.0) + 0.5)
+    with pytest.raises(ValueError, match="unequal run sets"):
+        E.paired(a, b)
+    with pytest.raises(TypeError):
+        E.paired(np.arange(4.0), np.arange(4.0))
+    d, se = E.paired(a.iloc[:40], b)
+    assert d == pytest.approx(-0.5) and se == 0.0
+    with pytest.raises(ValueError):  # same length, different runs
+        E.paired(E.per_run([1.0, 2.0, 3.0], runs=[0, 1, 2]), E.per_run([1.0, 2.0, 4.0], runs=[0, 1, 3]))
+    assert isinstance(a, pd.Series)
+
+
+def test_first_runs_and_merge_keep_common_runs_only():
+    from pfrepro.experiments import dpf_hou2008 as E
+
+    m = UNGMTheta()
+    sim = m.simulate(5, 6, truth_streams(E.SEED_51, 6))
+    big = E._run({"DPF": DualParticleFilter(m, 20, 20, cap=20.0, weight="plugin")}, sim, 7)
+    small_sim = m.simulate(5, 3, truth_streams(E.SEED_51, 3))
+    np.testing.assert_array_equal(small_sim.y, sim.y[:3])       # keyed by run: the first runs are the same
+    small = E._run({"B": DualParticleFilter(m, 20, 20, cap=10.0, weight="plugin")}, small_sim, 7)
+    cut = E.first_runs(big, 3)
+    np.testing.assert_array_equal(cut.results["DPF"].x, big.results["DPF"].x[:3])
+    both = E.merge(cut, small)
+    assert set(both.results) == {"DPF", "B"}
+    E.paired(E.rmse_51(both, "DPF", 0), E.rmse_51(both, "B", 0))
+    with pytest.raises(ValueError, match="truths"):
+        E.merge(big, small)
+
+
+def test_failure_definitions_on_hand_cases():
+    """lost_51: state RMSE above the truth's own RMS, or final |θ̂ − θ| > 0.1, or non-finite;
+    lost_52: final altitude error above 1000 ft, or non-finite; convergence_time by hand."""
+    from types import SimpleNamespace
+
+    from pfrepro.experiments import dpf_hou2008 as E
+    from pfrepro.filters.base import FilterResult
+
+    T = 4
+    truth = np.zeros((3, T + 1, 1)); truth[:, 1:, 0] = 2.0            # truth RMS 2 in every run
+    x = np.stack([np.full(T, 2.5), np.full(T, 5.0), np.full(T, 2.0)])[..., None]   # errors 0.5, 3, 0
+    th = np.array([[0.5] * T, [0.5] * T, [0.5, 0.5, 0.5, 0.65]])
+    model = SimpleNamespace(theta_true=np.array([0.5]))
+    run = E.Run(sim=SimpleNamespace(x=truth), results={"f": FilterResult(x, None, {"theta": th})},
+                filters={"f": SimpleNamespace(model=model)})
+    assert E.lost_51(run, "f").tolist() == [False, True, True]
+    x[0, 1, 0] = np.nan
+    assert E.lost_51(run, "f").tolist() == [True, True, True]
+    # sec 5.2: altitude errors at T of 999 and 1001 ft, and a NaN speed
+    t52 = np.zeros((3, T + 1, 2))
+    e = np.zeros((3, T, 2)); e[0, -1, 0] = 999.0; e[1, -1, 0] = -1001.0; e[2, 1, 1] = np.nan
+    run52 = E.Run(sim=SimpleNamespace(x=t52), results={"f": FilterResult(e, None, {"theta": np.full((3, T), 1e-3)})},
+                  filters={"f": SimpleNamespace(model=SimpleNamespace(theta_true=np.array([1e-3])))})
+    assert E.lost_52(run52, "f").tolist() == [False, True, True]
+    ct = E.convergence_time(np.array([[0.3, 0.5, 0.5, 0.3, 0.5], [0.5] * 5, [0.3] * 5]), 0.5, 0.05)
+    assert ct.tolist() == [5.0, 1.0, 6.0]
+
+
+def test_choices_cover_the_chapter_and_statuses_are_valid():
+    from pfrepro.choices import FIXED, as_choice_map
+    from pfrepro.experiments import dpf_hou2008 as E
+
+    cm = as_choice_map(E.CHOICES)
+    for name in ("T51", "theta51", "weight", "cap", "dekf", "Q52", "horizon52", "liu_west", "roughening"):
+        assert cm[name].status != FIXED, name
+    assert set(E.Q52) == {"0", "small", "printed"} and E.Q52["0"] is None
+    np.testing.assert_array_equal(E.model_52(Q="printed").Q, np.diag([1e6, 4e6]))
+    assert not E.model_52().has_process_noise
+
+
+def test_dpf_chapter_pairs_only_through_the_run_set_check():
+    """Every paired comparison of the chapter goes through E.paired (which refuses unequal run sets),
+    never through claims.paired_difference on bare arrays."""
+    from pathlib import Path
+
+    src = (Path(__file__).resolve().parents[1] / "book" / "50_dpf.md").read_text(encoding="utf-8")
+    assert "paired_difference(" not in src
+    assert src.count("paired(") > 10

@@ -1,6 +1,7 @@
 """Hou & Yin (2008), dual particle filter: models, filters and settings of every experiment.
 
-Every unstated setting is fixed here, before any run, with its reason (``ASSUMPTIONS``);
+Every unstated setting is fixed here, before any run, with its reason and its status (``CHOICES``:
+fixed by the paper, swept, or a reading run beside the main one);
 the chapter ``book/50_dpf.md`` only calls these functions and plots. Seeds are picked once.
 
 Randomness: the truth of run i comes from ``truth_streams(seed, runs)`` and filter ``name``'s
@@ -22,12 +23,16 @@ from ..filters.theta_grid import ThetaGridReference
 from ..models.reentry import FT, Reentry
 from ..models.ungm_theta import UNGMTheta
 from ..models.base import Simulation
+from ..choices import FIXED, READING, SWEEP, FreeChoice, choices_table
+from ..claims import paired_difference
 from ..montecarlo import run_monte_carlo, truth_streams
 
-__all__ = ["PAPER", "SEED_51", "SEED_52", "S51", "S52", "ASSUMPTIONS", "assumptions_table", "model_51",
+__all__ = ["PAPER", "SEED_51", "SEED_52", "S51", "S52", "Q52", "CHOICES", "assumptions_table", "model_51",
            "model_52", "simulate_51", "simulate_52", "dpf_51", "dekf_51", "liu_west_51", "grid_51",
            "run_51", "run_fig5", "run_dpf_sensitivity", "run_dekf_sensitivity",
-           "run_52", "rmse_eq14", "rmse_usual", "mean_se", "coverage", "crb_theta_52"]
+           "run_52", "run_52_readings", "run_51_theta", "run_51_extra", "rmse_eq14", "rmse_usual", "mean_se",
+           "coverage", "crb_theta_52", "per_run", "paired", "rmse_51", "rmse_52", "lost_51", "lost_52",
+           "errors_52", "table_52", "convergence_time", "first_runs", "merge"]
 
 PAPER = "dpf_hou2008"
 #: seeds, picked once (the paper's year + section); never changed
@@ -66,46 +71,102 @@ S52 = dict(
     literal_runs=10,
 )
 
-ASSUMPTIONS = [
-    ("5.1 horizon T", "100", "not stated; the classic UNGM horizon (Kitagawa, ref [17])"),
-    ("5.1 range [r_l, r_u]", "[0, 1]", "not stated; the interval on which sec 3.2 fits the Beta (eq 6)"),
-    ("5.1 x_0", "N(0, 5) for truth and filters", "eq 12 text: N(mu, sigma^2), 5 is a variance"),
-    ("5.1 forcing", "8 cos(1.2 k)", "as printed in eq (12)"),
-    ("Monte Carlo runs", "100 (5.1), 50 (5.2)", "5.1: the paper shows one run; 5.2: as printed"),
-    ("DPF parameter weight", "N(z_k; h(f(x̂_{k-1}, θ)), H P⁻ Hᵀ + R)",
-     "eq (11)'s E[x_k | θ, z_1:k-1] with the predictive variance; the literal p(z_k | θ, x̂_k) is flat in θ"),
-    ("DPF θ̂_0 (state filter at k = 1)", "prior mean 0.5 (5.1), 3e-5 (5.2)",
-     "the paper starts the Beta at α = β = 1; the initial guess enters only through θ̂_0"),
-    ("Beta cap", "max(α, β) ≤ N_θ, mean kept",
-     "paper: 'upper limits on α, β', value not given; a pseudo-count above the number of draws "
-     "claims more precision than the draws carry"),
-    ("Refit guards", "ν = α + β floored at 2 when σ² ≥ μ(1 − μ); capped when σ² = 0", "eq (7) fails there"),
-    ("Step 3(d) variance", "Σ w (θ − θ̂)²", "printed with an extra factor θ^i (erratum)"),
-    ("DPF resampling", "systematic, every step", "step 2(e)"),
-    ("DEKF", "Wan & Nelson dual EKF, recurrent derivative without ∂K/∂θ",
-     "Q^θ_k = max(1e-3 P_θ0 · 0.995^k, 1e-6 P_θ0): ReBEL-style annealing, fixed before any run"),
-    ("DEKF start (5.1)", "θ̂_0 = 0.5, P_θ0 = 1/12", "the uniform prior's mean and variance"),
-    ("DEKF parameter update", "noise of the 'measurement' z_k = h(x⁻(θ)) is the innovation covariance S",
-     "prediction-error form: the innovation, not z_k alone, carries the state uncertainty"),
-    ("Liu-West", "δ = 0.99, N = 500, auxiliary form", "2N = 1000 likelihoods per step, as the DPF's N_x + N_θ"),
-    ("Exact θ posterior", "81 θ nodes × 241 x nodes on [-30, 30], first 40 runs",
-     "cubic interpolation of the log-evidence; cost limits it to 40 of the 100 runs"),
-    ("Sweeps (weight readings, caps)", "first 30 runs", "budget of the chapter"),
-    ("5.2 units", "feet (Athans et al. 1968)", "γ, noise variance and θ are foot values; plots in metres"),
-    ("5.2 drag", "−θ x2² exp(−γ x1)", "the classic problem; the paper's eq (16) drops the square"),
-    ("5.2 10⁶, 4·10⁶", "initial covariance P_0, no process noise", "the classic problem; printed as process noise"),
-    ("5.2 θ", "truth 1e-3, start 3e-5 (DEKF P_θ0 = 1e-4), range [0, 2e-3]", "the classic problem"),
-    ("5.2 horizon", "60 s, 1 s sampling", "the classic problem (KalmTool)"),
-    ("5.2 integration", "RK4, 64 substeps (truth), 4 (filters)", "4-substep error ≈ 0.01 ft against 100 ft noise; halves the cost"),
-    ("5.2 state PF", "roughening K = 0.2 (Gordon et al. 1993)", "with Q = 0 a bootstrap PF collapses to one particle"),
-    ("5.2 DEKF noise", "Q^θ = 0 (static θ)", "the classic set-up"),
-    ("5.2 Liu-West", "N = 2000, δ = 0.99, θ_0 ~ U[0, 2e-3]", "4000 likelihoods per step, as the DPF's 2000 + 2000"),
-    ("DEKF projection", "θ̂ clipped to [r_l, r_u]", "the same prior information as the DPF's Beta; unprojected as a sensitivity row"),
+#: the two extra readings of the filters' process noise in 5.2 (ft², (ft/s)² per 1 s sample); the
+#: truth is the classic noise-free trajectory under every reading (the printed variances on the
+#: truth would move the body by ~5·10⁵ ft in 60 s: no re-entry left)
+Q52 = {"0": None, "small": np.diag([1e2**2, 1e2**2]), "printed": np.diag([1e6, 4e6])}
+S52.update(q_runs=50,            # runs of each extra 5.2 reading (Q, weight, δ, K): the paper's 50 (fewer left the orderings undecided)
+           lw_deltas=(0.99, 0.95), roughenings=(0.2, 0.1),
+           horizons=(60, 30),    # 30 s: the readings' horizon by truncating the 60 s runs (causal filters)
+           lost_ft=1e3)          # lost: final altitude error > 10 measurement sd (100 ft)
+S51.update(horizons=(100, 50),   # 50: Arulampalam et al.'s UNGM horizon (ref [11], whose eq (14) the paper cites)
+           thetas=(0.5, 0.2, 0.7),  # θ readings for the sec 5.1 RMSEs (0.2, 0.7: the paper's own guesses)
+           lost_theta=0.1,       # lost: |θ̂_T − θ| > 0.1 (7 exact posterior sd at T)
+           conv_band=0.05)       # convergence: |θ̂_k − θ| ≤ 0.05 from k on (Beta vs Gaussian)
+
+CHOICES = [
+    FreeChoice("T51", "100", READING,
+               "Sec 5.1 gives no horizon. 100 (Kitagawa, ref [17]) is the main reading; 50 (Arulampalam et al., "
+               "ref [11], whose eq (14) the paper cites) is run by truncating the 100-step runs (the filters are "
+               "causal: bit-identical to 50-step runs). Every sec 5.1 claim is decided under both.",
+               "Sec 5.1: not stated"),
+    FreeChoice("theta51", "0.5", READING,
+               "True θ of the sec 5.1 RMSEs and Fig. 4: the paper states θ = 0.5 only for Fig. 5. 0.5 (the classic UNGM "
+               "value, Fig. 5's) is the main reading; 0.2 and 0.7 (the paper's own Fig. 5 guesses) are run for the "
+               "DPF and the DEKF on the first 30 runs, and the four RMSE numbers and the two Fig. 4 orderings are "
+               "decided under each.", "Sec 5.1 text (Fig. 5 only)"),
+    FreeChoice("range51", "[0, 1]", FIXED, "[r_l, r_u] for sec 5.1 is not printed, but sec 3.2 fits the Beta on "
+               "the unit interval and the UNGM's θ lies in it.", "Sec 3.2, eq (6)"),
+    FreeChoice("ungm", "v, w ~ N(0, 1); x_0 ~ N(0, 5) (5 a variance); forcing 8 cos(1.2k)", FIXED,
+               "as printed (the text defines N(μ, σ²))", "Eqs (12)-(13)"),
+    FreeChoice("particles", "N_x = N_θ = 500 (5.1), 2000 (5.2); 50 runs (5.2)", FIXED, "as printed",
+               "Secs 5.1, 5.2"),
+    FreeChoice("runs51", "100 runs", FIXED,
+               "The paper prints one run; our 100 runs give the distribution of single runs its numbers are "
+               "compared with (a published number is inside when it lies in our central 95 % of single runs).",
+               "Sec 5.1 (one run)"),
+    FreeChoice("prior", "α_0 = β_0 = 1 (uniform on [r_l, r_u])", FIXED, "as printed", "Sec 4.2"),
+    FreeChoice("weight", "predictive: N(z_k; h(f(x̂_{k-1}, θ)), H P⁻ Hᵀ + R)", READING,
+               "Eq (11) is read three ways: the predictive density of its second line (main), the plug-in of its "
+               "third line (variance R only; run: sec 5.1 on the sweep's 30 runs, sec 5.2 on all 50 runs) and the "
+               "literal p(z_k | θ, x̂_k) of its last line and step 3(b), which is the same for every θ (the filter "
+               "learns nothing, contradicting Figs. 4, 5 and 9; shown in the sweep table, not a reading).",
+               "Eq (11), step 3(b)"),
+    FreeChoice("theta0", "prior mean 0.5 (5.1); 3·10⁻⁵ (5.2)", SWEEP,
+               "The Beta starts uniform whatever the guess; the guess enters only as θ̂_0 of the state filter at "
+               "k = 1. Swept over the paper's guesses 0.2 / 0.5 / 0.7 in Fig. 5; 5.2 uses the classic start.",
+               "Sec 4.2, Fig. 5"),
+    FreeChoice("cap", "max(α, β) ≤ N_θ, mean kept", SWEEP,
+               "The paper caps α, β without a value. N_θ: a pseudo-count above the number of draws claims more "
+               "precision than they carry. Swept over 50, 500, 5000 and no cap (sec 5.1, 30 runs): the sec 5.1 "
+               "DPF claims are decided at every finite cap (no cap contradicts the paper's own capping: shown, "
+               "not a reading). Not varied in 5.2 (cap 2000 = N_θ).", "Sec 5.2, last paragraph"),
+    FreeChoice("guards", "ν = α + β floored at 2 when σ² ≥ μ(1 − μ); capped when σ² = 0", FIXED,
+               "Eq (7) has no solution there; the floor is the uniform prior's ν (binds in the share of steps "
+               "the sweep table's 'guards' column shows).", "Eq (7)"),
+    FreeChoice("step3d", "σ² = Σ w (θ − θ̂)²", FIXED, "the printed extra factor θ^i is a misprint (errata)",
+               "Step 3(d)"),
+    FreeChoice("resampling", "systematic, every step", FIXED, "every step as printed; the scheme is not "
+               "named (systematic, the book's default)", "Step 2(e)"),
+    FreeChoice("dekf", "Q^θ_k = max(10⁻³ P_θ0 · 0.995^k, 10⁻⁶ P_θ0), θ̂ projected on [r_l, r_u]", SWEEP,
+               "DEKF tuning is not given (ReBEL-style annealing, fixed before any run). Swept: q_0 = 0, 10⁻⁴, 10⁻³, "
+               "10⁻² P_θ0 and unprojected, 100 runs; the sec 5.1 DPF-vs-DEKF claims are decided at every value. "
+               "5.1 start θ̂_0 = 0.5, P_θ0 = 1/12 (the uniform prior's moments); the parameter 'measurement' noise "
+               "is the innovation covariance S (prediction-error form).", "Sec 5.1 (DEKF, ref [10])"),
+    FreeChoice("liu_west", "δ = 0.99, auxiliary form; N = 500 (5.1), 2000 (5.2); θ_0 ~ U[r_l, r_u]", READING,
+               "Not the paper's filter (our baseline): 2N likelihoods per step = the DPF's N_x + N_θ. δ = 0.99 (main), "
+               "the upper end of Liu & West's 0.95-0.99; δ = 0.95, the lower end, is run (5.1: 30 runs, 5.2: 50 runs) "
+               "and the Liu-West claims are decided under both.", "Sec 1 (ref [8])"),
+    FreeChoice("exact", "81 θ nodes × 241 x nodes on [-30, 30], first 40 runs", SWEEP,
+               "Our reference, not the paper's: grid error is checked against a fine grid in the tests (lost mass "
+               "shown); its cost limits it to 40 runs, and every comparison with it uses those 40 runs.", ""),
+    FreeChoice("units52", "feet; drag −θ x2² exp(−γ x1) (Athans et al. 1968)", FIXED,
+               "Fixed by the paper's own description of the trajectory (sharp deceleration in 10-20 s, Fig. 6): the "
+               "printed metric state with foot constants and no square makes the body hit the ground at 6 km/s "
+               "(run on 10 runs and shown, Fig. 6 below), so it is not an admissible reading.", "Sec 5.2, eq (16)"),
+    FreeChoice("Q52", "0: the printed 10⁶, 4·10⁶ are the initial covariance P_0", READING,
+               "Eqs (15)-(16) print 10⁶, 4·10⁶ as process noise; the classic problem has them as P_0 and no process "
+               "noise (main). Readings run (filters only, 50 runs each): Q = diag(10⁴, 10⁴) ('small': 100 ft and "
+               "100 ft/s per s) and Q = diag(10⁶, 4·10⁶) ('printed'). Every sec 5.2 claim is decided under all three.",
+               "Eqs (15)-(16)"),
+    FreeChoice("horizon52", "60 s, 1 s sampling", READING,
+               "The horizon is not printed (Figs. 7-9 are missing): 60 s is the classic problem's (main); 30 s is "
+               "run by truncating the 60 s runs.", "Sec 5.2"),
+    FreeChoice("start52", "truth x_0 = (3·10⁵ ft, 2·10⁴ ft/s), θ = 10⁻³; filter θ̂_0 = 3·10⁻⁵, DEKF P_θ0 = 10⁻⁴, "
+               "Q^θ = 0", FIXED, "the classic problem (ref [19]); the paper prints x_0 in km and the θ range only",
+               "Sec 5.2"),
+    FreeChoice("integration", "RK4, 64 substeps (truth), 4 (filters)", SWEEP,
+               "Swept in the integration-error table (2 ... 64 substeps): 4 substeps err by ~0.01 ft, 10⁻⁴ of the "
+               "measurement sd; no claim can move.", ""),
+    FreeChoice("roughening", "K = 0.2 (Gordon et al. 1993), 5.2 state PF", READING,
+               "The paper is silent; with Q = 0 a bootstrap PF collapses to one particle. K = 0.2 (main); K = 0.1 is "
+               "run for the DPF (50 runs) and the sec 5.2 DPF claims are decided under both.", ""),
 ]
 
 
 def assumptions_table() -> pd.DataFrame:
-    return pd.DataFrame(ASSUMPTIONS, columns=["item", "our choice", "reason"])
+    """The chapter's assumptions table (:func:`pfrepro.choices.choices_table` of :data:`CHOICES`)."""
+    return choices_table(CHOICES)
 
 
 # --------------------------------------------------------------------------- metrics
@@ -134,22 +195,26 @@ def coverage(lo, hi, truth):
 
 
 # --------------------------------------------------------------------------- 5.1
-def model_51() -> UNGMTheta:
-    return UNGMTheta(theta_true=S51["theta_true"], bounds=S51["bounds"])
+def model_51(theta_true=None) -> UNGMTheta:
+    """The sec 5.1 model (eqs 12-13) with true θ ``theta_true`` (default 0.5, the main reading)."""
+    return UNGMTheta(theta_true=S51["theta_true"] if theta_true is None else theta_true, bounds=S51["bounds"])
 
 
-def simulate_51(runs=None):
+def simulate_51(runs=None, theta_true=None):
+    """Run i's truth of sec 5.1 from ``truth_streams(SEED_51)``'s stream i (first ``runs`` runs)."""
     runs = S51["runs"] if runs is None else runs
-    return model_51().simulate(S51["T"], runs, truth_streams(SEED_51, runs))
+    return model_51(theta_true).simulate(S51["T"], runs, truth_streams(SEED_51, runs))
 
 
 def dpf_51(model=None, **over):
+    """The sec 5.1 DPF (N_x = N_θ = 500, cap N_θ, θ̂_0 = 0.5); ``over`` replaces any setting."""
     kw = dict(n_x=S51["n_x"], n_theta=S51["n_theta"], cap=S51["cap"], theta0=S51["theta0"])
     kw.update(over)
     return DualParticleFilter(model or model_51(), **kw)
 
 
 def dekf_51(model=None, theta0=None, q_rel=None, clip=True):
+    """The sec 5.1 DEKF: P_θ0 = the uniform prior's variance, annealed parameter noise q_rel·P_θ0."""
     P0 = (S51["bounds"][1] - S51["bounds"][0]) ** 2 / 12.0
     q_rel = S51["dekf_q_rel"] if q_rel is None else q_rel
     return DualExtendedKalmanFilter(model or model_51(), S51["theta0"] if theta0 is None else theta0, P0,
@@ -157,11 +222,13 @@ def dekf_51(model=None, theta0=None, q_rel=None, clip=True):
                                     q_min=S51["dekf_floor_rel"] * P0 * (q_rel > 0), clip_to_bounds=clip)
 
 
-def liu_west_51(model=None):
-    return LiuWestFilter(model or model_51(), S51["lw_n"], delta=S51["lw_delta"])
+def liu_west_51(model=None, delta=None):
+    """Liu & West's joint filter at the DPF's likelihood count (2 × 500 = 500 + 500)."""
+    return LiuWestFilter(model or model_51(), S51["lw_n"], delta=S51["lw_delta"] if delta is None else delta)
 
 
 def grid_51(model=None):
+    """The exact θ posterior of sec 5.1 (θ grid × point-mass filter over x)."""
     return ThetaGridReference(model or model_51(), n_theta=S51["grid_n_theta"], x_bounds=S51["grid_x_bounds"],
                               n_grid=S51["grid_n_x"])
 
@@ -237,6 +304,7 @@ def run_dpf_sensitivity(executor=None) -> Run:
 
 
 def run_dekf_sensitivity(executor=None) -> Run:
+    """The DEKF's parameter noise q_0 (0, 10⁻⁴, 10⁻³, 10⁻² P_θ0) and the unprojected DEKF, on all runs."""
     m = model_51()
     sim = simulate_51()
     filters = {f"q0 = {q:g} P0": dekf_51(m, q_rel=q) for q in S51["dekf_q_rels"]}
@@ -244,29 +312,74 @@ def run_dekf_sensitivity(executor=None) -> Run:
     return _run(filters, sim, SEED_51, executor)
 
 
+def run_51_theta(theta_true, executor=None) -> Run:
+    """The reading ``theta51``: DPF and DEKF on the first ``sens_runs`` runs with true θ = ``theta_true``
+    (same seeds and stream names as the main runs)."""
+    m = model_51(theta_true)
+    sim = simulate_51(S51["sens_runs"], theta_true)
+    return _run({"DPF": dpf_51(m), "DEKF": dekf_51(m)}, sim, SEED_51, executor)
+
+
+def run_51_extra(executor=None) -> Run:
+    """Sec 5.1 comparisons beyond the main set, on the main truths: the DPF with a Gaussian parameter law
+    (sec 3.2, Fig. 2; all runs, equal N) and Liu-West at δ = 0.95 (the reading ``liu_west``, first
+    ``sens_runs`` runs). Own stream names."""
+    m = model_51()
+    sim = simulate_51()
+    return _run({"DPF Gaussian θ": dpf_51(m, theta_law="gaussian"),
+                 "Liu-West δ=0.95": liu_west_51(m, delta=S52["lw_deltas"][1])},
+                sim, SEED_51, executor, runs_of={"Liu-West δ=0.95": S51["sens_runs"]})
+
+
 # --------------------------------------------------------------------------- 5.2
-def model_52(reading="feet", substeps=None) -> Reentry:
-    return Reentry(reading=reading, n_substeps=S52["filter_substeps"] if substeps is None else substeps)
+def model_52(reading="feet", substeps=None, Q=None) -> Reentry:
+    """The re-entry model in ``reading``; ``Q``: the filters' process noise (a key of :data:`Q52` or a matrix)."""
+    if isinstance(Q, str):
+        Q = Q52[Q]
+    return Reentry(reading=reading, n_substeps=S52["filter_substeps"] if substeps is None else substeps, Q=Q)
 
 
 def simulate_52(runs=None, reading="feet"):
+    """Run i's noise-free re-entry truth (64 RK4 substeps) and its range measurements, from ``truth_streams``."""
     runs = S52["runs"] if runs is None else runs
     return model_52(reading, S52["truth_substeps"]).simulate(S52["T"], runs, truth_streams(SEED_52, runs))
 
 
-def run_52(reading="feet", runs=None, executor=None) -> Run:
-    """Sec 5.2: DPF (2000 + 2000 particles), DEKF and Liu-West (2000 joint particles) on the re-entry problem."""
+def run_52(reading="feet", runs=None, executor=None, Q=None, names=("DPF", "DEKF", "Liu-West"),
+           weight="predictive", delta=None, roughening=None) -> Run:
+    """Sec 5.2: DPF (2000 + 2000 particles), DEKF and Liu-West (2000 joint particles) on the re-entry problem.
+
+    The truth is always the classic noise-free trajectory (``simulate_52``); ``Q`` (a key of
+    :data:`Q52` or a matrix) is the filters' process noise (the reading ``Q52``); ``weight``,
+    ``delta`` (Liu-West) and ``roughening`` (DPF) give the other readings. ``names`` picks the
+    filters (stream names are the same under every reading: common random numbers).
+    """
     runs = (S52["runs"] if reading == "feet" else S52["literal_runs"]) if runs is None else runs
-    m = model_52(reading)
+    m = model_52(reading, Q=Q)
     sim = simulate_52(runs, reading)
-    filters = {
-        "DPF": DualParticleFilter(m, S52["n_x"], S52["n_theta"], cap=S52["cap"], theta0=S52["theta0"],
-                                  roughening=S52["roughening"]),
-        "DEKF": DualExtendedKalmanFilter(m, S52["theta0"], S52["P_theta0"], clip_to_bounds=True),
+    make = {
+        "DPF": lambda: DualParticleFilter(m, S52["n_x"], S52["n_theta"], cap=S52["cap"], theta0=S52["theta0"],
+                                          roughening=S52["roughening"] if roughening is None else roughening,
+                                          weight=weight),
+        "DEKF": lambda: DualExtendedKalmanFilter(m, S52["theta0"], S52["P_theta0"], clip_to_bounds=True),
         # joint (not dual) reference at the DPF's likelihood count: 2 x 2000 = 2000 + 2000
-        "Liu-West": LiuWestFilter(m, S52["n_x"], delta=S51["lw_delta"]),
+        "Liu-West": lambda: LiuWestFilter(m, S52["n_x"], delta=S51["lw_delta"] if delta is None else delta),
     }
-    return _run(filters, sim, SEED_52, executor)
+    return _run({n: make[n]() for n in names}, sim, SEED_52, executor)
+
+
+def run_52_readings(executor=None) -> dict:
+    """Every extra reading of sec 5.2 on the first ``q_runs`` runs: ``{(choice, value): Run}`` for the
+    filters' process noise (``Q52``: small, printed; all three filters), the plug-in weight and
+    roughening K = 0.1 (DPF), Liu-West at δ = 0.95."""
+    n = S52["q_runs"]
+    out = {("Q52", q): run_52(runs=n, executor=executor, Q=q) for q in ("small", "printed")}
+    out[("weight", "plugin")] = run_52(runs=n, executor=executor, names=("DPF",), weight="plugin")
+    out[("roughening", S52["roughenings"][1])] = run_52(runs=n, executor=executor, names=("DPF",),
+                                                        roughening=S52["roughenings"][1])
+    out[("liu_west", S52["lw_deltas"][1])] = run_52(runs=n, executor=executor, names=("Liu-West",),
+                                                    delta=S52["lw_deltas"][1])
+    return out
 
 
 def crb_theta_52(reading="feet", T=None):
@@ -291,7 +404,7 @@ def crb_theta_52(reading="feet", T=None):
     return sd
 
 
-def to_metres(v, component):
+def to_metres(v, component):  # kept for callers outside the chapter (the chapter works in feet)
     """Feet -> metres for altitude (0) and velocity (1); θ (2) in 1/ft -> 1/m."""
     return v * FT if component in (0, 1) else v / FT
 
@@ -308,16 +421,16 @@ def errors_51(run: Run, name: str, runs=None):
     res = run.results[name]
     n = res.x.shape[0] if runs is None else runs
     ex = res.x[:n, :, 0] - run.sim.x[:n, 1:, 0]
-    et = res.diagnostics["theta"][:n] - S51["theta_true"]
+    et = res.diagnostics["theta"][:n] - run.filters[name].model.theta_true[0]   # the run's own true θ
     return ex, et
 
 
 def rmse_table_51(run: Run, names, runs=None) -> pd.DataFrame:
-    """Per-run eq-(14) and usual RMSEs of x and θ, mean ± SE over runs."""
+    """Per-run eq-(14) and usual RMSEs of x and θ, mean ± SE over runs, and the failures (:func:`lost_51`)."""
     rows = []
     for n in names:
         ex, et = errors_51(run, n, runs)
-        row = {"filter": n, "runs": ex.shape[0]}
+        row = {"filter": n, "runs": ex.shape[0], "failures": int(lost_51(run, n, ex.shape[0]).sum())}
         for lab, e in (("x", ex), ("θ", et)):
             for kind, fn in (("eq14", rmse_eq14), ("usual", rmse_usual)):
                 m, se = mean_se(fn(e))
@@ -343,13 +456,15 @@ def coverage_table_51(run: Run, names, runs=None) -> pd.DataFrame:
 
 
 def sensitivity_table(run: Run, runs=None) -> pd.DataFrame:
-    """x and θ RMSE (usual, mean ± SE), coverage at T, and refit-guard counts, per filter of a sweep."""
+    """x and θ RMSE (usual, mean ± SE), failures (:func:`lost_51`), coverage at T, and refit-guard counts,
+    per filter of a sweep."""
     rows = []
     for n, res in run.results.items():
         ex, et = errors_51(run, n, runs)
         mx, sx = mean_se(rmse_usual(ex))
         mt, st = mean_se(rmse_usual(et))
-        row = {"variant": n, "RMSE x": mx, "se x": sx, "RMSE θ": mt, "se θ": st}
+        row = {"variant": n, "runs": ex.shape[0], "failures": int(lost_51(run, n, ex.shape[0]).sum()),
+               "RMSE x": mx, "se x": sx, "RMSE θ": mt, "se θ": st}
         try:
             q = theta_interval(run, n)
             row["coverage at T"] = float(coverage(q[0, :, -1], q[2, :, -1], S51["theta_true"]).mean())
@@ -407,3 +522,139 @@ def truth_trajectory_52(reading="feet"):
     for k in range(1, S52["T"] + 1):
         x.append(m.f(x[-1], k, m.theta_true[None]))
     return np.concatenate(x)
+
+
+# --------------------------------------------------------------------------- per-run values, failures, pairs
+def per_run(values, runs=None, name=None) -> pd.Series:
+    """Per-run values as a Series indexed by run number (0-based, the truth stream's index)."""
+    v = np.asarray(values, dtype=float)
+    idx = pd.RangeIndex(v.shape[0]) if runs is None else pd.Index(runs, name="run")
+    return pd.Series(v, index=idx, name=name)
+
+
+def paired(a: pd.Series, b: pd.Series):
+    """Mean and SE of the per-run differences ``a - b`` over the *same* runs.
+
+    ``a`` and ``b`` are :func:`per_run` Series; a comparison over different run sets (e.g. 100
+    runs against the exact reference's 40) is refused with ``ValueError``: select the common
+    runs first (``a.loc[b.index]``).
+    """
+    if not (isinstance(a, pd.Series) and isinstance(b, pd.Series)):
+        raise TypeError("paired() takes per-run Series (per_run), which carry their run numbers")
+    if not a.index.equals(b.index):
+        raise ValueError(f"paired comparison over unequal run sets ({a.size} runs {_span(a.index)} against "
+                         f"{b.size} runs {_span(b.index)}): compare on common runs only")
+    return paired_difference(a.to_numpy(), b.to_numpy())
+
+
+def _span(idx):
+    return f"[{idx.min()}..{idx.max()}]" if len(idx) else "[]"
+
+
+def rmse_51(run: Run, name: str, which: int, kind="usual", runs=None, T=None) -> pd.Series:
+    """Per-run RMSE of x (``which=0``) or θ (1), ``kind`` "usual" or "eq14", over the first ``T`` steps."""
+    e = errors_51(run, name, runs)[which]
+    if T is not None:
+        e = e[:, :T]
+    return per_run((rmse_usual if kind == "usual" else rmse_eq14)(e), name=name)
+
+
+def lost_51(run: Run, name: str, runs=None, T=None) -> pd.Series:
+    """Failures of sec 5.1, per run (defined before looking at which filter fails):
+
+    *diverged*: a non-finite estimate; *lost*: a state RMSE above that of the trivial estimate
+    x̂_k = 0 (the truth's own RMS in the run: the filter does no better than ignoring the data), or a
+    final θ further than ``lost_theta`` = 0.1 from the truth (seven exact posterior sd at T = 100).
+    """
+    res = run.results[name]
+    n = res.x.shape[0] if runs is None else runs
+    T = res.x.shape[1] if T is None else T
+    ex, et = errors_51(run, name, n)
+    ex, et = ex[:, :T], et[:, :T]
+    truth_rms = np.sqrt(np.mean(run.sim.x[:n, 1:T + 1, 0] ** 2, axis=1))
+    bad = ~np.all(np.isfinite(ex), 1) | ~np.all(np.isfinite(et), 1)
+    with np.errstate(invalid="ignore"):
+        lost = (rmse_usual(ex) > truth_rms) | (np.abs(et[:, -1]) > S51["lost_theta"])
+    return pd.Series(bad | lost, index=pd.RangeIndex(n), name=name)
+
+
+def first_runs(run: Run, n: int, names=None) -> Run:
+    """The first ``n`` runs of ``run`` (truths and the results of ``names``, default all), to pair a
+    reading run on fewer runs with the main one on common runs."""
+    from ..filters.base import FilterResult
+
+    R = run.sim.y.shape[0]
+
+    def cut(v):
+        return v[:n] if isinstance(v, np.ndarray) and v.ndim >= 1 and v.shape[0] == R else v
+
+    names = list(run.results) if names is None else list(names)
+    res = {k: FilterResult(cut(run.results[k].x), None if run.results[k].P is None else cut(run.results[k].P),
+                           {kk: cut(vv) for kk, vv in run.results[k].diagnostics.items()}) for k in names}
+    return Run(sim=Simulation(run.sim.x[:n], run.sim.y[:n]), results=res,
+               seconds={k: run.seconds.get(k) for k in names}, filters={k: run.filters[k] for k in names})
+
+
+def merge(*runs: Run) -> Run:
+    """One Run from several on the same truths (later runs' filters win); refuses different truths."""
+    base = runs[0]
+    for r in runs[1:]:
+        if r.sim.y.shape != base.sim.y.shape or not np.array_equal(r.sim.y, base.sim.y):
+            raise ValueError("merge: the runs do not share their truths (different run sets)")
+    out = Run(sim=base.sim, results={}, seconds={}, filters={})
+    for r in runs:
+        out.results.update(r.results); out.seconds.update(r.seconds); out.filters.update(r.filters)
+    return out
+
+
+def errors_52(run: Run, name: str, T=None):
+    """Errors (runs, T, 3) of altitude (ft), speed (ft/s) and θ (1/ft), first ``T`` steps."""
+    res = run.results[name]
+    e = res.x - run.sim.x[:, 1:]
+    et = res.diagnostics["theta"] - run.filters[name].model.theta_true[0]
+    out = np.concatenate([e, et[..., None]], axis=-1)
+    return out if T is None else out[:, :T]
+
+
+def lost_52(run: Run, name: str, T=None) -> pd.Series:
+    """Failures of sec 5.2, per run: *diverged* (a non-finite estimate) or *lost* (final altitude error
+    above ``lost_ft`` = 1000 ft, ten measurement standard deviations: the filter no longer follows the
+    range measurements)."""
+    e = errors_52(run, name, T)
+    bad = ~np.all(np.isfinite(e.reshape(e.shape[0], -1)), axis=1)
+    with np.errstate(invalid="ignore"):
+        lost = np.abs(e[:, -1, 0]) > S52["lost_ft"]
+    return pd.Series(bad | lost, index=pd.RangeIndex(e.shape[0]), name=name)
+
+
+def rmse_52(run: Run, name: str, which: int, window=None, T=None) -> pd.Series:
+    """Per-run RMSE of altitude (0, ft), speed (1, ft/s) or θ (2, 1/ft) over ``window`` = (k0, k1)
+    (1-based, inclusive) or the first ``T`` steps."""
+    e = errors_52(run, name, T)[..., which]
+    if window is not None:
+        e = e[:, window[0] - 1:window[1]]
+    return per_run(rmse_usual(e), name=name)
+
+
+def table_52(run: Run, names=("DPF", "DEKF", "Liu-West"), T=None) -> pd.DataFrame:
+    """Per filter: RMSE over runs at the last step of altitude (ft), speed (ft/s), θ (10⁻³/ft), the
+    failures (:func:`lost_52`) and the altitude RMSE at T over the runs not lost."""
+    rows = []
+    for n in names:
+        e = errors_52(run, n, T)
+        lost = lost_52(run, n, T).to_numpy()
+        rm = np.sqrt(np.mean(e[:, -1] ** 2, axis=0))
+        ok = e[~lost, -1, 0]
+        rows.append({"filter": n, "runs": e.shape[0], "failures": int(lost.sum()),
+                     "altitude (ft)": rm[0], "speed (ft/s)": rm[1], "θ (10⁻³/ft)": rm[2] / 1e-3,
+                     "altitude, runs not lost (ft)": float(np.sqrt(np.mean(ok**2))) if ok.size else np.nan})
+    return pd.DataFrame(rows).set_index("filter")
+
+
+def convergence_time(theta_hat, truth, band):
+    """Per run: the first step k after which |θ̂_j − θ| ≤ ``band`` for every j ≥ k (T + 1 if never)."""
+    ok = np.abs(np.asarray(theta_hat) - truth) <= band                    # (runs, T)
+    T = ok.shape[1]
+    # last step that is outside the band; converged from the step after it
+    out_idx = np.where(~ok, np.arange(1, T + 1), 0).max(axis=1)
+    return out_idx + 1.0

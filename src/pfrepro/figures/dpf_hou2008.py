@@ -14,7 +14,8 @@ import pandas as pd
 from ..experiments import dpf_hou2008 as E
 from . import new_figure
 
-__all__ = ["pm", "rmse_table", "fig4", "fig5", "figs_7_9", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
+__all__ = ["pm", "rmse_table", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "legend_below", "reproduce", "TABLES",
+           "FIGURES", "N_STEPS"]
 
 #: what :func:`reproduce` makes
 TABLES = ("RMSE table",)
@@ -23,6 +24,18 @@ FIGURES = ("Fig. 4", "Fig. 5", "Figs. 7-9")
 N_STEPS = 3
 #: the filters of the sec 5.1 RMSE table
 NAMES_51 = ("DPF", "DEKF", "Liu-West")
+
+
+def legend_below(fig, axs, ncol=4, **kw):
+    """One legend for the figure, under the panels (never over the data): handles of every axis, deduplicated."""
+    handles, labels = [], []
+    for ax in np.atleast_1d(axs).ravel():
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            if lab not in labels:
+                handles.append(h); labels.append(lab)
+    fig.tight_layout()
+    leg = fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=ncol, frameon=False, **kw)
+    return leg
 
 
 def pm(m, se, digits=3) -> str:
@@ -43,7 +56,9 @@ def rmse_table(r51, pub=None):
     Returns
     -------
     tab : pandas.DataFrame
-        The shown table (strings), all runs, then the exact reference's runs, then the paper.
+        The shown table (strings: mean ± standard error over runs, and the failures of
+        :func:`~pfrepro.experiments.dpf_hou2008.lost_51`), all runs, then the exact
+        reference's runs, then the paper.
     t_all, t_grid : pandas.DataFrame
         ``pfrepro.experiments.dpf_hou2008.rmse_table_51`` on all runs and on the runs of
         the exact reference (numbers).
@@ -60,13 +75,14 @@ def rmse_table(r51, pub=None):
     def fmt(t, digits):
         out = pd.DataFrame(index=t.index)
         out["runs"] = t["runs"].astype(object)  # the paper row holds a string
+        out["failures"] = t["failures"].astype(object)
         for c in ("eq14 x", "usual x", "eq14 θ", "usual θ"):
             d = digits if "x" in c else digits + 2
             out[c] = [pm(m, s, d) for m, s in zip(t[c], t[c + " se"])]
         return out
 
     tab = pd.concat([fmt(t_all, 3), fmt(t_grid, 3).rename(index=lambda s: s + f" ({n_grid} runs)")])
-    tab.loc["paper (1 run)"] = ["1", f"{pub.loc['RMSE x', 'DPF']:.3f} / {pub.loc['RMSE x', 'DEKF']:.3f}", "—",
+    tab.loc["paper (1 run)"] = ["1", "—", f"{pub.loc['RMSE x', 'DPF']:.3f} / {pub.loc['RMSE x', 'DEKF']:.3f}", "—",
                                 f"{pub.loc['RMSE theta', 'DPF']:.5f} / {pub.loc['RMSE theta', 'DEKF']:.5f}", "—"]
     return tab, t_all, t_grid
 
@@ -78,7 +94,7 @@ def fig4(r51, run: int = 0):
     axs[0].plot(kk, r51.sim.x[run, 1:, 0], "k-", lw=1, label="truth")
     axs[0].plot(kk, r51.results["DPF"].x[run, :, 0], "C0-", lw=0.9, label="DPF")
     axs[0].plot(kk, r51.results["DEKF"].x[run, :, 0], "C3--", lw=0.9, label="DEKF")
-    axs[0].set_ylabel("x_k"); axs[0].legend(ncol=3, fontsize=7)
+    axs[0].set_ylabel("x_k")
     ex = r51.results["exact"].diagnostics
     qx = E.theta_interval(r51, "exact")
     axs[1].fill_between(kk, qx[0, run], qx[2, run], color="0.85", label="exact 95 %")
@@ -87,8 +103,8 @@ def fig4(r51, run: int = 0):
     axs[1].plot(kk, r51.results["DEKF"].diagnostics["theta"][run], "C3--", lw=0.9, label="DEKF")
     axs[1].plot(kk, r51.results["Liu-West"].diagnostics["theta"][run], "C2:", lw=1.2, label="Liu–West")
     axs[1].axhline(E.S51["theta_true"], color="k", lw=0.5, ls=":")
-    axs[1].set_ylim(0, 1); axs[1].set_ylabel("θ estimate"); axs[1].set_xlabel("k"); axs[1].legend(ncol=3, fontsize=7)
-    fig.tight_layout()
+    axs[1].set_ylim(0, 1); axs[1].set_ylabel("θ estimate"); axs[1].set_xlabel("k")
+    legend_below(fig, axs, ncol=3, fontsize=7)
     return fig
 
 
@@ -116,35 +132,87 @@ def fig5(f5: dict, run: int = 0):
         axs[0, col].set_title(f"({'ab'[col]}) {name}: θ estimate, quantiles over runs", fontsize=8)
         axs[1, col].set_title(f"({'cd'[col]}) {name}: own posterior quantiles, run {run + 1}", fontsize=8)
         axs[1, col].set_xlabel("k")
-    axs[0, 0].set_ylabel("θ"); axs[1, 0].set_ylabel("θ"); axs[0, 1].legend(fontsize=7)
-    fig.tight_layout()
+    axs[0, 0].set_ylabel("θ"); axs[1, 0].set_ylabel("θ")
+    legend_below(fig, axs, ncol=3, fontsize=7)
     return fig
 
 
 def figs_7_9(r52, crb_ft=None, rm: dict | None = None):
-    """Figs. 7-9: RMSE against time of altitude, speed and θ (metres), with θ's Cramér-Rao bound.
+    """Figs. 7-9: RMSE against time of altitude (ft), speed (ft/s) and θ (1/ft), with θ's Cramér-Rao bound.
 
     ``r52`` is :func:`~pfrepro.experiments.dpf_hou2008.run_52`'s result, ``crb_ft``
     :func:`~pfrepro.experiments.dpf_hou2008.crb_theta_52` (default: computed), ``rm`` the
     per-filter ``pfrepro.experiments.dpf_hou2008.rmse_over_time_52`` (default: computed).
+    The chapter works in feet, the problem's own units (Athans et al. 1968).
     """
     if crb_ft is None:
         crb_ft = E.crb_theta_52("feet")
     if rm is None:
         rm = {n: E.rmse_over_time_52(r52, n) for n in NAMES_51}
-    lab52 = ["altitude (m)", "speed (m/s)", "θ (1/m)"]
+    lab52 = ["altitude (ft)", "speed (ft/s)", "θ (1/ft)"]
     T = rm["DPF"].shape[-1]
     tt = np.arange(1, T + 1)
-    fig, axs = new_figure(1, 3, figsize=(7.5, 2.5))
+    fig, axs = new_figure(1, 3, figsize=(7.5, 2.6))
     for j, (ax, lab) in enumerate(zip(axs, lab52)):
         for n, c, ls in (("DEKF", "C3", (0, (4, 1.5))), ("DPF", "C0", "-"), ("Liu-West", "C2", ":")):
-            ax.plot(tt, E.to_metres(rm[n][j], j), color=c, ls=ls, label=n.replace("-", "–"))
+            ax.plot(tt, rm[n][j], color=c, ls=ls, label=n.replace("-", "–"))
         if j == 2:
-            ax.plot(tt, E.to_metres(np.asarray(crb_ft)[:T], 2), color="k", lw=0.7, label="CRB sd")
-            ax.set_ylim(1e-6, 1e-1)
+            ax.plot(tt, np.asarray(crb_ft)[:T], color="k", lw=0.7, label="CRB sd of θ")
+            ax.set_ylim(1e-7, 1e-2)
         ax.set_yscale("log"); ax.set_xlabel("t (s)"); ax.set_title(f"({'abc'[j]}) RMSE of {lab}", fontsize=8)
-    axs[2].legend(fontsize=7)
-    fig.tight_layout()
+    legend_below(fig, axs, ncol=4, fontsize=7)
+    return fig
+
+
+def fig6(tr_ft, tr_lit_m):
+    """Fig. 6: the noise-free truth under the foot reading and the literal one (converted to feet)."""
+    from ..models.reentry import FT
+
+    t = np.arange(tr_ft.shape[0])
+    fig, axs = new_figure(1, 2, figsize=(7, 2.6))
+    axs[0].plot(t, tr_ft[:, 0] / 1e3, label="our reading (feet, drag ∝ x₂²)")
+    axs[0].plot(t, tr_lit_m[:, 0] / FT / 1e3, "--", label="literal reading (metric state, drag ∝ x₂)")
+    axs[0].set_xlabel("t (s)"); axs[0].set_ylabel("altitude (10³ ft)")
+    axs[1].plot(t, tr_ft[:, 1] / 1e3); axs[1].plot(t, tr_lit_m[:, 1] / FT / 1e3, "--")
+    axs[1].set_xlabel("t (s)"); axs[1].set_ylabel("speed (10³ ft/s)")
+    legend_below(fig, axs, ncol=2, fontsize=7)
+    return fig
+
+
+def fig2(outside_over_time=None, cases=((0.5, 1 / 12), (0.12, 0.01))):
+    """Fig. 2 regenerated: a Beta law and the Gaussian with the same mean and variance on [0, 1].
+
+    ``cases`` are (mean, variance) pairs on the unit interval (default: the uniform prior's moments,
+    where every DPF starts, and a law near the edge); the mass the Gaussian puts outside [0, 1] is
+    shaded and printed. With ``outside_over_time`` (share of Gaussian draws outside the range per
+    step, averaged over runs), a last panel shows it against k.
+    """
+    from scipy.stats import beta as beta_dist, norm
+
+    n = len(cases) + (outside_over_time is not None)
+    fig, axs = new_figure(1, n, figsize=(2.6 * n, 2.6))
+    axs = np.atleast_1d(axs)
+    u = np.linspace(-0.4, 1.4, 721)
+    for i, (ax, (mu, var)) in enumerate(zip(axs, cases)):
+        nu = mu * (1 - mu) / var - 1
+        a, b = mu * nu, (1 - mu) * nu
+        inside = (u > 0) & (u < 1)
+        ax.plot(u[inside], beta_dist.pdf(u[inside], a, b), color="C0", label="Beta")
+        g = norm.pdf(u, mu, np.sqrt(var))
+        ax.plot(u, g, color="C1", ls="--", label="Gaussian, same mean and variance")
+        ax.fill_between(u, 0, g, where=~inside, color="C1", alpha=0.35, lw=0)
+        out = norm.cdf(0, mu, np.sqrt(var)) + norm.sf(1, mu, np.sqrt(var))
+        ax.axvline(0, color="0.5", lw=0.6); ax.axvline(1, color="0.5", lw=0.6)
+        ax.set_title(f"({'abcd'[i]}) μ = {mu:g}, σ = {np.sqrt(var):.3g}\n{100 * out:.1f} % of the Gaussian outside", fontsize=8)
+        ax.set_xlabel("φ = (θ − r_l)/(r_u − r_l)")
+    axs[0].set_ylabel("density")
+    if outside_over_time is not None:
+        ax = axs[-1]
+        k = np.arange(1, len(outside_over_time) + 1)
+        ax.plot(k, 100 * np.asarray(outside_over_time), color="C1", ls="--")
+        ax.set_xlabel("k"); ax.set_ylabel("% of draws outside")
+        ax.set_title(f"({'abcd'[n - 1]}) DPF with a Gaussian law\n(sec 5.1, mean over runs)", fontsize=8)
+    legend_below(fig, axs, ncol=2, fontsize=7)
     return fig
 
 

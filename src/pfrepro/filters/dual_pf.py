@@ -48,6 +48,12 @@ roughening : None or Gordon et al.'s (1993) roughening constant K: after resampl
     state particles get N(0, (K E_j n_x^{-1/d})²) jitter per component j (E_j = range of
     the particles) — needed when the model has no process noise.
 resampling : resampling scheme of the state filter (every step, as in step 2e).
+theta_law : "beta" (the paper, default) or "gaussian": the comparison of sec 3.2 / Fig. 2.
+    With "gaussian", step 3(a) draws θ^i ~ N(μ_θ, σ_θ²) with the mean and variance of the
+    same fitted Beta(α_{k-1}, β_{k-1}) (same sufficient statistics, same guards and cap; at
+    k = 1 the uniform prior's moments), and a draw outside [r_l, r_u] gets weight zero
+    (the prior has no mass there): only the sampling law differs. The share of draws
+    outside the range per step is ``diagnostics["outside"]``.
 """
 from __future__ import annotations
 
@@ -62,9 +68,11 @@ from .particle import normalize_log_weights
 from .resampling import check_scheme, resample_counts
 
 __all__ = ["DualParticleFilter", "beta_moment_fit", "beta_moments", "weighted_mean_var", "roughen",
-           "PARAMETER_WEIGHTS", "check_parameterized", "init_parameterized_filter"]
+           "PARAMETER_WEIGHTS", "THETA_LAWS", "check_parameterized", "init_parameterized_filter"]
 
 PARAMETER_WEIGHTS = ("predictive", "plugin", "literal")
+#: sampling laws of the parameter draws (step 3a): the paper's Beta, or a Gaussian with its moments
+THETA_LAWS = ("beta", "gaussian")
 #: status codes of :func:`beta_moment_fit`
 FIT_OK, FIT_TOO_WIDE, FIT_ZERO_VAR, FIT_CAPPED = 0, 1, 2, 3
 #: concentration used when the variance vanishes and no cap is set
@@ -187,7 +195,8 @@ class DualParticleFilter(Filter):
     needs_rng = True
 
     def __init__(self, model, n_x: int, n_theta: int, weight: str = "predictive", cap=None,
-                 theta0=None, roughening=None, resampling: str = "systematic", nu_min: float = 2.0):
+                 theta0=None, roughening=None, resampling: str = "systematic", nu_min: float = 2.0,
+                 theta_law: str = "beta"):
         init_parameterized_filter(self, model, type(self).__name__,
                                   needs=("f", "h") if weight == "plugin" or weight == "literal"
                                   else ("f", "h", "jacobian_f", "jacobian_h"))
@@ -211,6 +220,9 @@ class DualParticleFilter(Filter):
         self.roughening = roughening
         self.resampling = check_scheme(resampling)
         self.nu_min = float(nu_min)
+        if theta_law not in THETA_LAWS:
+            raise ValueError(f"theta_law must be one of {THETA_LAWS}, got {theta_law!r}")
+        self.theta_law = theta_law
 
     # -- the parameter step -------------------------------------------------------------
     def parameter_loglik(self, z, theta, x_prev, P_prev, x_now, theta_prev, k):
@@ -254,6 +266,7 @@ class DualParticleFilter(Filter):
         ess_t = np.empty((runs, T))
         coll_x = np.zeros((runs, T), bool)
         coll_t = np.zeros((runs, T), bool)
+        outside = np.zeros((runs, T))
         for k in range(1, T + 1):
             z = y[:, k - 1]
             # (2) state filter, conditioned on θ̂_{k-1}
@@ -271,9 +284,17 @@ class DualParticleFilter(Filter):
             if self.roughening is not None:
                 x = roughen(x, self.roughening, rng)
             # (3) parameter filter: draw from Beta(α_{k-1}, β_{k-1}), weight, refit (eq 7)
-            phi = rng.beta(alpha[:, None], beta[:, None], size=(runs, Nt))
+            if self.theta_law == "beta":
+                phi = rng.beta(alpha[:, None], beta[:, None], size=(runs, Nt))
+            else:  # a Gaussian with the fitted Beta's moments (sec 3.2's comparison)
+                mu_b, var_b = beta_moments(alpha, beta)
+                phi = mu_b[:, None] + np.sqrt(var_b)[:, None] * rng.standard_normal((runs, Nt))
+            out = (phi < 0.0) | (phi > 1.0)
+            outside[:, k - 1] = out.mean(axis=1)
             theta = lo + width * phi
             logw = self.parameter_loglik(z, theta, x_hat, P_hat, x_new, theta_hat, k)
+            if self.theta_law == "gaussian":
+                logw = np.where(out, -np.inf, logw)   # no prior mass outside [r_l, r_u]
             wt, _, ct = normalize_log_weights(logw)
             coll_t[:, k - 1] = ct
             ess_t[:, k - 1] = 1.0 / np.sum(wt * wt, axis=1)
@@ -292,7 +313,7 @@ class DualParticleFilter(Filter):
             "n_too_wide": (status == FIT_TOO_WIDE).sum(axis=1), "n_zero_var": (status == FIT_ZERO_VAR).sum(axis=1),
             "n_capped": (status == FIT_CAPPED).sum(axis=1), "ess_x": ess_x, "ess_theta": ess_t,
             "collapsed_x": coll_x, "collapsed_theta": coll_t,
-            "likelihood_evaluations_per_step": Nx + Nt,
+            "likelihood_evaluations_per_step": Nx + Nt, "outside": outside,
         })
 
     def theta_quantiles(self, result: FilterResult, q):
@@ -303,4 +324,4 @@ class DualParticleFilter(Filter):
 
     def __repr__(self) -> str:
         return (f"DualParticleFilter(n_x={self.n_x}, n_theta={self.n_theta}, weight={self.weight!r}, "
-                f"cap={self.cap}, roughening={self.roughening})")
+                f"cap={self.cap}, roughening={self.roughening}, theta_law={self.theta_law!r})")
