@@ -145,9 +145,12 @@ class GridFilter(Filter):
                 log_domain[bad, k - 1] = True
                 collapsed[np.flatnonzero(bad)[coll], k - 1] = True
             p = post / s
-            mean = p @ g
+            # row-wise sums, not p @ g: a BLAS matrix-vector product's summation order
+            # depends on how many rows it is given, so run i's mean would differ in the
+            # last bits with the batch size (pfrepro.rng rule 3)
+            mean = (p * g).sum(axis=1)
             means[:, k - 1, 0] = mean
-            covs[:, k - 1, 0, 0] = p @ (g * g) - mean**2
+            covs[:, k - 1, 0, 0] = (p * (g * g)).sum(axis=1) - mean**2
         edge = p[:, :5].sum(axis=1) + p[:, -5:].sum(axis=1)
         return FilterResult(means, covs, diagnostics={
             "lost_mass": lost, "final_edge_mass": edge, "collapsed": collapsed,
