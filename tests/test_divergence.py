@@ -98,3 +98,65 @@ def test_growth_threshold_is_checked():
             GaussianParticleFlowFilter(model, 10, max_growth=bad)
     with pytest.raises(ValueError, match="on_divergence"):
         GaussianParticleFlowFilter(model, 10, on_divergence="ignore")
+
+
+def test_every_filter_on_a_1e200_outlier_behaves_as_documented():
+    """Issue 21: GPFF raised numpy's singular-matrix error, the theta-grid reference scipy's
+    "finite values" error, the grid filter was silent, the dual EKF returned 5e199 then NaN.
+    Now: filters that weight (grid, theta grid, PFs) ignore the measurement, flag it and give
+    one WeightCollapseWarning; the flow and the dual EKF mark the run diverged (NaN from that
+    step) with one FilterDivergenceWarning; no other run changes."""
+    from pfrepro.experiments.dpf_hou2008 import model_51
+    from pfrepro.filters import GridFilter
+    from pfrepro.filters.dual_ekf import DualExtendedKalmanFilter
+    from pfrepro.filters.particle import WeightCollapseWarning
+    from pfrepro.filters.theta_grid import ThetaGridReference
+    from pfrepro.models import UNGM
+
+    m, pm = UNGM.zhang2016(), model_51()
+    y = m.simulate(10, 3, np.random.default_rng(0)).y
+    py = pm.simulate(10, 3, np.random.default_rng(0)).y
+    y_bad, py_bad = y.copy(), py.copy()
+    y_bad[1, 4] = 1e200
+    py_bad[1, 4] = 1e200
+    cases = [
+        ("GPFF", lambda yy: GaussianParticleFlowFilter(m, 50).filter(yy, filter_streams(1, "g", 3)), y, y_bad,
+         FilterDivergenceWarning, "diverged_at", 5),
+        ("Grid", lambda yy: GridFilter(m, bounds=(-40, 40), n_grid=1601).filter(yy), y, y_bad,
+         WeightCollapseWarning, "collapsed", None),
+        # the dual EKF's test is the EKF's (non-finite estimates): the 1e200 estimate of step 5
+        # overflows at step 6, where the run is stopped
+        ("DEKF", lambda yy: DualExtendedKalmanFilter(pm, 0.5, 0.1).filter(yy), py, py_bad,
+         FilterDivergenceWarning, "diverged_at", 6),
+        ("ThetaGrid", lambda yy: ThetaGridReference(pm, n_theta=21, n_grid=201).filter(yy), py, py_bad,
+         WeightCollapseWarning, "collapsed", None),
+    ]
+    for name, run, clean, bad, kind, key, at in cases:
+        ref = run(clean)
+        with warnings.catch_warnings(record=True) as rec:
+            warnings.simplefilter("always")
+            got = run(bad)
+        assert [w.category for w in rec] == [kind], (name, [str(w.message) for w in rec])
+        flag = np.asarray(got.diagnostics[key])
+        if key == "diverged_at":
+            assert flag.tolist() == [0, at, 0], name
+            assert np.all(np.isnan(got.x[1, at - 1:])) and np.all(np.isfinite(got.x[1, :at - 1])), name
+        else:
+            assert flag[1, 4] and flag.sum() == 1, name
+            assert np.all(np.isfinite(got.x)), name
+        for r in (0, 2):                                  # the other runs: the same bits
+            np.testing.assert_array_equal(got.x[r], ref.x[r], err_msg=name)
+
+
+def test_dual_ekf_raises_like_the_ekf_when_asked():
+    from pfrepro.experiments.dpf_hou2008 import model_51
+    from pfrepro.filters.dual_ekf import DualExtendedKalmanFilter
+
+    pm = model_51()
+    y = pm.simulate(8, 2, np.random.default_rng(0)).y
+    y[0, 3] = 1e200
+    with pytest.raises(FilterDivergenceError, match="DEKF"):
+        DualExtendedKalmanFilter(pm, 0.5, 0.1, on_divergence="raise").filter(y)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        DualExtendedKalmanFilter(pm, 0.5, 0.1, on_divergence="drop").filter(y)   # silent, marked

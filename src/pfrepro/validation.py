@@ -109,7 +109,11 @@ def as_measurements(y, dim_y: int, name: str = "y") -> np.ndarray:
 
 
 def as_finite_float(value, name: str, *, positive: bool = False, nonnegative: bool = False) -> float:
-    """Return ``value`` as a finite float (optionally > 0 or >= 0), else raise naming ``name``."""
+    """Return ``value`` as a finite float (optionally > 0 or >= 0), else raise naming ``name``.
+
+    Strings are refused (``float("0.5")`` would read one): a setting is a number, not text."""
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{name} must be a real number, got the string {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -153,7 +157,7 @@ def check_positive_int(value, name: str) -> int:
 
 def check_probability(value, name: str) -> float:
     """Return ``value`` as a float in [0, 1]."""
-    v = float(value)
+    v = as_finite_float(value, name)
     if not 0.0 <= v <= 1.0:
         raise ValueError(f"{name} must lie in [0, 1], got {value}")
     return v
