@@ -384,9 +384,9 @@ def check_seed(seed, name: str = "seed") -> int:
     return int(seed)
 
 
-def _check_mc_inputs(model, filters, executor):
+def _check_mc_inputs(model, filters, executor, sim=None):
     """run_monte_carlo's model, filters and executor, checked before any work starts."""
-    if model is None or not callable(getattr(model, "simulate", None)):
+    if sim is None and (model is None or not callable(getattr(model, "simulate", None))):
         raise TypeError(f"model must be a state-space model with a simulate method, got {model!r}")
     if not isinstance(filters, dict):
         raise TypeError(f"filters must be a dict {{name: filter}}, got {type(filters).__name__}")
@@ -462,7 +462,7 @@ def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, execu
     T = check_positive_int(T, "T")
     runs = check_positive_int(runs, "runs")
     seed = check_seed(seed)
-    _check_mc_inputs(model, filters, executor)
+    _check_mc_inputs(model, filters, executor, sim)
     if sim is not None and sim.y.shape[:2] != (runs, T):
         raise ValueError(f"sim has shape {sim.y.shape[:2]}, expected (runs, T) = {(runs, T)}")
     parts = run_chunks(runs, executor, chunks)
