@@ -390,8 +390,6 @@ def _check_mc_inputs(model, filters, executor, sim=None):
         raise TypeError(f"model must be a state-space model with a simulate method, got {model!r}")
     if not isinstance(filters, dict):
         raise TypeError(f"filters must be a dict {{name: filter}}, got {type(filters).__name__}")
-    if not filters:
-        raise ValueError("filters is empty: give at least one {name: filter}")
     for name, filt in filters.items():
         if not isinstance(name, str):
             raise TypeError(f"filters: every name must be a string, got {name!r}")
