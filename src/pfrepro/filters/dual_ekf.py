@@ -37,7 +37,7 @@ from ..models.parameterized import as_theta
 import warnings
 
 from ..flow import solve_per_run
-from ..validation import as_covariance, as_finite_float
+from ..validation import as_covariance, as_finite_float, check_quantile_levels
 from .base import (DIVERGENCE_POLICIES, Filter, FilterDivergenceError, FilterDivergenceWarning, FilterResult,
                    gaussian_loglik)
 from .dual_pf import init_parameterized_filter
@@ -155,4 +155,4 @@ class DualExtendedKalmanFilter(Filter):
         from scipy.stats import norm
 
         th, v = result.diagnostics["theta"], result.diagnostics["theta_var"]
-        return np.stack([th + norm.ppf(qq) * np.sqrt(np.maximum(v, 0.0)) for qq in np.atleast_1d(q)])
+        return np.stack([th + norm.ppf(qq) * np.sqrt(np.maximum(v, 0.0)) for qq in check_quantile_levels(q, "q")])

@@ -24,7 +24,7 @@ from scipy.interpolate import CubicSpline
 
 import warnings
 
-from ..validation import check_positive_int
+from ..validation import check_positive_int, check_quantile_levels
 from .base import Filter, FilterResult
 from .particle import WeightCollapseWarning
 from .dual_pf import init_parameterized_filter
@@ -185,6 +185,6 @@ class ThetaGridReference(Filter):
 
     def theta_quantiles(self, result: FilterResult, q=None):
         """The exact posterior's 2.5 / 50 / 97.5 % quantiles of θ: (3, runs, T)."""
-        if q is not None and tuple(np.atleast_1d(q)) != self.quantile_levels:
+        if q is not None and check_quantile_levels(q, "q") != self.quantile_levels:
             raise ValueError(f"the reference stores the quantiles {self.quantile_levels}; got q = {q}")
         return np.moveaxis(result.diagnostics["theta_quantiles"], -1, 0)
