@@ -153,3 +153,36 @@ def test_bad_values_give_clear_errors(label, call, name, values):
             raise AssertionError(f"{label}({v!r}) was accepted")
 
     check()
+
+
+# -- exports and the command line --------------------------------------------------------------
+def test_write_table_and_to_csv_checks(tmp_path):
+    import pandas as pd
+
+    from pfrepro.export import write_table
+
+    with pytest.raises(TypeError, match="DataFrame"):
+        write_table(np.zeros((2, 2)), tmp_path / "a.csv")
+    with pytest.raises(IsADirectoryError, match="directory"):
+        write_table(pd.DataFrame({"a": [1]}), tmp_path)
+    res = _mc()
+    with pytest.raises(IsADirectoryError, match="directory"):
+        res.results["PF"].to_csv(tmp_path)
+    assert write_table(pd.Series([1.0, 2.0], name="v"), tmp_path / "s.csv").read_text() == "v\n1.0\n2.0\n"
+
+
+@pytest.mark.parametrize("content", ["{not json", "[1, 2]", '{"a": 1}', '[{"claim_id": "x"}]'])
+def test_scorecard_on_a_corrupt_claims_file_is_one_line_and_exit_2(tmp_path, capsys, content):
+    from pfrepro import cli
+
+    (tmp_path / "bad.json").write_text(content)
+    code = cli.main(["scorecard", "--dir", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "bad.json" in err, err
+
+
+def test_run_with_an_empty_out_is_refused(capsys):
+    from pfrepro import cli
+
+    assert cli.main(["run", "li2012", "--runs", "1", "--out", ""]) == 2
+    assert "--out" in capsys.readouterr().err
