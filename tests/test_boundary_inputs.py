@@ -99,6 +99,7 @@ def test_normalize_log_weights_checks():
 
 @pytest.mark.parametrize("value", ["0.5", "1", b"2"])
 def test_strings_are_not_numbers(value):
+    """(Any numeric setting read through validation.as_finite_float; the table below covers more.)"""
     with pytest.raises(TypeError, match="q0"):
         from pfrepro.experiments.dpf_hou2008 import model_51
         from pfrepro.filters.dual_ekf import DualExtendedKalmanFilter
@@ -114,6 +115,37 @@ bad_count = st.one_of(st.integers(max_value=0), st.floats(allow_nan=True).filter
                       not_a_number, st.booleans())
 bad_seed = st.one_of(st.integers(max_value=-1), st.floats().filter(lambda v: not (np.isfinite(v) and v.is_integer())),
                      not_a_number, st.booleans())
+
+bad_levels = st.one_of(st.lists(st.floats(min_value=1.0), min_size=1, max_size=3),
+                       st.lists(st.floats(max_value=0.0), min_size=1, max_size=3), st.just([]), st.text(max_size=3),
+                       st.lists(nonfinite, min_size=1, max_size=2))
+
+
+def _lw(**kw):
+    from pfrepro.filters.liu_west import LiuWestFilter
+    from pfrepro.models.ungm_theta import UNGMTheta
+
+    return LiuWestFilter(UNGMTheta(), 10, **kw)
+
+
+def _dpf(**kw):
+    from pfrepro.filters.dual_pf import DualParticleFilter
+    from pfrepro.models.ungm_theta import UNGMTheta
+
+    return DualParticleFilter(UNGMTheta(), 10, 10, **kw)
+
+
+def _ungm_theta(**kw):
+    from pfrepro.models.ungm_theta import UNGMTheta
+
+    return UNGMTheta(**kw)
+
+
+def unit_ball_volume(d):
+    from pfrepro.filters.imm import unit_ball_volume as u
+
+    return u(d)
+
 
 TABLE = [
     # (label, call with the bad value, parameter name the message must contain, bad values)
@@ -133,6 +165,19 @@ TABLE = [
     ("GPFF n_steps", lambda v: GaussianParticleFlowFilter(UNG, 10, n_steps=v), "n_steps", bad_count),
     ("GPFF max_growth", lambda v: GaussianParticleFlowFilter(UNG, 10, max_growth=v), "max_growth",
      st.one_of(nonfinite, not_a_number, st.floats(max_value=1.0, allow_infinity=False))),
+    ("LiuWestFilter quantiles", lambda v: _lw(quantiles=v), "quantiles", bad_levels),
+    ("LiuWestFilter delta", lambda v: _lw(delta=v), "delta", st.one_of(nonfinite, not_a_number)),
+    ("DualParticleFilter nu_min", lambda v: _dpf(nu_min=v), "nu_min",
+     st.one_of(nonfinite, not_a_number, st.floats(max_value=0.0, allow_infinity=False))),
+    ("DualParticleFilter cap", lambda v: _dpf(cap=v), "cap",
+     st.one_of(nonfinite, st.text(max_size=3), st.floats(max_value=0.0, allow_infinity=False))),
+    ("DualParticleFilter roughening", lambda v: _dpf(roughening=v), "roughening",
+     st.one_of(nonfinite, st.text(max_size=3), st.floats(max_value=0.0, allow_infinity=False))),
+    ("UNGMTheta beta", lambda v: _ungm_theta(beta=v), "beta", st.one_of(nonfinite, not_a_number)),
+    ("UNGMTheta bounds", lambda v: _ungm_theta(bounds=v), "bounds",
+     st.one_of(st.tuples(st.floats()), st.tuples(st.floats(), st.floats(), st.floats()), nonfinite,
+               st.tuples(st.floats(min_value=0.6, max_value=10), st.floats(min_value=0.6, max_value=10)))),
+    ("unit_ball_volume d", lambda v: unit_ball_volume(v), "d", bad_count),
     ("GPFF max_shift", lambda v: GaussianParticleFlowFilter(UNG, 10, max_shift=v), "max_shift",
      st.one_of(nonfinite, not_a_number, st.floats(max_value=0.0, allow_infinity=False))),
 ]
@@ -186,3 +231,52 @@ def test_run_with_an_empty_out_is_refused(capsys):
 
     assert cli.main(["run", "li2012", "--runs", "1", "--out", ""]) == 2
     assert "--out" in capsys.readouterr().err
+
+
+def test_theta_quantiles_refuse_levels_outside_0_1():
+    from pfrepro.experiments.dpf_hou2008 import model_51
+    from pfrepro.filters.dual_ekf import DualExtendedKalmanFilter
+    from pfrepro.filters.dual_pf import DualParticleFilter
+
+    m = model_51()
+    y = m.simulate(4, 2, np.random.default_rng(0)).y
+    for filt in (DualExtendedKalmanFilter(m, 0.5, 0.1), DualParticleFilter(m, 20, 20)):
+        res = filt.filter(y, np.random.default_rng(1))
+        for bad in ([1.5], [0.0], [], "0.5"):
+            with pytest.raises((ValueError, TypeError), match="q"):
+                filt.theta_quantiles(res, bad)
+        assert np.all(np.isfinite(filt.theta_quantiles(res, [0.1, 0.9])))
+
+
+def test_parameterized_model_theta_true_inside_bounds():
+    from pfrepro.models.ungm_theta import UNGMTheta
+
+    with pytest.raises(ValueError, match="theta_true.*outside bounds"):
+        UNGMTheta(theta_true=1.5, bounds=(0.0, 1.0))
+    with pytest.raises(ValueError, match="bounds"):
+        UNGMTheta(bounds=(0,))
+
+
+def test_jump_markov_and_imm_mismatches():
+    from pfrepro.filters import IMMKalman, KalmanFilter
+    from pfrepro.models import JumpMarkovSystem, LinearGaussianModel
+
+    F1, F2 = np.array([[1.0, 1.0], [0.0, 1.0]]), np.array([[1.0, 1.0], [0.0, 0.5]])
+    H, Q, R = np.array([[1.0, 0.0]]), 0.1 * np.eye(2), np.array([[2.0]])
+    ms = [LinearGaussianModel(F, H, Q, R, x0=[0.0, 1.0], P0=np.eye(2)) for F in (F1, F2)]
+    sysm = JumpMarkovSystem(ms, [[0.9, 0.1], [0.1, 0.9]])
+    with pytest.raises(ValueError, match=r"mode_filters\[1\]"):
+        IMMKalman(sysm, [KalmanFilter(ms[0]), KalmanFilter(ms[0])])      # mode 1's filter on mode 0's model
+    IMMKalman(sysm, [KalmanFilter(m) for m in ms])
+    twin = LinearGaussianModel(F2, H, Q, R, x0=[0.0, 1.0], P0=np.eye(2))   # an equal copy is fine
+    IMMKalman(sysm, [KalmanFilter(ms[0]), KalmanFilter(twin)])
+    with pytest.raises(TypeError, match="JumpMarkovSystem"):
+        IMMKalman(ms[0], [KalmanFilter(ms[0])])
+    with pytest.raises(TypeError, match=r"models\[1\]"):
+        JumpMarkovSystem([ms[0], "CV"], np.eye(2))
+    other_R = LinearGaussianModel(F2, H, Q, 5 * R, x0=[0.0, 1.0], P0=np.eye(2))
+    with pytest.raises(ValueError, match=r"models\[1\].R differs"):
+        JumpMarkovSystem([ms[0], other_R], np.eye(2))
+    other_P0 = LinearGaussianModel(F2, H, Q, R, x0=[0.0, 1.0], P0=2 * np.eye(2))
+    with pytest.raises(ValueError, match=r"models\[1\].P0 differs"):
+        JumpMarkovSystem([ms[0], other_P0], np.eye(2))
