@@ -55,8 +55,11 @@ def mixing_probabilities(mu, Pi):
     column mu (it carries no probability, the value only keeps the arithmetic finite).
     """
     mu = np.asarray(mu, float)
-    c = mu @ Pi
     num = Pi * mu[..., :, None]
+    # c_j = sum_i num[i, j] as a sum over the mode axis, not mu @ Pi: a BLAS matrix product's
+    # rounding depends on how many rows (runs) it is given, so run i's probabilities would
+    # differ in the last bit with the batch size (pfrepro.rng rule 3)
+    c = num.sum(axis=-2)
     with np.errstate(invalid="ignore", divide="ignore"):
         M = num / c[..., None, :]
     zero = c <= 0
