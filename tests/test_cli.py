@@ -6,6 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -196,10 +197,10 @@ def test_run_with_jobs_matches_serial(li_run, tmp_path):
     code = cli.main(["run", "li2012", "--runs", "2", "--seed", "3", "--jobs", "2", "--out", str(tmp_path)])
     assert code == 0
     a, b = pd.read_csv(serial / "table1.csv"), pd.read_csv(tmp_path / "table1.csv")
-    # EKF/PF columns are bit-identical (per-run streams); the grid filter's FFT may round
-    # differently when the runs are split into chunks, at the 1e-16 level
-    assert a["ours"].to_numpy() == pytest.approx(b["ours"].to_numpy(), rel=1e-12, abs=0)
-    assert a["exact"].to_numpy() == pytest.approx(b["exact"].to_numpy(), rel=1e-12)
+    # bit-identical, the grid filter's "exact" column included (issue 21: it used to differ in
+    # the last bits with the batch size)
+    np.testing.assert_array_equal(a["ours"].to_numpy(), b["ours"].to_numpy())
+    np.testing.assert_array_equal(a["exact"].to_numpy(), b["exact"].to_numpy())
 
 
 # -- the dual PF and IMM-PF papers: registered, listed, runnable on one run -------------------
@@ -258,3 +259,39 @@ def test_immpf_table1_frame_matches_the_experiment():
     assert tab.loc[["IMMPF", "IMMPFOR"], "ours mean"].to_numpy() == pytest.approx(t1["mean"].to_numpy(), rel=1e-12)
     assert "IMM-EKF" not in tab.index          # rows of filters that were not run are left out
     assert tab.loc["IMMPF", "paper peak"] > 0
+
+
+# -- --jobs 1 and --jobs 2 write the same bytes -------------------------------------------------
+class _TickClock:
+    """A deterministic stand-in for ``time.perf_counter`` (1 s a call): the timing columns and
+    the time panels then depend on the call sequence only, which is the same for every --jobs
+    (timing always runs serially in the main process)."""
+
+    def __init__(self):
+        self.t = 0.0
+
+    def perf_counter(self):
+        self.t += 1.0
+        return self.t
+
+
+def test_every_output_file_is_byte_identical_for_jobs_1_and_2(tmp_path, capsys, monkeypatch):
+    """Issue 21: the grid filter's numbers differed in the last bits with the batch size, so
+    `--jobs 2` wrote other "exact" numbers than `--jobs 1`. Every file (tables, figures, claims)
+    must be the same bytes; only the wall clock is replaced (measured seconds are not numbers of
+    the experiment)."""
+    from pfrepro import montecarlo
+
+    outs = []
+    for jobs in (1, 2):
+        monkeypatch.setattr(montecarlo, "time", _TickClock())
+        out = tmp_path / f"jobs{jobs}"
+        code = cli.main(["run", "li2012", "--runs", "3", "--seed", "7", "--jobs", str(jobs), "--out", str(out)])
+        assert code == 0
+        outs.append(out)
+    capsys.readouterr()
+    files = sorted(p.relative_to(outs[0]) for p in outs[0].rglob("*") if p.is_file())
+    assert {p.relative_to(outs[1]) for p in outs[1].rglob("*") if p.is_file()} == set(files)
+    assert any(f.suffix == ".png" for f in files) and any(f.suffix == ".csv" for f in files)
+    for f in files:
+        assert (outs[0] / f).read_bytes() == (outs[1] / f).read_bytes(), f"{f} differs between --jobs 1 and 2"

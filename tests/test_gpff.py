@@ -4,7 +4,7 @@ import pytest
 
 from pfrepro import flow, metrics
 from pfrepro.experiments.gpff_zhang2016 import random_linear_problem
-from pfrepro.filters import (FilterDivergenceError, GaussianParticleFlowFilter, KalmanFilter,
+from pfrepro.filters import (FilterDivergenceError, FilterDivergenceWarning, GaussianParticleFlowFilter, KalmanFilter,
                              ScaledSigmaPoints, kalman_update, unscented_transform)
 from pfrepro.filters.gpff import particle_moments
 from pfrepro.models import CWPA, UNGM, BearingsOnly, LinearGaussianModel
@@ -165,10 +165,14 @@ def test_eq41_divergence_is_recorded_when_dropping():
         if d[r] > 0:
             assert np.all(np.isnan(res.x[r, d[r] - 1:]))
             assert np.all(np.isfinite(res.x[r, :d[r] - 1]))
+    assert res.diagnostics["n_diverged"] > 0
     with pytest.raises(FilterDivergenceError):
-        if res.diagnostics["n_diverged"] == 0:
-            raise FilterDivergenceError("no divergence in this short run")
-        GaussianParticleFlowFilter(model, 50, field="eq41").filter(sim.y, np.random.default_rng(1))
+        GaussianParticleFlowFilter(model, 50, field="eq41", on_divergence="raise").filter(
+            sim.y, np.random.default_rng(1))
+    # the default keeps the runs and warns once, with the count
+    with pytest.warns(FilterDivergenceWarning, match=f"{res.diagnostics['n_diverged']} of 4 runs diverged"):
+        warned = GaussianParticleFlowFilter(model, 50, field="eq41").filter(sim.y, np.random.default_rng(1))
+    np.testing.assert_array_equal(warned.x, res.x)
 
 
 def test_input_validation():

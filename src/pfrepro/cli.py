@@ -181,6 +181,8 @@ def cmd_run(args) -> int:
         paper = get_paper(args.paper)
     except KeyError as exc:
         raise UsageError(exc.args[0]) from None
+    if args.out is not None and not args.out.strip():
+        raise UsageError("--out must name a directory, got an empty string (use --out . for the current one)")
     out = _writable_dir(Path(args.out if args.out is not None else f"pfrepro-{paper.key}"))
     import matplotlib
 
@@ -240,7 +242,14 @@ def cmd_scorecard(args) -> int:
     d = Path(args.dir) if args.dir is not None else _default_claims_dir()
     if not d.is_dir():
         raise UsageError(f"no claims directory {str(d)!r} (build the book or pass --dir <out>/claims of a run)")
-    df = load_all_claims(d)
+    try:
+        df = load_all_claims(d)
+    except (ValueError, TypeError, KeyError, AttributeError, UnicodeDecodeError) as exc:
+        # a corrupt or wrong-shaped JSON file: one line naming it, exit 2 (not a traceback)
+        bad = _first_bad_claims_file(d)
+        where = f" in {str(bad)!r}" if bad else ""
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise UsageError(f"cannot read the claims{where}: {msg}") from None
     if not len(df):
         raise UsageError(f"no claims (*.json) in {str(d)!r}")
     if args.format == "csv":
@@ -252,6 +261,24 @@ def cmd_scorecard(args) -> int:
         print()
         print(df["verdict"].value_counts().to_string())
     return 0
+
+
+def _first_bad_claims_file(d: Path):
+    """The first ``*.json`` of ``d`` that is not a list of claim records (for the error message)."""
+    import json
+
+    from .claims import Claim
+
+    for path in sorted(d.glob("*.json")):
+        try:
+            rows = json.loads(path.read_text(encoding="utf-8"))
+            for row in rows:
+                row = dict(row)
+                row.pop("verdict", None)
+                Claim(**row)
+        except Exception:  # noqa: BLE001 - any failure marks this file
+            return path
+    return None
 
 
 COMMANDS = {"list": cmd_list, "run": cmd_run, "scorecard": cmd_scorecard}

@@ -104,7 +104,17 @@ def write_table(df: pd.DataFrame, path) -> Path:
 
     Multi-level column labels are joined with " | " so the file has one header line.
     """
+    if not isinstance(df, pd.DataFrame):
+        if isinstance(df, pd.Series):
+            df = df.to_frame()
+        else:
+            raise TypeError(f"write_table needs a pandas DataFrame (or Series) as df, got {type(df).__name__}; "
+                            "wrap an array with pandas.DataFrame(...) and name its columns")
+    if str(path).strip() == "":
+        raise ValueError("path is empty: give a file name")
     path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"path {str(path)!r} is a directory: give a file name, e.g. {str(path / 'table.csv')!r}")
     path.parent.mkdir(parents=True, exist_ok=True)
     out = df.copy()
     if isinstance(out.columns, pd.MultiIndex):

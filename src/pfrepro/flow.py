@@ -28,7 +28,7 @@ import numpy as np
 __all__ = ["lambda_schedule", "homotopy_moments", "affine_flow_coefficients", "affine_flow_field",
            "flow_moment_rhs", "kalman_bucy_rhs", "exact_affine_map", "gaussian_flow_field",
            "flow_field_coefficients", "field_from_coefficients",
-           "nonlinear_coefficients", "integrate_flow", "INTEGRATORS", "SCHEDULES"]
+           "nonlinear_coefficients", "integrate_flow", "solve_per_run", "INTEGRATORS", "SCHEDULES"]
 
 #: integrators of the flow ODE in lambda and their orders
 INTEGRATORS = {"euler": 1, "midpoint": 2, "rk4": 4}
@@ -208,13 +208,39 @@ def exact_affine_map(m, P, H, R, y, lam=1.0):
     return x_lam, Phi
 
 
+# ----------------------------------------------------------------------------- per-run linear algebra
+def solve_per_run(A, B):
+    """``np.linalg.solve(A, B)`` over a batch of matrices, one run unable to spoil another.
+
+    numpy's batched solve factorises each matrix on its own (run i's result does not depend
+    on the other matrices), but raises ``LinAlgError`` for the *whole* batch when one matrix
+    is singular. Here the batch is tried first (the common case, bit-identical); on failure
+    each matrix is solved alone and a singular one gives NaN in its own run only, which the
+    caller's divergence check then marks.
+    """
+    try:
+        return np.linalg.solve(A, B)
+    except np.linalg.LinAlgError:
+        pass
+    lead = np.broadcast_shapes(A.shape[:-2], B.shape[:-2])
+    A = np.broadcast_to(A, lead + A.shape[-2:])
+    B = np.broadcast_to(B, lead + B.shape[-2:])
+    out = np.empty(lead + B.shape[-2:])
+    for idx in np.ndindex(*lead):
+        try:
+            out[idx] = np.linalg.solve(A[idx], B[idx])
+        except np.linalg.LinAlgError:
+            out[idx] = np.nan
+    return out
+
+
 # ----------------------------------------------------------------------------- nonlinear case
 def _solve_sym(S, B):
     if S.shape[-1] == 1:
         # scalar measurement: LAPACK's 1 x 1 solve is this division (bit-identical),
         # without np.linalg's per-call overhead (the flow calls it 2 x 20-80 times a step)
         return B / S
-    return np.linalg.solve(S, B)
+    return solve_per_run(S, B)
 
 
 def flow_field_coefficients(lam, y, y_hat, Pxy, Pyy, R, residual=None):

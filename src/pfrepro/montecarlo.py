@@ -19,6 +19,7 @@ import gc
 import math
 import os
 import sys
+import concurrent.futures
 import time
 import zlib
 from dataclasses import dataclass, field
@@ -130,13 +131,25 @@ class MonteCarloResult:
         """The true states x_1..x_T, aligned with the estimates, shape ``(runs, T, dim_x)``."""
         return self.sim.x[:, 1:]
 
+    def _result(self, name):
+        try:
+            return self.results[name]
+        except (KeyError, TypeError):
+            raise KeyError(f"no filter named {name!r} in this result; filters: {list(self.results)}") from None
+
     def mse(self, name: str) -> np.ndarray:
         """Per-run MSE (eq 56 of Zhang et al.)."""
-        return mse(self.x_true, self.results[name].x)
+        return mse(self.x_true, self._result(name).x)
 
     def rmse(self, name: str) -> np.ndarray:
         """Per-run RMSE."""
-        return rmse(self.x_true, self.results[name].x)
+        return rmse(self.x_true, self._result(name).x)
+
+    def n_diverged(self) -> dict:
+        """Runs each filter lost (diverged/stopped: non-finite estimates), ``{name: count}``:
+        report them beside every error statistic."""
+        return {n: int((~np.all(np.isfinite(r.x.reshape(r.x.shape[0], -1)), axis=1)).sum())
+                for n, r in self.results.items()}
 
     # -- exports (pfrepro.export) ----------------------------------------------------------
     def to_frame(self, component_names=None, filters=None):
@@ -362,6 +375,59 @@ def _filter_chunk(filt, name: str, y, seed: int, start: int) -> tuple[FilterResu
     return res, time.perf_counter() - t0
 
 
+def check_seed(seed, name: str = "seed") -> int:
+    """A seed is an int >= 0 (not a bool, a float such as 1.5, None or a string)."""
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer >= 0, got {seed!r}")
+    if seed < 0:
+        raise ValueError(f"{name} must be >= 0, got {seed}")
+    return int(seed)
+
+
+def _check_mc_inputs(model, filters, executor, sim=None):
+    """run_monte_carlo's model, filters and executor, checked before any work starts."""
+    if sim is None and (model is None or not callable(getattr(model, "simulate", None))):
+        raise TypeError(f"model must be a state-space model with a simulate method, got {model!r}")
+    if not isinstance(filters, dict):
+        raise TypeError(f"filters must be a dict {{name: filter}}, got {type(filters).__name__}")
+    for name, filt in filters.items():
+        if not isinstance(name, str):
+            raise TypeError(f"filters: every name must be a string, got {name!r}")
+        if not callable(getattr(filt, "filter", None)):
+            raise TypeError(f"filters[{name!r}] must be a filter (with a .filter method), got {filt!r}")
+    if executor is not None:
+        if not callable(getattr(executor, "submit", None)):
+            raise TypeError(f"executor must be a concurrent.futures.Executor (or None), got {executor!r}")
+        if getattr(executor, "_shutdown", False) or getattr(executor, "_shutdown_thread", False):
+            raise ValueError("executor has been shut down; create a new one (montecarlo.process_pool)")
+        if isinstance(executor, concurrent.futures.ProcessPoolExecutor):
+            _check_picklable({"model": model, **{f"filters[{n!r}]": f for n, f in filters.items()}})
+
+
+def _check_picklable(objects: dict):
+    """Raise a TypeError naming the object and attribute that a process pool cannot pickle."""
+    import pickle
+
+    for label, obj in objects.items():
+        try:
+            pickle.dumps(obj)
+        except Exception as exc:  # noqa: BLE001 - any pickling failure is reported the same way
+            bad = [k for k, v in getattr(obj, "__dict__", {}).items() if not _pickles(v)]
+            where = f" (attribute {', '.join(bad)})" if bad else ""
+            raise TypeError(f"{label} cannot be sent to a process pool: it cannot be pickled{where}: "
+                            f"{type(exc).__name__}: {exc}") from None
+
+
+def _pickles(v) -> bool:
+    import pickle
+
+    try:
+        pickle.dumps(v)
+        return True
+    except Exception:  # noqa: BLE001
+        return False
+
+
 def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, executor=None, progress=None,
                     chunks: int | None = None, time_per_run: bool = False, timing_repeats: int = 3,
                     sim: Simulation | None = None) -> MonteCarloResult:
@@ -393,6 +459,8 @@ def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, execu
     """
     T = check_positive_int(T, "T")
     runs = check_positive_int(runs, "runs")
+    seed = check_seed(seed)
+    _check_mc_inputs(model, filters, executor, sim)
     if sim is not None and sim.y.shape[:2] != (runs, T):
         raise ValueError(f"sim has shape {sim.y.shape[:2]}, expected (runs, T) = {(runs, T)}")
     parts = run_chunks(runs, executor, chunks)

@@ -60,7 +60,16 @@ class RunStreams:
         ``entropy`` is an int or a sequence of ints (e.g. ``[seed, 1, crc32(name)]``).
         Run i gets ``default_rng(SeedSequence(entropy, spawn_key=(i,)))``.
         """
-        runs, start = int(runs), int(start)
+        from .validation import check_positive_int
+
+        runs = check_positive_int(runs, "runs")
+        if isinstance(start, (bool, np.bool_)) or not isinstance(start, (int, np.integer)):
+            raise TypeError(f"start must be an integer >= 0, got {start!r}")
+        ent = np.atleast_1d(np.asarray(entropy, dtype=object))
+        if not all(isinstance(e, (int, np.integer)) and not isinstance(e, (bool, np.bool_)) and e >= 0
+                   for e in ent.ravel()):
+            raise ValueError(f"entropy must be an int >= 0 or a sequence of them, got {entropy!r}")
+        start = int(start)
         if runs < 1 or start < 0:
             raise ValueError(f"need runs >= 1 and start >= 0, got runs={runs}, start={start}")
         return cls([np.random.default_rng(np.random.SeedSequence(entropy, spawn_key=(i,)))
@@ -90,11 +99,15 @@ class RunStreams:
     # -- draws -------------------------------------------------------------------
     def _size(self, size, what: str) -> tuple:
         if type(size) is tuple and size and size[0] == len(self._gens) \
-                and all(type(s) is int for s in size):
+                and all(type(s) is int and s >= 0 for s in size):
             return size                       # the hot path of every filter step: already valid
         if size is None:
             raise ValueError(f"RunStreams.{what} needs size=(runs, ...) with the runs axis first")
-        size = tuple(int(s) for s in np.atleast_1d(size))
+        raw = np.atleast_1d(np.asarray(size, dtype=object))
+        if raw.ndim != 1 or not all(isinstance(s, (int, np.integer)) and not isinstance(s, (bool, np.bool_))
+                                    and s >= 0 for s in raw):
+            raise ValueError(f"RunStreams.{what}: size must be a tuple of integers >= 0, got {size!r}")
+        size = tuple(int(s) for s in raw)
         if not size or size[0] != len(self._gens):
             raise ValueError(
                 f"RunStreams.{what}: size {size} must start with the number of runs ({len(self._gens)}); "

@@ -109,7 +109,11 @@ def as_measurements(y, dim_y: int, name: str = "y") -> np.ndarray:
 
 
 def as_finite_float(value, name: str, *, positive: bool = False, nonnegative: bool = False) -> float:
-    """Return ``value`` as a finite float (optionally > 0 or >= 0), else raise naming ``name``."""
+    """Return ``value`` as a finite float (optionally > 0 or >= 0), else raise naming ``name``.
+
+    Strings are refused (``float("0.5")`` would read one): a setting is a number, not text."""
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{name} must be a real number, got the string {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):
@@ -153,7 +157,25 @@ def check_positive_int(value, name: str) -> int:
 
 def check_probability(value, name: str) -> float:
     """Return ``value`` as a float in [0, 1]."""
-    v = float(value)
+    v = as_finite_float(value, name)
     if not 0.0 <= v <= 1.0:
         raise ValueError(f"{name} must lie in [0, 1], got {value}")
     return v
+
+
+def check_quantile_levels(q, name: str = "q") -> tuple:
+    """Quantile levels: a number or a non-empty 1-D sequence of numbers in (0, 1) -> tuple of floats.
+
+    (A level of 0 or 1 is an infinite quantile for an unbounded law, and 1.5 is none at all:
+    both are refused rather than returned as NaN.)"""
+    if isinstance(q, (str, bytes)):
+        raise TypeError(f"{name} must be quantile levels in (0, 1), got the string {q!r}")
+    try:
+        arr = np.atleast_1d(np.asarray(q, dtype=float))
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be quantile levels in (0, 1), got {q!r}") from None
+    if arr.ndim != 1 or arr.size == 0:
+        raise ValueError(f"{name} must be a non-empty 1-D sequence of levels, got {q!r}")
+    if not np.all((arr > 0) & (arr < 1)):
+        raise ValueError(f"{name} must lie in (0, 1), got {q!r}")
+    return tuple(float(v) for v in arr)

@@ -1,5 +1,5 @@
 """Filters: Kalman family, bootstrap particle filter with resampling schemes, grid filter."""
-from .base import Filter, FilterDivergenceError, FilterResult, GaussianFilter
+from .base import Filter, FilterDivergenceError, FilterDivergenceWarning, FilterResult, GaussianFilter
 from .cmspf import CMSParticleFilter, OracleCMSParticleFilter
 from .espf import EvolutionSamplingParticleFilter
 from .gpff import GaussianParticleFlowFilter
@@ -13,7 +13,7 @@ from .resampling import (RESAMPLING_SCHEMES, effective_sample_size, multinomial_
 from .sigma_points import ScaledSigmaPoints, unscented_transform
 from .ukf import UnscentedKalmanFilter
 
-__all__ = ["Filter", "FilterResult", "GaussianFilter", "FilterDivergenceError", "KalmanFilter",
+__all__ = ["Filter", "FilterResult", "GaussianFilter", "FilterDivergenceError", "FilterDivergenceWarning", "KalmanFilter",
            "ExtendedKalmanFilter", "kalman_update", "UnscentedKalmanFilter", "ScaledSigmaPoints",
            "unscented_transform", "BootstrapParticleFilter", "normalize_log_weights", "GridFilter", "GaussianParticleFlowFilter",
            "resample", "multinomial_resample", "stratified_resample", "systematic_resample",

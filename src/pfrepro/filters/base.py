@@ -9,12 +9,22 @@ from ..models.base import ModelContractError, require_capabilities
 from ..rng import check_rng
 from ..validation import MEASUREMENT_SHAPES, as_covariance, as_measurements, as_vector
 
-__all__ = ["FilterResult", "Filter", "GaussianFilter", "FilterDivergenceError", "ModelContractError",
+__all__ = ["FilterResult", "Filter", "GaussianFilter", "FilterDivergenceError", "FilterDivergenceWarning",
+           "DIVERGENCE_POLICIES", "ModelContractError",
            "gaussian_loglik", "MEASUREMENT_SHAPES"]
 
 
 class FilterDivergenceError(FloatingPointError):
     """Raised when a filter's state becomes non-finite (e.g. a covariance loses definiteness)."""
+
+
+class FilterDivergenceWarning(RuntimeWarning):
+    """Some runs diverged and were stopped (NaN from the step in ``diagnostics["diverged_at"]``);
+    the other runs are unaffected."""
+
+
+#: what a filter with an ``on_divergence`` setting does with a diverging run
+DIVERGENCE_POLICIES = ("warn", "drop", "raise")
 
 
 @dataclass

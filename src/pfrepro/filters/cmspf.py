@@ -42,7 +42,7 @@ import numpy as np
 
 from ..chaos import ChaosCarrier
 from ..rng import take_runs
-from ..validation import check_positive_int, check_probability
+from ..validation import as_finite_float, check_positive_int, check_probability
 from .base import Filter, FilterDivergenceError, FilterResult
 from .particle import normalize_log_weights, warn_collapse
 from .resampling import check_scheme, resample_counts
@@ -188,10 +188,7 @@ class CMSParticleFilter(Filter):
         if self.n_particles < 2:
             raise ValueError("CMSParticleFilter needs n_particles >= 2 (big and small particles)")
         self.carrier = carrier if isinstance(carrier, ChaosCarrier) else ChaosCarrier(carrier)
-        eta = float(eta)
-        if not np.isfinite(eta) or eta <= 0:
-            raise ValueError(f"eta (adjustment factor) must be a positive number, got {eta}")
-        self.eta = eta
+        self.eta = as_finite_float(eta, "eta (adjustment factor)", positive=True)
         self.big_fraction = check_probability(big_fraction, "big_fraction")
         self.n_big = int(min(max(1, round(self.big_fraction * self.n_particles)), self.n_particles // 2))
         self.n_th = check_probability(n_th, "n_th")

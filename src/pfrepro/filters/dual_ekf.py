@@ -25,14 +25,21 @@ model : a :class:`~pfrepro.models.parameterized.ParameterizedModel`.
 theta0, P_theta0 : initial parameter estimate and its variance.
 q0, anneal, q_min : parameter noise Q^θ_k = max(q0 · anneal^k, q_min).
 clip_to_bounds : keep θ̂ inside the model's prior range (default False: the plain DEKF).
+on_divergence : "warn" (default): a run whose estimates become non-finite is NaN from that step on,
+    its step in ``diagnostics["diverged_at"]``, one ``FilterDivergenceWarning`` with the count; "drop": the
+    same, silent; "raise": ``FilterDivergenceError`` (as the EKF, UKF and IMM filters).
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ..models.parameterized import as_theta
-from ..validation import as_covariance
-from .base import Filter, FilterResult, gaussian_loglik
+import warnings
+
+from ..flow import solve_per_run
+from ..validation import as_covariance, as_finite_float, check_quantile_levels
+from .base import (DIVERGENCE_POLICIES, Filter, FilterDivergenceError, FilterDivergenceWarning, FilterResult,
+                   gaussian_loglik)
 from .dual_pf import init_parameterized_filter
 
 __all__ = ["DualExtendedKalmanFilter"]
@@ -51,17 +58,20 @@ class DualExtendedKalmanFilter(Filter):
     name = "DEKF"
 
     def __init__(self, model, theta0, P_theta0, q0: float = 0.0, anneal: float = 1.0, q_min: float = 0.0,
-                 clip_to_bounds: bool = False, m0=None, P0=None):
+                 clip_to_bounds: bool = False, on_divergence: str = "warn", m0=None, P0=None):
         init_parameterized_filter(self, model, type(self).__name__, m0, P0, scalar_theta=False,
                                   needs=("f", "h", "jacobian_f", "jacobian_f_theta", "jacobian_h"))
         self.theta0 = as_theta(theta0, model.dim_theta, "theta0").reshape(model.dim_theta)
         self.P_theta0 = as_covariance(P_theta0, "P_theta0", model.dim_theta, allow_singular=True)
-        for name, v in (("q0", q0), ("q_min", q_min)):
-            if not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"{name} must be finite and >= 0, got {v!r}")
+        q0 = as_finite_float(q0, "q0", nonnegative=True)
+        q_min = as_finite_float(q_min, "q_min", nonnegative=True)
+        anneal = as_finite_float(anneal, "anneal")
         if not 0 < anneal <= 1:
             raise ValueError(f"anneal must lie in (0, 1], got {anneal!r}")
-        self.q0, self.anneal, self.q_min = float(q0), float(anneal), float(q_min)
+        if on_divergence not in DIVERGENCE_POLICIES:
+            raise ValueError(f"on_divergence must be one of {DIVERGENCE_POLICIES}, got {on_divergence!r}")
+        self.on_divergence = on_divergence
+        self.q0, self.anneal, self.q_min = q0, anneal, q_min
         self.clip_to_bounds = bool(clip_to_bounds)
 
     def q_theta(self, k: int) -> float:
@@ -96,7 +106,7 @@ class DualExtendedKalmanFilter(Filter):
                 H = mdl.jacobian_h(xm)
                 S = H @ Pm @ np.swapaxes(H, -1, -2) + mdl.R
                 S = 0.5 * (S + np.swapaxes(S, -1, -2))
-                K = np.swapaxes(np.linalg.solve(S, H @ Pm), -1, -2)  # P⁻Hᵀ S⁻¹ (P⁻, S symmetric)
+                K = np.swapaxes(solve_per_run(S, H @ Pm), -1, -2)  # P⁻Hᵀ S⁻¹ (P⁻, S symmetric)
                 nu = mdl.residual_y(z, mdl.h(xm))
                 x = xm + (K @ nu[..., None])[..., 0]
                 IKH = I_n - K @ H
@@ -105,7 +115,7 @@ class DualExtendedKalmanFilter(Filter):
                 # parameter EKF: measurement z = h(x⁻(θ)) + e, C = H D⁻, e ~ (0, S)
                 C = H @ Dm
                 St = C @ Pt_m @ np.swapaxes(C, -1, -2) + S
-                Kt = np.swapaxes(np.linalg.solve(St, C @ Pt_m), -1, -2)
+                Kt = np.swapaxes(solve_per_run(St, C @ Pt_m), -1, -2)
                 th = th + (Kt @ nu[..., None])[..., 0]
                 Pt = (np.eye(p) - Kt @ C) @ Pt_m
                 Pt = 0.5 * (Pt + np.swapaxes(Pt, -1, -2))
@@ -114,10 +124,29 @@ class DualExtendedKalmanFilter(Filter):
                 xs[:, k - 1], Ps[:, k - 1], ths[:, k - 1], Pts[:, k - 1] = x, P, th, Pt
                 Ds[:, k - 1], Ks[:, k - 1] = D, K
                 loglik[:, k - 1] = gaussian_loglik(nu, S)
-        bad = ~np.all(np.isfinite(xs.reshape(runs, -1)), axis=1) | ~np.all(np.isfinite(ths.reshape(runs, -1)), axis=1)
+        # divergence (as the EKF: non-finite estimates), judged run by run; a diverged run is
+        # NaN from its first non-finite step on (no huge finite numbers before the NaN are
+        # passed on as estimates: the step where x or theta first leaves the finite range)
+        finite = np.isfinite(xs).all(axis=-1) & np.isfinite(ths).all(axis=-1)       # (runs, T)
+        bad = ~finite.all(axis=1)
+        diverged_at = np.where(bad, np.argmin(finite, axis=1) + 1, 0)
+        if bad.any():
+            msg = (f"DEKF: {int(bad.sum())} of {runs} runs diverged (non-finite estimates, first at step "
+                   f"{int(diverged_at[bad].min())}) in runs {np.flatnonzero(bad)[:10].tolist()}")
+            if self.on_divergence == "raise":
+                raise FilterDivergenceError(msg)
+            for r in np.flatnonzero(bad):
+                sl = slice(diverged_at[r] - 1, None)
+                for arr in (xs, Ps, ths, Pts, Ds, Ks, loglik):
+                    arr[r, sl] = np.nan
+            if self.on_divergence == "warn":
+                warnings.warn(FilterDivergenceWarning(
+                    msg + "; their estimates are NaN from diagnostics['diverged_at'] on "
+                    "(on_divergence='drop' silences this, 'raise' makes it an error)"), stacklevel=2)
         return FilterResult(xs, Ps, diagnostics={
             "theta": ths[..., 0] if p == 1 else ths, "theta_var": Pts[..., 0, 0] if p == 1 else Pts,
             "dx_dtheta": Ds, "gain": Ks, "log_likelihood": loglik, "diverged": bad,
+            "diverged_at": diverged_at,
             "n_diverged": int(bad.sum()),
         })
 
@@ -126,4 +155,4 @@ class DualExtendedKalmanFilter(Filter):
         from scipy.stats import norm
 
         th, v = result.diagnostics["theta"], result.diagnostics["theta_var"]
-        return np.stack([th + norm.ppf(qq) * np.sqrt(np.maximum(v, 0.0)) for qq in np.atleast_1d(q)])
+        return np.stack([th + norm.ppf(qq) * np.sqrt(np.maximum(v, 0.0)) for qq in check_quantile_levels(q, "q")])

@@ -62,7 +62,7 @@ from scipy import special
 
 from ..models.base import ModelContractError
 from ..models.parameterized import ParameterizedModel, as_theta
-from ..validation import as_covariance, as_vector, check_positive_int
+from ..validation import as_covariance, as_finite_float, as_vector, check_positive_int, check_quantile_levels
 from .base import Filter, FilterDivergenceError, FilterResult
 from .particle import normalize_log_weights
 from .resampling import check_scheme, resample_counts
@@ -205,9 +205,7 @@ class DualParticleFilter(Filter):
         if weight not in PARAMETER_WEIGHTS:
             raise ValueError(f"weight must be one of {PARAMETER_WEIGHTS}, got {weight!r}")
         self.weight = weight
-        if cap is not None and not (np.isfinite(cap) and cap > 0):
-            raise ValueError(f"cap must be a positive number or None, got {cap!r}")
-        self.cap = None if cap is None else float(cap)
+        self.cap = None if cap is None else as_finite_float(cap, "cap", positive=True)
         lo, hi = model.bounds
         if theta0 is None:
             theta0 = 0.5 * (lo + hi)
@@ -215,11 +213,9 @@ class DualParticleFilter(Filter):
         if not lo <= theta0 <= hi:
             raise ValueError(f"theta0 = {theta0} lies outside the prior range {model.bounds}")
         self.theta0 = theta0
-        if roughening is not None and not roughening > 0:
-            raise ValueError(f"roughening must be None or > 0, got {roughening!r}")
-        self.roughening = roughening
+        self.roughening = None if roughening is None else as_finite_float(roughening, "roughening", positive=True)
         self.resampling = check_scheme(resampling)
-        self.nu_min = float(nu_min)
+        self.nu_min = as_finite_float(nu_min, "nu_min", positive=True)
         if theta_law not in THETA_LAWS:
             raise ValueError(f"theta_law must be one of {THETA_LAWS}, got {theta_law!r}")
         self.theta_law = theta_law
@@ -320,7 +316,7 @@ class DualParticleFilter(Filter):
         """Quantiles ``q`` of the fitted Beta laws, on [r_l, r_u]: shape (len(q), runs, T)."""
         lo, hi = self.model.bounds
         a, b = result.diagnostics["alpha"], result.diagnostics["beta"]
-        return np.stack([lo + (hi - lo) * special.betaincinv(a, b, qq) for qq in np.atleast_1d(q)])
+        return np.stack([lo + (hi - lo) * special.betaincinv(a, b, qq) for qq in check_quantile_levels(q, "q")])
 
     def __repr__(self) -> str:
         return (f"DualParticleFilter(n_x={self.n_x}, n_theta={self.n_theta}, weight={self.weight!r}, "

@@ -22,8 +22,10 @@ import numpy as np
 from .. import flow
 from ..models.base import require_capabilities
 from ..rng import take_runs
-from ..validation import check_positive_int
-from .base import Filter, FilterDivergenceError, FilterResult
+import warnings
+
+from ..validation import as_finite_float, check_positive_int
+from .base import DIVERGENCE_POLICIES, Filter, FilterDivergenceError, FilterDivergenceWarning, FilterResult
 from .sigma_points import ScaledSigmaPoints, unscented_transform
 
 __all__ = ["GaussianParticleFlowFilter", "particle_moments"]
@@ -77,9 +79,23 @@ class GaussianParticleFlowFilter(Filter):
         identical for linear h (up to rounding). The default is the field the GPFF chapter
         uses for a nonlinear h, so defaults work on every model the package ships.
     on_divergence : str
-        "raise" (default) raises ``FilterDivergenceError`` when a run's particles become
-        non-finite; "drop" stops that run (its estimates become NaN) and records the step
-        in ``diagnostics["diverged_at"]`` (0 = never).
+        What to do with a run that diverges (the test, on the size of one flow update: its
+        particles become non-finite, or it grows a component's particle variance more than
+        ``max_growth`` times or moves the mean more than ``max_shift`` prior standard
+        deviations; see ``_diverged``). "warn" (default): stop that run (its estimates are NaN
+        from that step on), record the step in ``diagnostics["diverged_at"]`` (0 = never)
+        and the count in ``diagnostics["n_diverged"]``, and emit one
+        :class:`~pfrepro.filters.FilterDivergenceWarning` per call naming the count; the
+        other runs are untouched, bit for bit. "drop": the same without the warning (for a
+        caller that reports the count itself). "raise": ``FilterDivergenceError``.
+    max_growth : float
+        Divergence threshold (> 1): the largest factor by which one flow update may grow a
+        component's particle variance. A Bayesian update does not spread the cloud (in the
+        chapter's configurations the largest factor seen is 1.0); a blow-up starts with a
+        factor of hundreds and overflows a few steps later.
+    max_shift : float
+        The largest move of the cloud's mean in one flow update, in prior standard
+        deviations per component (default 1000; the chapter's configurations reach ~11).
     alpha, beta, kappa : float
         Scaled-UT parameters (not given in the paper; default alpha = 1, beta = 2,
         kappa = 0, as our UKF; exact for linear h and, with beta = 2, exact for the mean
@@ -109,13 +125,17 @@ class GaussianParticleFlowFilter(Filter):
 
     def __init__(self, model, n_particles: int = 100, n_steps: int = 20, schedule: str = "uniform",
                  ratio: float = 1.2, integrator: str = "euler", alpha: float = 1.0, beta: float = 2.0,
-                 kappa: float = 0.0, field: str = "eq43", on_divergence: str = "raise",
-                 m0=None, P0=None, return_cov: bool = False):
+                 kappa: float = 0.0, field: str = "eq43", on_divergence: str = "warn",
+                 max_growth: float = 100.0, max_shift: float = 1e3, m0=None, P0=None, return_cov: bool = False):
         super().__init__(model, m0, P0)
         if field not in ("eq41", "eq43"):
             raise ValueError(f"field must be 'eq41' or 'eq43', got {field!r}")
-        if on_divergence not in ("raise", "drop"):
-            raise ValueError(f"on_divergence must be 'raise' or 'drop', got {on_divergence!r}")
+        if on_divergence not in DIVERGENCE_POLICIES:
+            raise ValueError(f"on_divergence must be one of {DIVERGENCE_POLICIES}, got {on_divergence!r}")
+        self.max_growth = as_finite_float(max_growth, "max_growth")
+        if not self.max_growth > 1.0:
+            raise ValueError(f"max_growth must be > 1, got {max_growth!r}")
+        self.max_shift = as_finite_float(max_shift, "max_shift", positive=True)
         self.field, self.on_divergence = field, on_divergence
         self.n_particles = check_positive_int(n_particles, "n_particles")
         if self.n_particles < 2:
@@ -136,7 +156,7 @@ class GaussianParticleFlowFilter(Filter):
     def prior_statistics(self, x):
         """Eqs (47)-(52): particle mean/cov, then UT moments y_hat, Pyy, Pxy of h."""
         m, P = particle_moments(x)
-        sig = self.points.sigma_points(m, P)                      # (runs, 2d+1, d)
+        sig = self.points.sigma_points(m, P, on_error="nan")      # (runs, 2d+1, d)
         Y = self.model.h(sig)                                      # (runs, 2d+1, m)
         y_hat, Pyy, dy = unscented_transform(Y, self.points.Wm, self.points.Wc,
                                              residual=self.model.residual_y)
@@ -167,7 +187,7 @@ class GaussianParticleFlowFilter(Filter):
                 return flow.field_from_coefficients(model.h(z), y, *coefficients(lam), residual=res)
         else:
             # h(z) ~ y_hat + J (z - m), J = Pxy^T P^{-1}; innovations r(y, y_hat) - J (z - m)
-            J = np.swapaxes(np.linalg.solve(P, Pxy), -1, -2)          # (runs, m, d)
+            J = np.swapaxes(flow.solve_per_run(P, Pxy), -1, -2)       # (runs, m, d)
             r0 = model.residual_y(y, y_hat)
 
             def field(z, lam):
@@ -189,6 +209,29 @@ class GaussianParticleFlowFilter(Filter):
 
         return flow.integrate_flow(x, field, self.grid, self.integrator)
 
+    def _diverged(self, x, m_prior, P_prior):
+        """Per-run divergence test on the flow's size (the one test, see the class docstring).
+
+        A run has diverged when its moved particles are non-finite, when the flow grew a
+        component's particle variance by more than ``max_growth`` times its prior value, or
+        moved the cloud's mean by more than ``max_shift`` prior standard deviations. The
+        measurement update of a Bayesian filter does not spread the cloud (for a linear
+        Gaussian model the posterior covariance P - K S K^T never exceeds the prior), so a
+        growth of 100x in one update is the flow running away, the step where a blow-up
+        starts (then 1e4x, 1e11x, ... until overflow); a shift of 1000 prior standard
+        deviations is an innovation the model gives no probability (an outlier such as
+        y = 1e200), which would otherwise pass on a huge finite estimate. In the GPFF
+        chapter's configurations the largest values are a growth of 1.0 and a shift of
+        about 11 standard deviations. Each run is judged on its own values.
+        """
+        runs = x.shape[0]
+        ok = np.all(np.isfinite(x.reshape(runs, -1)), axis=1)
+        m, P = particle_moments(x)
+        prior = np.maximum(np.diagonal(P_prior, axis1=-2, axis2=-1), np.finfo(float).tiny)
+        grown = np.any(np.diagonal(P, axis1=-2, axis2=-1) > self.max_growth * prior, axis=1)
+        shifted = np.any((m - m_prior) ** 2 > self.max_shift**2 * prior, axis=1)
+        return ~ok | grown | shifted
+
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
         y = self._prepare(y, rng)
         runs, T, _ = y.shape
@@ -202,31 +245,43 @@ class GaussianParticleFlowFilter(Filter):
             for k in range(1, T + 1):
                 # runs that diverged no longer draw; the others keep their own streams
                 x = self.model.sample_transition(x, k, take_runs(rng, alive) if len(alive) < runs else rng)
-                # a cloud whose covariance overflows cannot be moved (eq 52): treat as diverged.
-                # Each run's fate depends on its own particles only (pfrepro.rng rule 3): drop the
-                # runs that diverged in the prediction, update the others, then check them again.
-                for stage in ("prior", "update"):
-                    if stage == "prior":
-                        ok = np.all(np.isfinite(particle_moments(x)[1].reshape(len(alive), -1)), axis=1)
-                    else:
-                        x = self.update(x, y[alive, k - 1])
-                        ok = np.all(np.isfinite(x.reshape(len(alive), -1)), axis=1)
-                    if not ok.all():
-                        bad = alive[~ok]
-                        if self.on_divergence == "raise":
-                            raise FilterDivergenceError(f"GPFF particles became non-finite at step {k} "
-                                                        f"in runs {bad[:10].tolist()}")
-                        diverged_at[bad] = k
-                        alive, x = alive[ok], x[ok]
-                        if alive.size == 0:
-                            break
-                if alive.size == 0:
-                    break
+                # Each run's fate depends on its own particles only (pfrepro.rng rule 3), and
+                # every batched linear-algebra call of the update works matrix by matrix
+                # (flow.solve_per_run, safe_cholesky(on_error="nan")): a diverging run never
+                # changes another run's numbers. A cloud whose covariance overflows cannot be
+                # moved (eq 52): diverged in the prediction; then the flow's growth test.
+                m_prior, P_prior = particle_moments(x)
+                bad = ~np.all(np.isfinite(P_prior.reshape(len(alive), -1)), axis=1)
+                if not bad.any():
+                    x_new = self.update(x, y[alive, k - 1])
+                else:
+                    x_new = np.full_like(x, np.nan)
+                    if (~bad).any():
+                        x_new[~bad] = self.update(x[~bad], y[alive[~bad], k - 1])
+                bad |= self._diverged(x_new, m_prior, P_prior)
+                x = x_new
+                if bad.any():
+                    if self.on_divergence == "raise":
+                        raise FilterDivergenceError(
+                            f"GPFF diverged at step {k} in runs {alive[bad][:10].tolist()} (particles "
+                            f"non-finite, or the flow grew a variance more than {self.max_growth:g}x or "
+                            f"moved the mean more than {self.max_shift:g} prior sd); "
+                            f"on_divergence='warn' keeps the other runs")
+                    diverged_at[alive[bad]] = k
+                    alive, x = alive[~bad], x[~bad]
+                    if alive.size == 0:
+                        break
                 xs[alive, k - 1] = x.mean(axis=1)
                 if Ps is not None:
                     Ps[alive, k - 1] = particle_moments(x)[1]
-        return FilterResult(xs, Ps, diagnostics={"diverged_at": diverged_at,
-                                                 "n_diverged": int((diverged_at > 0).sum())})
+        n_div = int((diverged_at > 0).sum())
+        if n_div and self.on_divergence == "warn":
+            warnings.warn(FilterDivergenceWarning(
+                f"GPFF: {n_div} of {runs} runs diverged (first at step {int(diverged_at[diverged_at > 0].min())}); "
+                f"their estimates are NaN from the step in diagnostics['diverged_at'] on. "
+                f"Count them beside any error statistic (on_divergence='drop' silences this warning, "
+                f"'raise' makes it an error)"), stacklevel=2)
+        return FilterResult(xs, Ps, diagnostics={"diverged_at": diverged_at, "n_diverged": n_div})
 
     def __repr__(self) -> str:
         return (f"GaussianParticleFlowFilter(N={self.n_particles}, n_steps={self.n_steps}, "

@@ -12,6 +12,8 @@ the accuracy reference: its MSE is the lowest achievable by any filter.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from scipy import fft as sfft
 from scipy import sparse
@@ -145,9 +147,20 @@ class GridFilter(Filter):
                 log_domain[bad, k - 1] = True
                 collapsed[np.flatnonzero(bad)[coll], k - 1] = True
             p = post / s
-            mean = p @ g
+            # row-wise sums, not p @ g: a BLAS matrix-vector product's summation order
+            # depends on how many rows it is given, so run i's mean would differ in the
+            # last bits with the batch size (pfrepro.rng rule 3)
+            mean = (p * g).sum(axis=1)
             means[:, k - 1, 0] = mean
-            covs[:, k - 1, 0, 0] = p @ (g * g) - mean**2
+            covs[:, k - 1, 0, 0] = (p * (g * g)).sum(axis=1) - mean**2
+        if collapsed.any():
+            # the same report as the particle filters' (one warning per call, with the count)
+            from .particle import WeightCollapseWarning
+
+            warnings.warn(WeightCollapseWarning(
+                f"GridFilter: the likelihood vanished at every node with predictive mass in "
+                f"{int(collapsed.sum())} of {collapsed.size} run-steps (an outlier measurement); those "
+                f"measurements were ignored (diagnostics['collapsed'])"), stacklevel=2)
         edge = p[:, :5].sum(axis=1) + p[:, -5:].sum(axis=1)
         return FilterResult(means, covs, diagnostics={
             "lost_mass": lost, "final_edge_mass": edge, "collapsed": collapsed,

@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from ..rng import take_runs
-from ..validation import as_covariance, as_vector, check_positive_int, check_probability
+from ..validation import as_covariance, as_finite_float, as_vector, check_positive_int, check_probability
 
 try:  # package v2 model contract
     from ..models.base import require_capabilities
@@ -56,8 +56,9 @@ def mixing_probabilities(mu, Pi):
     """
     mu = np.asarray(mu, float)
     num = Pi * mu[..., :, None]
-    # c = mu @ Pi, summed row by row: a (runs, r) @ (r, r) BLAS call picks its kernel by the
-    # number of runs (gemv for one, gemm for more), which changed the last bits with the batch
+    # c_j = sum_i num[i, j] as a sum over the mode axis, not mu @ Pi: a BLAS matrix product's
+    # rounding depends on how many rows (runs) it is given, so run i's probabilities would
+    # differ in the last bit with the batch size (pfrepro.rng rule 3)
     c = num.sum(axis=-2)
     with np.errstate(invalid="ignore", divide="ignore"):
         M = num / c[..., None, :]
@@ -182,8 +183,30 @@ def _init_on_system(filt, system, m0, P0, mode_requirements):
     filt.P0 = system.P0 if P0 is None else as_covariance(P0, "P0", system.dim_x)
 
 
+def _check_mode_filter_model(f, system, j):
+    """Mode filter j must be built on mode j's model (issue 21: one built on another mode's
+    model ran and was silently wrong). The same object passes; another object passes only if
+    it has mode j's Q and transition f at a few probe states."""
+    fm, mj = getattr(f, "model", None), system.models[j]
+    if fm is mj or fm is None:
+        return
+    same = getattr(fm, "dim_x", None) == mj.dim_x
+    if same:
+        probe = np.asarray(system.m0, float) + np.arange(1, 4)[:, None] * np.linspace(0.5, 1.5, mj.dim_x)
+        try:
+            same = (np.allclose(np.asarray(fm.Q), np.asarray(mj.Q), rtol=1e-12, atol=0)
+                    and np.allclose(fm.f(probe, 1), mj.f(probe, 1), rtol=1e-12, atol=1e-12))
+        except Exception:  # noqa: BLE001 - a model we cannot compare is treated as different
+            same = False
+    if not same:
+        name = system.names[j] if hasattr(system, "names") else j
+        raise ValueError(f"mode_filters[{j}] is built on a model that is not mode {j}'s ({name!r}): build it "
+                         f"on system.models[{j}]")
+
+
 def unit_ball_volume(d: int) -> float:
     """Volume V_d = pi^(d/2) / Gamma(d/2 + 1) of the unit ball in d dimensions."""
+    d = check_positive_int(d, "d")
     return math.pi ** (d / 2) / math.gamma(d / 2 + 1)
 
 
@@ -194,6 +217,8 @@ def nn_distance_scale(n: float, density, d: int):
     nearest neighbour in a Poisson field of intensity n p(x) in d dimensions
     (Bhattacharyya & Chakrabarti); ``density`` may be an array.
     """
+    d = check_positive_int(d, "d")
+    n = as_finite_float(n, "n", positive=True)
     density = np.asarray(density, float)
     return math.gamma(1.0 + 1.0 / d) / (n * density * unit_ball_volume(d)) ** (1.0 / d)
 
@@ -611,6 +636,7 @@ class IMMKalman(Filter):
         for j, f in enumerate(self.mode_filters):
             if not (hasattr(f, "predict") and hasattr(f, "update")):
                 raise TypeError(f"mode filter {j} ({f!r}) has no predict/update")
+            _check_mode_filter_model(f, system, j)
         self.name = str(name)
 
     @staticmethod

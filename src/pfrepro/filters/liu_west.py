@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..validation import check_positive_int
+from ..validation import as_finite_float, check_positive_int, check_quantile_levels
 from .base import Filter, FilterDivergenceError, FilterResult
 from .dual_pf import init_parameterized_filter
 from .particle import normalize_log_weights
@@ -34,7 +34,7 @@ __all__ = ["LiuWestFilter", "shrinkage_kernel", "liu_west_a"]
 
 def liu_west_a(delta: float) -> float:
     """Shrinkage factor a = (3δ − 1)/(2δ)."""
-    delta = float(delta)
+    delta = as_finite_float(delta, "delta")
     if not 1.0 / 3.0 < delta <= 1.0:
         raise ValueError(f"delta must lie in (1/3, 1], got {delta!r}")
     return (3.0 * delta - 1.0) / (2.0 * delta)
@@ -77,7 +77,7 @@ class LiuWestFilter(Filter):
         self.a = liu_west_a(delta)
         self.delta = float(delta)
         self.resampling = check_scheme(resampling)
-        self.quantiles = tuple(float(q) for q in quantiles)
+        self.quantiles = check_quantile_levels(quantiles, "quantiles")
 
     def filter(self, y, rng=None) -> FilterResult:
         y = self._prepare(y, rng)
@@ -130,6 +130,6 @@ class LiuWestFilter(Filter):
 
     def theta_quantiles(self, result: FilterResult, q=None):
         """Weighted quantiles of the θ particles at the levels given at construction: (len(q), runs, T)."""
-        if q is not None and tuple(np.atleast_1d(q)) != self.quantiles:
+        if q is not None and check_quantile_levels(q, "q") != self.quantiles:
             raise ValueError(f"this filter stored the quantiles {self.quantiles}; got q = {q}")
         return np.moveaxis(result.diagnostics["theta_quantiles"], -1, 0)

@@ -29,8 +29,16 @@ def normalize_log_weights(logw):
 
     Returns ``(w, log_sum, collapsed)``; a run whose log-weights are all -inf
     or NaN (weight collapse) gets uniform weights and ``collapsed = True``.
+    A ``+inf`` log-weight is an error (no density is infinite), as is any shape but 2-D.
     """
+    if type(logw) is not np.ndarray or logw.ndim != 2:
+        logw = np.asarray(logw, dtype=float)
+        if logw.ndim != 2:
+            raise ValueError(f"logw must be a 2-D array (runs, N) of log-weights, got shape {logw.shape}")
     m = logw.max(axis=1, keepdims=True)
+    if np.any(m == np.inf):
+        raise ValueError(f"logw contains +inf log-weights (runs {np.flatnonzero(m[:, 0] == np.inf)[:10].tolist()}); "
+                         "a likelihood cannot be infinite")
     if np.isnan(m).any():  # max propagates NaN: only then pay for a pass that removes them
         logw = np.where(np.isnan(logw), -np.inf, logw)
         m = logw.max(axis=1, keepdims=True)

@@ -15,7 +15,7 @@ import numpy as np
 __all__ = ["ScaledSigmaPoints", "unscented_transform", "safe_cholesky"]
 
 
-def safe_cholesky(A, name="covariance"):
+def safe_cholesky(A, name="covariance", on_error="raise"):
     """Batched matrix square root L with L L^T = A; robust to singular A.
 
     The lower Cholesky factor (symmetrised A), with a small jitter if needed. A
@@ -24,27 +24,52 @@ def safe_cholesky(A, name="covariance"):
     square root V sqrt(max(lam, 0)) V^T, which is as good for sigma points. One with
     an eigenvalue below -1e-8 of its scale (or NaN) raises
     ``numpy.linalg.LinAlgError`` naming it.
+
+    Each matrix of a batch is treated on its own (pfrepro.rng rule 3): when one matrix
+    needs the jitter, the others keep their plain Cholesky factor (the batch is tried
+    first; on failure every matrix is factorised alone). ``on_error="nan"``: a matrix
+    that cannot be factorised (NaN/inf, indefinite) gets a NaN factor in its own slot
+    instead of raising for the whole batch (the GPFF then marks that run diverged).
     """
+    if on_error not in ("raise", "nan"):
+        raise ValueError(f"on_error must be 'raise' or 'nan', got {on_error!r}")
     A = 0.5 * (A + np.swapaxes(A, -1, -2))
     try:
         return np.linalg.cholesky(A)
     except np.linalg.LinAlgError:
         pass
-    scale = np.max(np.abs(np.diagonal(A, axis1=-2, axis2=-1)), axis=-1, keepdims=True)[..., None]
+    out = np.empty_like(A)
+    for idx in np.ndindex(*A.shape[:-2]):
+        try:
+            out[idx] = _safe_cholesky_one(A[idx], name)
+        except np.linalg.LinAlgError:
+            if on_error == "raise":
+                raise
+            out[idx] = np.nan
+    return out
+
+
+def _safe_cholesky_one(A, name):
+    """:func:`safe_cholesky` of one symmetric (n, n) matrix."""
+    try:
+        return np.linalg.cholesky(A)
+    except np.linalg.LinAlgError:
+        pass
+    if not np.all(np.isfinite(A)):
+        raise np.linalg.LinAlgError(f"{name} contains NaN or infinite entries")
+    scale = np.max(np.abs(np.diagonal(A)))
     eye = np.eye(A.shape[-1])
     for rel in (1e-12, 1e-10, 1e-8, 1e-6):
         try:
             return np.linalg.cholesky(A + rel * scale * eye)
         except np.linalg.LinAlgError:
             continue
-    if not np.all(np.isfinite(A)):
-        raise np.linalg.LinAlgError(f"{name} contains NaN or infinite entries")
     lam, V = np.linalg.eigh(A)
-    tol = 1e-8 * np.maximum(scale[..., 0, 0], np.finfo(float).tiny)
-    if np.any(lam.min(axis=-1) < -tol):
+    tol = 1e-8 * max(scale, np.finfo(float).tiny)
+    if lam.min() < -tol:
         raise np.linalg.LinAlgError(f"{name} is not positive semi-definite (smallest eigenvalue "
                                     f"{lam.min():.3g})")
-    return (V * np.sqrt(np.clip(lam, 0.0, None))[..., None, :]) @ np.swapaxes(V, -1, -2)
+    return (V * np.sqrt(np.clip(lam, 0.0, None))) @ V.T
 
 
 class ScaledSigmaPoints:
@@ -68,9 +93,12 @@ class ScaledSigmaPoints:
     def num_points(self) -> int:
         return 2 * self.n + 1
 
-    def sigma_points(self, x, P):
-        """Points for batched ``x`` (..., n), ``P`` (..., n, n) -> (..., 2n + 1, n)."""
-        L = safe_cholesky((self.n + self.lam) * P)
+    def sigma_points(self, x, P, on_error="raise"):
+        """Points for batched ``x`` (..., n), ``P`` (..., n, n) -> (..., 2n + 1, n).
+
+        ``on_error="nan"``: a ``P`` without a square root gives NaN points for its own
+        batch entry only (see :func:`safe_cholesky`)."""
+        L = safe_cholesky((self.n + self.lam) * P, on_error=on_error)
         offsets = np.swapaxes(L, -1, -2)  # rows = columns of L
         x = x[..., None, :]
         return np.concatenate([x, x + offsets, x - offsets], axis=-2)

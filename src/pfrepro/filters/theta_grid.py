@@ -22,8 +22,11 @@ from scipy import fft as sfft
 from scipy import sparse
 from scipy.interpolate import CubicSpline
 
-from ..validation import check_positive_int
+import warnings
+
+from ..validation import check_positive_int, check_quantile_levels
 from .base import Filter, FilterResult
+from .particle import WeightCollapseWarning
 from .dual_pf import init_parameterized_filter
 
 __all__ = ["ThetaGridReference", "posterior_summary"]
@@ -126,6 +129,7 @@ class ThetaGridReference(Filter):
         xmean_theta = np.empty((runs, T, Nt))
         lost = np.zeros((runs, Nt))
         cum = np.zeros((runs, Nt))
+        collapsed = np.zeros((runs, T), dtype=bool)
         for k in range(1, T + 1):
             A = self._move_matrix(k)
             moved = (A @ p.reshape(runs, Nt * M).T).T.reshape(runs, Nt, M)
@@ -134,17 +138,37 @@ class ThetaGridReference(Filter):
             pred = sfft.irfft(spec, n=self._nfft, axis=-1)[..., self._half:self._half + M]
             np.maximum(pred, 0.0, out=pred)
             lost += 1.0 - pred.sum(-1)
-            ll = self.model.log_likelihood(y[:, k - 1], g[None, :, None])     # (runs, M)
+            with np.errstate(over="ignore", invalid="ignore"):
+                ll = self.model.log_likelihood(y[:, k - 1], g[None, :, None])  # (runs, M)
+            ll = np.where(np.isnan(ll), -np.inf, ll)
             llmax = ll.max(axis=1, keepdims=True)
-            lik = np.exp(ll - llmax)[:, None, :]
+            # an outlier (y = 1e200): the likelihood is -inf at every node, or zero wherever
+            # any theta has predictive mass. As the grid filter and the particle filters do,
+            # the measurement is then ignored for that run (posterior = prediction, no
+            # evidence term), the step flagged in diagnostics["collapsed"] and one
+            # WeightCollapseWarning given per call.
+            coll = ~np.isfinite(llmax[:, 0])
+            llmax[coll], ll[coll] = 0.0, 0.0
+            with np.errstate(under="ignore"):
+                lik = np.exp(ll - llmax)[:, None, :]
             post = pred * lik
             s = post.sum(-1)                                                   # (runs, Nt)
+            coll |= ~np.any(s > 0, axis=1)
+            if coll.any():
+                post[coll], llmax[coll] = pred[coll], 0.0
+                s[coll] = pred[coll].sum(-1)
+                collapsed[coll, k - 1] = True
             with np.errstate(divide="ignore"):
                 cum += np.log(s) + llmax
             logev[:, k - 1] = cum
             s = np.where(s > 0, s, 1.0)
             p = post / s[..., None]
             xmean_theta[:, k - 1] = p @ g
+        if collapsed.any():
+            warnings.warn(WeightCollapseWarning(
+                f"ThetaGridReference: the likelihood vanished at every grid node in {int(collapsed.sum())} of "
+                f"{collapsed.size} run-steps (an outlier measurement); those measurements were ignored "
+                f"(diagnostics['collapsed'])"), stacklevel=2)
         # posterior of θ at every k (uniform prior on the grid range)
         mean, var, qs = posterior_summary(self.theta, logev, (0.025, 0.5, 0.975), self.n_fine)
         lw = logev - logev.max(-1, keepdims=True)
@@ -154,12 +178,13 @@ class ThetaGridReference(Filter):
         return FilterResult(x_mean, None, diagnostics={
             "theta": mean, "theta_var": var, "theta_quantiles": np.moveaxis(qs, 0, -1),  # (runs, T, 3)
             "log_evidence": logev, "lost_mass": lost, "x_mean_given_theta": xmean_theta,
+            "collapsed": collapsed, "n_collapsed": int(collapsed.sum()),
         })
 
     quantile_levels = (0.025, 0.5, 0.975)
 
     def theta_quantiles(self, result: FilterResult, q=None):
         """The exact posterior's 2.5 / 50 / 97.5 % quantiles of θ: (3, runs, T)."""
-        if q is not None and tuple(np.atleast_1d(q)) != self.quantile_levels:
+        if q is not None and check_quantile_levels(q, "q") != self.quantile_levels:
             raise ValueError(f"the reference stores the quantiles {self.quantile_levels}; got q = {q}")
         return np.moveaxis(result.diagnostics["theta_quantiles"], -1, 0)

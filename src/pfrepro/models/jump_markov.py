@@ -148,6 +148,10 @@ class JumpMarkovSystem:
         self.r = len(self.models)
         m0 = self.models[0]
         for j, m in enumerate(self.models):
+            if not all(hasattr(m, a) for a in ("dim_x", "dim_y", "sample_transition")):
+                raise TypeError(f"models[{j}] must be a state-space model (pfrepro.models.StateSpaceModel), "
+                                f"got {type(m).__name__}")
+        for j, m in enumerate(self.models):
             if m.dim_x != m0.dim_x or m.dim_y != m0.dim_y:
                 raise ValueError(f"mode model {j} has (dim_x, dim_y) = {(m.dim_x, m.dim_y)}, "
                                  f"mode 0 has {(m0.dim_x, m0.dim_y)}: modes must share one state and measurement")
@@ -159,6 +163,15 @@ class JumpMarkovSystem:
         if len(self.names) != self.r:
             raise ValueError(f"names must have {self.r} entries, got {len(self.names)}")
         self.dim_x, self.dim_y = m0.dim_x, m0.dim_y
+        # the system has one measurement model and one prior: mode 0's. A mode whose R, m0
+        # or P0 differ would be silently ignored, so it is refused (issue 21)
+        for j, m in enumerate(self.models[1:], start=1):
+            for attr in ("R", "m0", "P0"):
+                a, b = getattr(m0, attr, None), getattr(m, attr, None)
+                if a is not None and b is not None and not np.array_equal(np.asarray(a), np.asarray(b)):
+                    raise ValueError(f"models[{j}].{attr} differs from models[0].{attr}: a JumpMarkovSystem "
+                                     f"shares one measurement model and one prior (mode 0's); give every "
+                                     f"mode the same {attr}")
         self.measurement_noise = m0.measurement_noise
         self.x0, self.m0, self.P0 = m0.x0, m0.m0, m0.P0
         self.schedule = None if schedule is None else np.asarray(schedule)

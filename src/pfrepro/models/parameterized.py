@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..rng import check_rng
-from ..validation import check_positive_int
+from ..validation import as_finite_float, check_positive_int
 from .base import Simulation, StateSpaceModel, init_noise_and_prior
 
 __all__ = ["ParameterizedModel", "FixedParameterModel", "as_theta"]
@@ -62,10 +62,19 @@ class ParameterizedModel:
         init_noise_and_prior(self, dim_x, dim_y, Q, R, x0, m0, P0, truth_init)
         self.dim_theta = check_positive_int(dim_theta, "dim_theta")
         self.theta_true = as_theta(theta_true, self.dim_theta, "theta_true")
-        lo, hi = (float(b) for b in bounds)
-        if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
+        try:
+            pair = tuple(bounds)
+        except TypeError:
+            raise TypeError(f"bounds must be a pair (r_l, r_u) of numbers, got {bounds!r}") from None
+        if len(pair) != 2:
+            raise ValueError(f"bounds must be a pair (r_l, r_u) of numbers, got {bounds!r}")
+        lo, hi = as_finite_float(pair[0], "bounds[0]"), as_finite_float(pair[1], "bounds[1]")
+        if not hi > lo:
             raise ValueError(f"bounds must be finite with r_l < r_u, got {bounds}")
         self.bounds = (lo, hi)
+        if np.any(self.theta_true < lo) or np.any(self.theta_true > hi):
+            raise ValueError(f"theta_true = {self.theta_true.tolist()} lies outside bounds = {self.bounds} "
+                             "(the prior support of theta)")
         self.has_process_noise = bool(np.any(self.Q != 0.0))
 
     # the same covariances a Gaussian filter is given as StateSpaceModel's (set by init_noise_and_prior)

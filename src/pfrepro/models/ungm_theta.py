@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .parameterized import ParameterizedModel
+from ..validation import as_finite_float
 
 __all__ = ["UNGMTheta"]
 
@@ -29,7 +30,8 @@ class UNGMTheta(ParameterizedModel):
 
     def __init__(self, theta_true=0.5, bounds=(0.0, 1.0), Q=1.0, R=1.0, P0=5.0, m0=0.0,
                  beta=25.0, gamma=8.0, omega=1.2):
-        self.beta, self.gamma, self.omega = float(beta), float(gamma), float(omega)
+        self.beta, self.gamma, self.omega = (as_finite_float(beta, "beta"), as_finite_float(gamma, "gamma"),
+                                             as_finite_float(omega, "omega"))
         super().__init__(1, 1, 1, Q, R, [m0], [m0], P0, [theta_true], bounds, truth_init="prior")
 
     def forcing(self, k):
