@@ -431,3 +431,111 @@ def test_ess_and_resampling_rule():
     e = res.diagnostics["ess"]
     assert np.all((e >= 1 - 1e-9) & (e <= 50 + 1e-9)) and e.min() < 25
     assert np.array_equal(res.diagnostics["resampled"], e < 25)
+
+
+# -- the readings of IMMPFOR (book/60_immpf.md, free choices "replace", "density") and the ablation --------
+def _one_mode_case():
+    """One scalar mode (r = 1), N = 4: x = 0, 1, 2, 3 with weights 0.7, 0.1, 0.1, 0.1; counts 2, 1, 1, 0
+    (particle 3 is discarded, the extra copy of particle 0 sits in slot 1)."""
+    m = LinearGaussianModel([[1.0]], [[1.0]], [[1.0]], [[1.0]], x0=[0.0], m0=[0.0], P0=[[1.0]])
+    sysm = JumpMarkovSystem([m], [[1.0]])
+    x = np.array([0.0, 1.0, 2.0, 3.0]).reshape(1, 1, 4, 1)
+    w = np.array([0.7, 0.1, 0.1, 0.1]).reshape(1, 1, 4)
+    counts = np.array([2, 1, 1, 0]).reshape(1, 1, 4)
+    return sysm, x, w, counts
+
+
+@pytest.mark.parametrize("density", ["gaussian", "weights"])
+def test_replacement_step_by_hand(density):
+    sysm, x, w, counts = _one_mode_case()
+    f = IMMPFOR(sysm, 4, d=1.0, density=density)
+    u, M = np.array([[1.0]]), np.ones((1, 1, 1))
+    new, nd = f.replacement(x, w, u, M, counts, np.zeros((1, 1, 4), dtype=np.intp))
+    m, L, z = IMMPFOR.joint_whitening(x, w, u)
+    z0, z3 = z[0, 0, 0, 0], z[0, 0, 3, 0]
+    if density == "weights":   # p = w' = 0.7 (eq 24 with r = 1): L = Gamma(2) / (1 * 4 * 0.7 * V_1), V_1 = 2
+        step = 1.0 / (4 * 0.7 * 2.0)
+    else:                      # p = N(z0; 0, 1)
+        step = 1.0 / (4 * norm.pdf(z0) * 2.0)
+    frac = min(1.0, step / abs(z3 - z0))
+    expected = m[0, 0] + L[0, 0, 0] * (z0 + frac * (z3 - z0))
+    assert nd[0, 0] == 1
+    assert np.isclose(new[0, 0, 1, 0], expected, rtol=1e-12)
+    np.testing.assert_array_equal(new[0, 0, [0, 2, 3], 0], [0.0, 1.0, 2.0])   # the copies themselves
+
+
+def test_own_parent_ablation_and_vanishing_step_give_the_resampled_set():
+    """mix_modes=False moves only the slot's own parent; with d -> 0 the new particle is that parent,
+    so the replaced set is the standard resampled set; with mixing it is a mixture of parents."""
+    rng = np.random.default_rng(7)
+    x = rng.normal(size=(2, 3, 30, 6))
+    w = rng.random((2, 3, 30)); w /= w.sum(-1, keepdims=True)
+    u = np.array([[0.5, 0.3, 0.2], [0.1, 0.1, 0.8]])
+    M = np.full((2, 3, 3), 1 / 3)
+    # systematic counts with offset 1/2 (every mode has extra copies and discarded particles)
+    counts = np.stack([[np.bincount(np.minimum(np.searchsorted(np.cumsum(w[a, j]), (np.arange(30) + 0.5) / 30), 29),
+                                    minlength=30) for j in range(3)] for a in range(2)])
+    other = rng.integers(0, 30, size=(2, 3, 30))
+    idx = _indices_from_counts(counts)
+    own = IMMPFOR(tracking_system(), 30, d=1e-9, mix_modes=False).replacement(x, w, u, M, counts, other)[0]
+    std = np.take_along_axis(x, idx[..., None], axis=2)
+    assert np.allclose(own, std, atol=1e-6)
+    mixed = IMMPFOR(tracking_system(), 30, d=1e-9).replacement(x, w, u, M, counts, other)[0]
+    assert not np.allclose(mixed, std, atol=1e-3)
+
+
+def test_replace_always_resamples_every_mode_every_step():
+    sysm = tracking_system()
+    sim = sysm.simulate(6, 2, RunStreams.from_entropy(4, 2))
+    res = IMMPFOR(sysm, 40, replace="always").filter(sim.y, RunStreams.from_entropy(5, 2))
+    assert res.diagnostics["resampled"].all()
+    assert np.all(res.diagnostics["density_evals"] == 6 * 3 * 40)
+    thr = IMMPFOR(sysm, 40, n_th=0.0).filter(sim.y, RunStreams.from_entropy(5, 2))
+    assert not thr.diagnostics["resampled"].any()
+    with pytest.raises(ValueError):
+        IMMPFOR(sysm, 40, replace="sometimes")
+    with pytest.raises(ValueError):
+        IMMPFOR(sysm, 40, density="kde")
+
+
+def test_imm_evaluations_and_equal_compute_count_transitions():
+    """Hand count: T = 10, r = 3, N = 100: transitions 3000, likelihoods 3000, densities 600 ->
+    6600 per run; an IMMPF with N' costs 2 r N' T = 60 N', so N' = 110 (not 120 without transitions)."""
+    from pfrepro.cost import imm_evaluations
+    from pfrepro.experiments.immpfor_zhou2017 import equal_compute_N
+    from pfrepro.filters.base import FilterResult
+
+    res = FilterResult(np.zeros((2, 10, 6)), None, {"likelihood_evals": np.array([3000, 3000]),
+                                                    "density_evals": np.array([600, 600])})
+    np.testing.assert_array_equal(imm_evaluations(res, 100, 3), [6600.0, 6600.0])
+    assert equal_compute_N(res, 100, 3) == 110
+    pf = FilterResult(np.zeros((1, 10, 6)), None, {"likelihood_evals": np.array([3000])})
+    assert imm_evaluations(pf, 100, 3)[0] == 6000
+
+
+def test_robustness_rule_median_and_lost_tracks():
+    from pfrepro.experiments import immpfor_zhou2017 as E
+    from pfrepro.filters.base import FilterResult
+    from pfrepro.models.base import Simulation
+
+    runs, T = 40, 5
+    xt = np.zeros((runs, T + 1, 6))
+    err_a = np.full((runs, T), 100.0)
+    def res(err):
+        x = np.zeros((runs, T, 6)); x[..., 0] = err
+        return FilterResult(x, None, {})
+    run_ = lambda eb: E.Run(Simulation(xt, np.zeros((runs, T, 3))), {"A": res(err_a), "B": res(eb)}, 0)
+    better = E.robustness(run_(np.full((runs, T), 90.0)), "A", "B")
+    assert better["holds"] is True and better["b_better"] == runs and better["lost_b"] == 0
+    eb = np.full((runs, T), 90.0); eb[:3, -1] = 1e4           # better in most runs but loses 3 tracks
+    assert E.robustness(run_(eb), "A", "B")["holds"] is False
+    assert E.robustness(run_(np.full((runs, T), 100.0)), "A", "B")["holds"] is None
+
+
+def test_generated_prose_sign_and_plural():
+    from pfrepro.experiments.immpfor_zhou2017 import compare_sentence, plural
+
+    assert plural(1, "scenario") == "1 scenario" and plural(3, "scenario") == "3 scenarios"
+    assert "exceeds" in compare_sentence(10.0, 2.0, "A", "B") and "+10.0" in compare_sentence(10.0, 2.0, "A", "B")
+    assert "is below" in compare_sentence(-10.0, 2.0, "A", "B")
+    assert "within two standard errors" in compare_sentence(1.0, 2.0, "A", "B")

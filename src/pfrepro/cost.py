@@ -52,7 +52,7 @@ from . import flow as _flow
 from .montecarlo import time_filter_repeats
 
 __all__ = ["COUNTED", "COUNT_COLUMNS", "CountingModel", "count_model_calls", "cost_counts",
-           "time_repeats", "time_summary", "median_interval"]
+           "time_repeats", "time_summary", "median_interval", "imm_evaluations"]
 
 #: counted model method -> column name
 COUNTED = {"sample_transition": "transitions", "log_likelihood": "likelihoods", "f": "f", "h": "h",
@@ -217,3 +217,32 @@ def time_summary(times: pd.DataFrame, reference: str | None = None) -> pd.DataFr
     df = pd.DataFrame(rows).T
     df.index.name = "filter"
     return df
+
+
+def imm_evaluations(result, n_particles: int, r: int = 3) -> np.ndarray:
+    """Deterministic cost per run of an IMM particle filter (``pfrepro.filters.imm``), in model evaluations.
+
+    r N state transitions per step (one per particle and mode) plus the likelihood evaluations
+    and, for IMMPFOR, the density evaluations of eq 25, both from the filter's diagnostics
+    (``likelihood_evals``, ``density_evals``). The one count behind the IMM chapter's equal-compute
+    particle number and the synthesis chapter's cost column.
+
+    Parameters
+    ----------
+    result : FilterResult
+        Output of ``IMMParticleFilter.filter`` or ``IMMPFOR.filter`` (``x`` of shape (runs, T, n)).
+    n_particles : int
+        N per mode of that filter.
+    r : int, optional
+        Number of modes.
+
+    Returns
+    -------
+    numpy.ndarray
+        (runs,) evaluations per run over the whole horizon.
+    """
+    d = result.diagnostics
+    T = np.asarray(result.x).shape[1]
+    lik = np.asarray(d["likelihood_evals"], float)
+    den = np.asarray(d.get("density_evals", np.zeros_like(lik)), float)
+    return r * n_particles * T + lik + den

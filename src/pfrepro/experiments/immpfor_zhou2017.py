@@ -30,6 +30,9 @@ from ..montecarlo import filter_streams, run_monte_carlo, truth_streams
 
 import inspect as _inspect
 
+from ..choices import FIXED, READING, SWEEP, FreeChoice
+from ..cost import imm_evaluations
+
 #: True once ``run_monte_carlo`` takes ``executor=`` (package v2); :func:`run` then delegates to it
 _ENGINE_EXECUTOR = "executor" in _inspect.signature(run_monte_carlo).parameters
 
@@ -37,7 +40,9 @@ __all__ = ["PAPER", "SCENARIO", "ALTERNATIVES", "SEEDS", "scenario", "truth_syst
            "schedule", "simulate", "immpf", "immpfor", "imm_ekf", "imm_ukf", "run", "Run", "errors",
            "table1", "rmse_curves", "bootstrap_table", "paired", "equal_compute_N", "mode_timeline",
            "lost_tracks", "PF_BUILDERS", "MAIN_BUILDERS", "equal_compute_name", "fig5_builders", "SYNTHESIS_FILTERS", "synthesis_record", "synthesis_record_path",
-           "save_synthesis_record", "load_synthesis_record", "run_synthesis_record"]
+           "save_synthesis_record", "load_synthesis_record", "run_synthesis_record", "CHOICES", "HELD", "D_GRID",
+           "READINGS", "TAIL", "LOST_KM", "pair_stats", "median_paired", "lost_mask", "plural", "compare_sentence",
+           "posterior_distance", "reading_builders", "D_FAVOURABLE", "per_run_rms", "robustness"]
 
 #: key of this paper in ``pfrepro.published`` and the claims registry
 PAPER = "immpfor_zhou2017"
@@ -70,6 +75,11 @@ SCENARIO = {
     "model_likelihood": "gaussian",  # eqs 11-15 as named (Gaussian on the residual mean); "mean" shown too
     "runs_robust": 50,               # runs per robustness scenario (budget; common truths within a scenario)
     "runs_lik": 50,                  # runs of the second model-likelihood reading (budget; main's first 50 truths)
+    "runs_readings": 50,             # runs of every other reading and of the d sweep (main's first 50 truths)
+    "runs_ablation": 20,             # runs of the own-parent ablation per d (main's first 20 truths)
+    "runs_ref": 10,                  # runs of the large-N reference posterior (main's first 10 truths)
+    "N_ref": 4000,                   # particles per mode of the reference IMMPF (8 x the paper's N)
+    "runs_fav": 25,                  # runs of the d = D_FAVOURABLE reading at N = 2000 and per robustness scenario
 }
 
 #: alternative plausible scenarios for the robustness check, fixed with SCENARIO (one change each)
@@ -80,8 +90,98 @@ ALTERNATIVES = {
     "sticky Markov": {"p_stay": 0.98},
 }
 
+#: step coefficients of the d sweep (eq 22/23), chosen from the text before running: the paper says only
+#: that d "removes the effect of the distance"; a step is a multiple of one neighbour spacing, so the
+#: grid spans "no move" (1e-6), a small fraction (0.01, 0.1, 0.3), one spacing (1, the main reading) and
+#: a few spacings (3)
+D_GRID = (1e-6, 0.01, 0.1, 0.3, 1.0, 3.0)
+#: the second step coefficient run at N = 2000 and in each robustness scenario: the value at which the
+#: review found IMMPFOR ahead on the main scenario, i.e. the reading most favourable to the paper
+D_FAVOURABLE = 0.1
+#: the other readings of the main scenario (name -> IMMPFOR keywords), each against the IMMPF on the
+#: same runs; the model-likelihood reading changes both filters (see :func:`reading_builders`)
+READINGS = {"replace=always": {"replace": "always"}, "density=weights": {"density": "weights"}}
+#: the tail of the RMSE curve ("converges more strongly"): from 40 s after the second turn to the end
+TAIL = (251, 300)
+#: a track is lost when the position error exceeds this many metres at the final step
+LOST_KM = 5.0
+
 #: one seed per experiment, chosen once (never changed to move a number)
 SEEDS = {"main": 20170501, "robust": 20170502, "checks": 20170503}
+
+
+_S = SCENARIO
+#: the chapter's assumptions table: every setting the text does not fix, with its status (fixed by the
+#: paper / swept / run as readings) and the reason, shown whole in the chapter (``choices_table``)
+CHOICES = [
+    FreeChoice("x0_T_N_runs", f"x0 = {_S['x0']}, T = {_S['T_s']} s, N = {_S['N']} ({_S['N_fig5']} in Fig. 5), "
+               f"{_S['runs']} runs, u(0) = 1/3 each", FIXED,
+               "Stated in the text; the three models CV, CT, CA on [Rx, Vx, ax, Ry, Vy, ay] and the range, "
+               "Doppler and bearing measurements too.", "sec 3"),
+    FreeChoice("trajectory", f"{_S['duration']} s; left turn k = {_S['left_turn'][0]}-{_S['left_turn'][1]}, "
+               f"right turn k = {_S['right_turn'][0]}-{_S['right_turn'][1]} at {_S['turn_rate_deg']} deg/s; "
+               f"truth DWNA q = {_S['q_truth']} m²/s⁴", READING,
+               "The text says only that the target turns left and right around 100 s and 200 s: 20 s turns "
+               "centred there in a 300 s track, at the standard-rate turn (1.4 g at 264 m/s). The 'sharp turns' "
+               "scenario (6 deg/s) is run as the other reading of the turn rate.", "sec 3"),
+    FreeChoice("noise", f"range {_S['sigma_r']:.0f} m, Doppler {_S['sigma_rdot']:.0f} m/s, bearing "
+               f"{1000 * _S['sigma_theta']:.0f} mrad", READING,
+               "Not printed: a surveillance radar with bearing noise of order 10 mrad, so that position errors "
+               "are hundreds of metres at 70 km as in Table 1. The 'low noise' (half) and 'high noise' (double) "
+               "scenarios are run as the other readings; they also set the level of every absolute number, "
+               "which is why Table 1's values are not checkable.", "sec 3 (not printed)"),
+    FreeChoice("p_stay", f"{_S['p_stay']} on the diagonal of the Markov matrix", READING,
+               "Not printed: the common IMM choice (rows sum to 1, 0.05 elsewhere). The 'sticky Markov' "
+               "scenario (0.98) is run as the other reading.", "not printed"),
+    FreeChoice("discard", "particles with no offspring in systematic resampling", FIXED,
+               "The text (step 6) builds the copy and discard groups from the standard IMMPF resampling; the "
+               "group sizes then follow from the weights.", "sec 2, step 6"),
+    FreeChoice("d", f"{_S['d']:g}", READING,
+               "The paper gives no value for the step coefficient (it 'removes the effect of the distance'). "
+               "It matters (see the sweep figure), so every value is a reading: one neighbour spacing is the main "
+               "reading; the sweep over d = "
+               + ", ".join(f"{v:g}" for v in D_GRID) + f" (grid chosen from the text before running: no move, "
+               f"fractions of a spacing, one spacing, a few spacings) runs on the main run's first "
+               f"{_S['runs_readings']} truths, with a figure; N = 2000 and the robustness scenarios are also run "
+               f"at d = {D_FAVOURABLE:g}, the value most favourable to the paper in review.", "eqs 22-23"),
+    FreeChoice("replace", "only in modes with N_eff < N_th", READING,
+               "The paper's steps 6-7 split and replace without naming a threshold; we first applied eq 19's "
+               "threshold. Replacement at every step in every mode is run as the other reading "
+               f"({_S['runs_readings']} runs).", "sec 2, steps 6-7"),
+    FreeChoice("density", "Gaussian fitted to the w'-weighted set", READING,
+               "Eq 25's density p(x) is lost: the prose around it takes the jointly normalised weight w' "
+               "(eq 24); the code used the moment-matched Gaussian of the w'-weighted set. Both are run "
+               f"(w' as p(x): {_S['runs_readings']} runs).", "eqs 24-25"),
+    FreeChoice("lik", f"{_S['model_likelihood']} (N(residual mean; 0, R + spread))", READING,
+               "Eq 15 is lost; its name (model likelihood from the residual mean and covariance, eqs 11-14) "
+               "suggests the Gaussian form. Boers & Driessen's mean particle likelihood is run as the other "
+               f"reading ({_S['runs_lik']} runs).", "eqs 11-15"),
+]
+
+#: settings the paper does not fix that this round holds at one value without varying them: a verdict
+#: may still depend on them (a limitation, said in the chapter), so they are listed apart from CHOICES
+#: rather than marked "fixed by the paper". Rows: (name, value, reason, where in the paper).
+HELD = [
+    ("models_q", f"CV q = {_S['q_cv']}, CT q = {_S['q_ct']} (|w| = the truth's turn rate), "
+               f"CA q = {_S['q_ca']}; filters' prior N(x0, diag{_S['P0_sd']}²)",
+               "Not printed; textbook values (Bar-Shalom, Li & Kirubarajan 2001, ch. 6 and 11): CV noise at "
+               "least the truth's, CA increments about 0.2 of the turn's acceleration. Not varied in this round.",
+               "not printed"),
+    ("n_th", f"N_th = {_S['n_th']} N",
+               "Not printed; the usual textbook threshold of eq 19, applied identically to both filters (the "
+               "IMMPF's resampling is not what the paper changes). Whether IMMPFOR's replacement also waits "
+               "for it is the separate reading 'replace'.", "eq 19 (value not printed)"),
+    ("metric", "whitened by the jointly weighted covariance",
+               "Our reconstruction of eqs 22-25: the state mixes metres, m/s and m/s², so a Euclidean distance "
+               "in raw units mixes units; whitening is the unit-free choice. Another metric would change the "
+               "step lengths in each direction, which the d sweep varies only as a whole.", "eqs 22-25 (lost)"),
+    ("budget", f"{_S['runs_readings']} runs per reading, {_S['runs_ablation']} per ablation point, "
+               f"{_S['runs_robust']} per scenario, reference N = {_S['N_ref']} on {_S['runs_ref']} runs",
+               "Time budget of the book, fixed before running; readings use the main run's first truths so that "
+               "every comparison is paired on common runs. Not a choice a verdict rests on: each reading's "
+               "ordering is decided on its own paired standard error.", "—"),
+    ("seeds", str(SEEDS), "Fixed once, never changed to move a number.", "—"),
+]
 
 
 def scenario(**over) -> dict:
@@ -321,21 +421,124 @@ def paired(run_: Run, a: str, b: str, idx=IDX_POS):
     return paired_difference(ea, eb)
 
 
-def lost_tracks(run_: Run, name: str, threshold: float = 5000.0) -> int:
+def lost_mask(run_: Run, name: str, threshold: float = LOST_KM * 1000.0) -> np.ndarray:
+    """Per run: is the track lost (final position error above ``threshold`` metres)?"""
+    return errors(run_.x_true, run_.results[name].x)[:, -1] > threshold
+
+
+def lost_tracks(run_: Run, name: str, threshold: float = LOST_KM * 1000.0) -> int:
     """Number of runs whose final position error exceeds ``threshold`` metres (track lost)."""
-    return int(np.sum(errors(run_.x_true, run_.results[name].x)[:, -1] > threshold))
+    return int(np.sum(lost_mask(run_, name, threshold)))
+
+
+def per_run_rms(run_: Run, name: str, idx=IDX_POS, steps=None):
+    """Per run: RMS over time (over ``steps`` = (first, last) k if given) of the error in components ``idx``."""
+    e = errors(run_.x_true, run_.results[name].x, idx)
+    if steps is not None:
+        e = e[:, steps[0] - 1:steps[1]]
+    return np.sqrt(np.mean(e * e, axis=1))
+
+
+def pair_stats(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 500, seed: int = SEEDS["checks"]) -> dict:
+    """Paired differences ``a - b`` (positive: ``b`` better) of every statistic the chapter judges.
+
+    Keys -> ``(diff, se)``: ``"rms"`` per-run RMS position error; ``"peak"``, ``"mean"`` of the
+    position RMSE curve (bootstrap se over runs, common resamples); ``"vel"`` per-run RMS velocity
+    error (Fig. 2 right); ``"x"``, ``"y"``, ``"vx"``, ``"vy"`` per-axis per-run RMS errors (Figs 3-4);
+    ``"tail"`` per-run RMS position error over :data:`TAIL` (the convergence of the RMSE curve).
+    """
+    out = {"rms": paired(run_, a, b)}
+    ea, eb = errors(run_.x_true, run_.results[a].x) ** 2, errors(run_.x_true, run_.results[b].x) ** 2
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, ea.shape[0], size=(B, ea.shape[0]))
+    ca, cb = np.sqrt(ea[idx].mean(axis=1)), np.sqrt(eb[idx].mean(axis=1))            # (B, T)
+    fa, fb = np.sqrt(ea.mean(axis=0)), np.sqrt(eb.mean(axis=0))
+    out["peak"] = (float(fa.max() - fb.max()), float(np.std(ca.max(1) - cb.max(1), ddof=1)))
+    out["mean"] = (float(fa.mean() - fb.mean()), float(np.std(ca.mean(1) - cb.mean(1), ddof=1)))
+    for key, ix in (("vel", IDX_VEL), ("x", (0,)), ("y", (3,)), ("vx", (1,)), ("vy", (4,))):
+        out[key] = paired_difference(per_run_rms(run_, a, ix), per_run_rms(run_, b, ix))
+    out["tail"] = paired_difference(per_run_rms(run_, a, steps=TAIL), per_run_rms(run_, b, steps=TAIL))
+    return out
+
+
+def median_paired(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 2000, seed: int = SEEDS["checks"]):
+    """Median over runs of the per-run RMS position error difference ``a - b``, its bootstrap
+    standard error and 95 % percentile interval: ``(median, se, lo, hi)`` (heavy tails cannot swamp it)."""
+    d = per_run_rms(run_, a) - per_run_rms(run_, b)
+    rng = np.random.default_rng(seed)
+    meds = np.median(d[rng.integers(0, d.size, size=(B, d.size))], axis=1)
+    lo, hi = np.percentile(meds, [2.5, 97.5])
+    return float(np.median(d)), float(np.std(meds, ddof=1)), float(lo), float(hi)
+
+
+def robustness(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 2000, seed: int = SEEDS["checks"]) -> dict:
+    """The chapter's robustness rule for "``b`` beats ``a``" in one scenario: the median paired difference
+    (:func:`median_paired`) and the lost-track counts (:func:`lost_tracks`).
+
+    ``holds`` is True when the 95 % bootstrap interval of the median lies above zero and ``b`` loses no
+    more tracks than ``a``; False when the interval lies below zero or ``b`` loses more tracks; None
+    (undecided) otherwise. Also returns ``median``, ``se``, ``lo``, ``hi``, ``lost_a``, ``lost_b``,
+    ``b_better`` (runs where ``b``'s RMS error is smaller) and ``runs``.
+    """
+    med, se, lo, hi = median_paired(run_, a, b, B, seed)
+    la, lb = lost_tracks(run_, a), lost_tracks(run_, b)
+    if lb > la or hi < 0:
+        holds = False
+    elif lo > 0:
+        holds = True
+    else:
+        holds = None
+    d = per_run_rms(run_, a) - per_run_rms(run_, b)
+    return {"holds": holds, "median": med, "se": se, "lo": lo, "hi": hi, "lost_a": la, "lost_b": lb,
+            "b_better": int(np.sum(d > 0)), "runs": int(d.size)}
+
+
+def posterior_distance(run_: Run, name: str, ref: str):
+    """Per run: RMS over time of the distance (m) between ``name``'s posterior-mean position and the
+    large-N reference ``ref``'s (how well the particle set approximates the posterior's first moment)."""
+    d = run_.results[name].x[..., list(IDX_POS)] - run_.results[ref].x[..., list(IDX_POS)]
+    return np.sqrt(np.mean(np.sum(d * d, axis=-1), axis=1))
+
+
+def plural(n: int, word: str, words: str | None = None) -> str:
+    """``"1 scenario"``, ``"3 scenarios"`` (``words``: the irregular plural)."""
+    n = int(n)
+    return f"{n} {word if n == 1 else (words or word + 's')}"
+
+
+def compare_sentence(diff: float, se: float, a: str, b: str, unit: str = "m", what: str = "per-run RMS position error") -> str:
+    """One sentence from a paired difference ``diff = err(a) - err(b)`` and its se, with the sign in words
+    (the sentence and the table beside it come from the same value)."""
+    if abs(diff) <= 2 * se:
+        rel = "is within two standard errors of"
+    else:
+        rel = "exceeds" if diff > 0 else "is below"
+    return f"the {what} of {a} {rel} that of {b} ({a} − {b} = {diff:+.1f} ± {se:.1f} {unit})"
+
+
+def reading_builders(runs_d=D_GRID, ablation=True) -> dict:
+    """Builders of the readings and the d sweep (IMMPFOR variants; the IMMPF they are paired with is
+    the main run's). Names: ``"d=<v>"``, ``"replace=always"``, ``"density=weights"``, ``"own d=<v>"``
+    (the own-parent ablation, ``mix_modes=False``)."""
+    out = {f"d={d:g}": ("immpfor", {"d": d}) for d in runs_d if d != SCENARIO["d"]}
+    for name, kw in READINGS.items():
+        out[name] = ("immpfor", kw)
+    if ablation:
+        out.update({f"own d={d:g}": ("immpfor", {"d": d, "mix_modes": False}) for d in D_GRID if d >= 0.01})
+    return out
 
 
 def equal_compute_N(res_or, N: int, r: int = 3) -> int:
-    """IMMPF particle number with the same density + likelihood evaluations as IMMPFOR with N.
+    """IMMPF particle number N' with the same deterministic cost as IMMPFOR with N particles per mode.
 
-    Cost of IMMPFOR per run: likelihood evaluations (r N per step) plus density evaluations
-    (r N at every step where one of the run's modes is resampled), from its diagnostics;
-    IMMPF with N' particles costs r N' per step. N' = round(N * cost_OR / cost_PF(N)).
+    The cost is :func:`pfrepro.cost.imm_evaluations` (the count the synthesis chapter uses):
+    r N state transitions and r N likelihood evaluations per step, plus IMMPFOR's density
+    evaluations (r N at every step where one of the run's modes is resampled). An IMMPF with N'
+    costs 2 r N' per step, so N' = round(mean over runs of cost_OR / (2 r T)).
     """
-    lik = np.asarray(res_or.diagnostics["likelihood_evals"], float)
-    den = np.asarray(res_or.diagnostics["density_evals"], float)
-    return int(round(N * float(np.mean((lik + den) / lik))))
+    T = np.asarray(res_or.x).shape[1]
+    per_run = imm_evaluations(res_or, N, r)
+    return int(round(float(np.mean(per_run)) / (2 * r * T)))
 
 
 def mode_timeline(sc=None) -> np.ndarray:
@@ -369,10 +572,7 @@ def synthesis_record(main: Run, fig5: Run, N_eq: int) -> dict:
         e = errors(main.x_true, rr.x)
         out[f"mse/{name}"] = np.mean(e * e, axis=1)
         if name in N:
-            d = rr.diagnostics
-            per_run = r * N[name] * T + np.asarray(d["likelihood_evals"], float) \
-                + np.asarray(d.get("density_evals", 0.0), float)
-            out[f"cost/{name}"] = np.array(float(np.mean(per_run)) / T)
+            out[f"cost/{name}"] = np.array(float(np.mean(imm_evaluations(rr, N[name], r))) / T)
     return out
 
 

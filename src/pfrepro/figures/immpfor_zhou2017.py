@@ -13,7 +13,7 @@ from ..experiments import immpfor_zhou2017 as E
 from ..models.tracking import IDX_POS, IDX_VEL
 from . import new_figure
 
-__all__ = ["table1_frame", "fig1", "shade_turns", "rmse_plot", "fig2", "fig3", "fig4", "fig5", "reproduce",
+__all__ = ["d_sweep_figure", "table1_frame", "fig1", "shade_turns", "rmse_plot", "fig2", "fig3", "fig4", "fig5", "reproduce",
            "TABLES", "FIGURES", "N_STEPS", "PF_NAMES"]
 
 #: what :func:`reproduce` makes
@@ -117,6 +117,33 @@ def fig4(main):
 def fig5(run_n2000):
     """Fig. 5: position and velocity RMSE, N = 2000."""
     return rmse_plot(run_n2000, list(PF_NAMES), IDX_POS, IDX_VEL, "position RMSE [m]", "velocity RMSE [m/s]")
+
+
+def d_sweep_figure(sweep: pd.DataFrame, ablation: pd.DataFrame | None = None):
+    """The step coefficient d (eqs 22-23): IMMPF - IMMPFOR per-run RMS position error (m) ± one paired
+    standard error against d (log axis); positive = IMMPFOR better.
+
+    Parameters
+    ----------
+    sweep : pandas.DataFrame
+        Index d, columns ``diff``, ``se`` (and ``runs``): IMMPFOR as reconstructed (eq 23).
+    ablation : pandas.DataFrame, optional
+        The same for the own-parent ablation (no mixing across modes).
+    """
+    fig, ax = new_figure(figsize=(6, 3.4))
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    series = [(sweep, "C1", "o-", "IMMPFOR (eq 23: parents of all modes)")]
+    if ablation is not None:
+        series.append((ablation, "C2", "s--", "ablation: own parent only"))
+    for df, col, st, lab in series:
+        d = np.asarray(df.index, float)
+        ax.errorbar(d, df["diff"], yerr=df["se"], fmt=st, color=col, ms=4, lw=1, capsize=3, label=lab)
+    ax.set_xscale("log")
+    ax.set_xlabel("step coefficient d [neighbour spacings]")
+    ax.set_ylabel("IMMPF − IMMPFOR [m]")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
 
 
 def reproduce(runs: int | None = None, seed: int | None = None, executor=None, steps=None):

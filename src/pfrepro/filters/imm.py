@@ -304,6 +304,10 @@ class IMMParticleFilter(Filter):
         q += self._meas_lognorm
         return q
 
+    def resample_mask(self, ess, N: int):
+        """Eq 19: which (run, mode) rows are resampled, from their N_eff (runs, r): N_eff < N_th."""
+        return ess < self.n_th * N
+
     # -- inner steps (each is tested on a hand-computed case) ------------------------------------
     def interact(self, x, w, mu, rng):
         """Eqs 6-7: for each mode j, N equally weighted particles from sum_i mu_{i|j} sum_l w_l^i delta.
@@ -420,7 +424,7 @@ class IMMParticleFilter(Filter):
             collapsed[:, k - 1] = coll.reshape(runs, r)
             e = 1.0 / np.sum(w * w, axis=-1)                                      # (19)
             ess[:, k - 1] = e
-            do = e < self.n_th * N
+            do = self.resample_mask(e, N)
             _, M_next = mixing_probabilities(u, sysm.Pi)
             x, w, nrep = self._resample(x, w, do, u, M_next, rng, k, cost)
             resampled[:, k - 1] = do
@@ -474,20 +478,50 @@ class IMMPFOR(IMMParticleFilter):
     f. All weights of a resampled mode become 1/N.
 
     Parameters (besides IMMPF's): ``d`` the step coefficient (> 0, default 1: one neighbour
-    spacing). Cost: the density p is evaluated once at each of the r N particles of a run
+    spacing). Three readings of what the lost equations fixed (``book/60_immpf.md``):
+
+    * ``replace`` -- ``"threshold"`` (default): steps a-f only in the modes with
+      N_eff < N_th (eq 19, as the IMMPF resamples); ``"always"``: in every mode at every
+      step (the paper's steps 6-7 name no threshold).
+    * ``density`` -- p(x) in eq 25: ``"gaussian"`` (default) the moment-matched density
+      N(z; 0, I) of step c; ``"weights"``: the joint weight w' itself (eq 24) taken as p(x),
+      as the prose around eq 25 reads.
+    * ``mix_modes`` -- ``True`` (default) eq 23 as above; ``False`` (an ablation, not a
+      reading): only the slot's own parent x_a^j moves, z_n = z_a^j + step, no mixing
+      across modes.
+
+    Cost: the density p is evaluated once at each of the r N particles of a run
     at every step where one of its modes resamples (``density_evals``); no extra
     likelihood evaluations.
     """
 
     name = "IMMPFOR"
 
+    #: readings of eq 25's density p(x) and of when the replacement runs
+    DENSITIES = ("gaussian", "weights")
+    REPLACE = ("threshold", "always")
+
     def __init__(self, system, n_particles: int, model_likelihood: str = "gaussian", n_th: float = 0.5,
-                 d: float = 1.0, m0=None, P0=None):
+                 d: float = 1.0, m0=None, P0=None, density: str = "gaussian", replace: str = "threshold",
+                 mix_modes: bool = True):
         super().__init__(system, n_particles, model_likelihood, n_th, m0, P0)
         d = float(d)
         if not (np.isfinite(d) and d > 0):
             raise ValueError(f"step coefficient d must be a positive number, got {d!r}")
+        if density not in self.DENSITIES:
+            raise ValueError(f"density must be one of {self.DENSITIES}, got {density!r}")
+        if replace not in self.REPLACE:
+            raise ValueError(f"replace must be one of {self.REPLACE}, got {replace!r}")
         self.d = d
+        self.density = density
+        self.replace = replace
+        self.mix_modes = bool(mix_modes)
+
+    def resample_mask(self, ess, N: int):
+        """Which (run, mode) rows get steps a-f: N_eff < N_th, or all of them (``replace="always"``)."""
+        if self.replace == "always":
+            return np.ones(np.shape(ess), dtype=bool)
+        return super().resample_mask(ess, N)
 
     @staticmethod
     def joint_whitening(x, w, u):
@@ -524,7 +558,12 @@ class IMMPFOR(IMMParticleFilter):
         do = np.ones((R_, r), dtype=bool) if do is None else np.asarray(do, bool)
         M = np.asarray(M, dtype=float)
         m, L, z = self.joint_whitening(x, w, u)                                   # (24)
-        logp = -0.5 * np.einsum("arni,arni->arn", z, z) - 0.5 * n * np.log(2 * np.pi)
+        if self.density == "weights":      # p(x) = w' = u_j w_l^j, the jointly normalised weight (24)
+            wj = u[:, :, None] * w
+            with np.errstate(divide="ignore"):
+                logp = np.log(wj / wj.sum(axis=(1, 2), keepdims=True))
+        else:                              # the moment-matched Gaussian of the w'-weighted set
+            logp = -0.5 * np.einsum("arni,arni->arn", z, z) - 0.5 * n * np.log(2 * np.pi)
         logL = math.lgamma(1 + 1 / n) - (np.log(r * N) + logp + np.log(unit_ball_volume(n))) / n   # (22), (25)
         logstep = np.log(self.d) + logL                                          # (R, r, N) per particle
         if idx is None:
@@ -569,7 +608,10 @@ class IMMPFOR(IMMParticleFilter):
                 np.exp(lam, out=lam)
             dv *= lam[:, None]                                                    # (23): in place,
             dv += z_a                                                             # M (z_a + lam dv)
-            dv *= np.take(M.reshape(-1), (A * r + i) * r + J)[:, None]            # mu_{i|j}
+            if self.mix_modes:
+                dv *= np.take(M.reshape(-1), (A * r + i) * r + J)[:, None]        # mu_{i|j}
+            else:                                                                 # ablation: own parent only
+                dv *= (J == i)[:, None]
             new += dv
         _put_rows(out.reshape(-1, n), f, np.take(m, A, axis=0) + np.einsum("kij,kj->ki", np.take(L, A, axis=0), new))
         return out, n_disc
@@ -598,7 +640,8 @@ class IMMPFOR(IMMParticleFilter):
 
     def __repr__(self) -> str:
         return (f"IMMPFOR(r={self.system.r}, N={self.n_particles}, model_likelihood={self.model_likelihood!r}, "
-                f"n_th={self.n_th}, d={self.d})")
+                f"n_th={self.n_th}, d={self.d}, density={self.density!r}, replace={self.replace!r}, "
+                f"mix_modes={self.mix_modes})")
 
 
 class IMMKalman(Filter):
