@@ -13,7 +13,8 @@ key             model (paper)                            T           reference (
 ``ung_li``      UNGM model 1, Q = 10 (Li 2012)           60          exact grid posterior mean
 ``ung_ning``    UNGM, sigma_w^2 = 1 (Ning 2011, eq 5)    50          exact grid posterior mean
 ``theta_hou``   UNGM with unknown theta (Hou 2008, 5.1)  100         exact theta posterior mean (grid)
-``bot``         bearings-only tracking (Zhang 2016, 5.3) 200         PCRB (a lower bound, not attained)
+``bot``         bearings-only tracking (Zhang 2016, 5.3) 200         PCRB, J0 = P0^-1 (a bound, not attained)
+``bot_centred`` the same, filters' prior mean at x0      200         the same PCRB (reading ``bot_prior``)
 ``imm_zhou``    manoeuvring target, 3 modes (Zhou 2017)  300         large-N IMMPF (N = 2000 per mode)
 =============== ======================================== =========== ==================================
 
