@@ -64,3 +64,23 @@ def test_input_checks():
         pcrb_linear_dynamics(model, 5, 10, truth_rng(0), init="nope")
     with pytest.raises(TypeError):
         pcrb_linear_dynamics(CWPA.zhang2016("mixture"), 5, 10, truth_rng(0))
+
+
+def test_prior_info_bound_uses_p0_on_the_datas_truths():
+    """init="prior_info": J_0 = P0^-1 with the truths the data have (fixed x0). With linear h it is the
+    KF covariance (as "prior", the truths do not enter); on BOT it lies above the x0-known bound at
+    every step (prior information is less than knowing x0) and, with a prior that knows almost
+    everything (P0 -> 0), it tends to the x0-known bound on the same truths."""
+    lin = _linear_model()
+    a = pcrb_linear_dynamics(lin, 10, 3, truth_rng(1), init="prior_info")
+    b = pcrb_linear_dynamics(lin, 10, 3, truth_rng(1), init="prior")
+    np.testing.assert_allclose(a, b, rtol=1e-9)
+    m = BearingsOnly.zhang2016()
+    info = pcrb_linear_dynamics(m, 40, 50, truth_rng(4), init="prior_info")
+    known = pcrb_linear_dynamics(m, 40, 50, truth_rng(4), init="fixed")
+    assert np.all(info > known)
+    sharp = BearingsOnly(P0=(1e-10, 1e-10, 1e-10, 1e-10))
+    np.testing.assert_allclose(pcrb_linear_dynamics(sharp, 40, 50, truth_rng(4), init="prior_info"), known,
+                               rtol=1e-3, atol=1e-8)
+    with pytest.raises(ValueError):
+        pcrb_linear_dynamics(m, 5, 5, truth_rng(4), init="x0")

@@ -142,3 +142,47 @@ def test_cms_fig3_counts_are_3n_and_2n():
     c = E.cost_counts_fig3(Ns=(10, 25))
     assert c["CMS-PF evals / step"].tolist() == [30.0, 75.0]
     assert c["PF evals / step"].tolist() == [20.0, 50.0]
+
+
+# ---------------------------------------------------------------- parameterised models (state × parameter)
+def _theta_data(runs=2, T_=3):
+    from pfrepro.experiments.dpf_hou2008 import model_51
+    m = model_51()
+    return m, m.simulate(T_, runs, np.random.default_rng(3))
+
+
+def test_dpf_counts_every_state_times_parameter_evaluation():
+    """Hand count of one DPF step (predictive weight, module docstring of filters.dual_pf), per run:
+    state filter: N_x transitions and N_x likelihoods; parameter filter: f at the one state
+    estimate under each of the N_θ draws (N_θ evaluations, not 1), one Jacobian of f (at θ̂),
+    and h and its Jacobian at the N_θ predicted states."""
+    from pfrepro.filters.dual_pf import DualParticleFilter
+    m, sim = _theta_data()
+    nx, nt, runs, T_ = 7, 5, sim.runs, sim.y.shape[1]
+    c = count_model_calls(DualParticleFilter(m, n_x=nx, n_theta=nt), sim.y, np.random.default_rng(0))
+    zeros_except(c, transitions=runs * T_ * nx, likelihoods=runs * T_ * nx, f=runs * T_ * nt,
+                 jacobian_f=runs * T_, h=runs * T_ * nt, jacobian_h=runs * T_ * nt)
+    assert c["model_evaluations"] == runs * T_ * (2 * nx + 3 * nt + 1)   # 30 per run and step here
+
+
+def test_liu_west_counts_four_per_particle():
+    from pfrepro.filters.liu_west import LiuWestFilter
+    m, sim = _theta_data()
+    N, runs, T_ = 11, sim.runs, sim.y.shape[1]
+    c = count_model_calls(LiuWestFilter(m, N), sim.y, np.random.default_rng(0))
+    # auxiliary step: f at the N kernel locations and their likelihoods; then N transitions, N likelihoods
+    zeros_except(c, f=runs * T_ * N, likelihoods=2 * runs * T_ * N, transitions=runs * T_ * N)
+
+
+def test_parameter_broadcast_counts_pairs():
+    """f(x, k, θ) at one state (runs, 1, d) and N_θ draws (runs, N_θ, 1) is runs · N_θ evaluations; a
+    scalar θ (or one vector (dim_θ,)) broadcasts to every state."""
+    from pfrepro.experiments.dpf_hou2008 import model_51
+    proxy = CountingModel(model_51())
+    proxy.f(np.zeros((3, 1, 1)), 1, np.full((3, 4, 1), 0.5))
+    assert proxy.counts["f"] == 12
+    proxy.f(np.zeros((3, 6, 1)), 1, 0.5)
+    proxy.f(np.zeros((3, 6, 1)), 1, np.array([0.5]))
+    assert proxy.counts["f"] == 12 + 18 + 18
+    proxy.sample_transition(np.zeros((2, 5, 1)), 1, np.full((2, 1, 1), 0.5), np.random.default_rng(0))
+    assert proxy.counts["transitions"] == 10

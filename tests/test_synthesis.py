@@ -70,35 +70,58 @@ def test_off_frontier_keeps_only_what_survives_the_cost_mismatch():
     assert S.equal_budget(r, "dear_good")["holds"] is None       # beats a cheaper PF: undecided
 
 
-def test_flat_frontier_end_stands_in_within_the_factor():
+def test_no_extrapolation_beyond_a_flat_looking_frontier_end():
+    """The old "flat end" rule let the dearest PF stand in up to 10x its cost when its last two points
+    did not differ; on BOT the PF kept improving beyond. Now a dearer method that beats it is undecided."""
     noise = 0.01 * RNG.standard_normal(RUNS)
     err = {"PF(100)": 2 * BASE, "PF(300)": 2 * BASE + noise, "dear_good": BASE, "ref": BASE}
-    cost = {"PF(100)": 200, "PF(300)": 600, "dear_good": 600 * S.FLAT_FACTOR * 0.9}
-    r = fake(err, cost)
+    r = fake(err, {"PF(100)": 200, "PF(300)": 600, "dear_good": 600 * 1.1}, families={"dear_good": "G"})
     e = S.equal_budget(r, "dear_good")
-    assert e["where"] == "above, flat" and e["holds"] is True
-    r2 = fake(err, {**cost, "dear_good": 600 * S.FLAT_FACTOR * 1.1})
-    assert S.equal_budget(r2, "dear_good")["holds"] is None      # beyond the factor: undecided
+    assert e["where"] == "above" and e["holds"] is None
+    assert S._word(e) == "undecided (off frontier)"
 
 
-def test_ranking_ties_with_the_rank_leader_not_by_chaining():
-    # a < b < c, each adjacent pair within noise, but a and c clearly apart
+def test_holm_by_hand():
+    # m = 4, alpha 0.05: thresholds 0.0125, 0.0167, 0.025, 0.05 in p order
+    p = [0.010, 0.040, 0.016, 0.030]
+    assert list(S.holm(p)) == [True, False, True, False]       # 0.010 <= .0125, 0.016 <= .0167, 0.030 > .025 stops
+    assert list(S.holm([0.06, 0.001])) == [False, True] and list(S.holm([0.02, 0.001])) == [True, True]
+    assert list(S.holm([0.001, np.nan])) == [True, False]
+    assert S.p_two_sided(2.0, 1.0) == pytest.approx(0.0455, abs=1e-4) and S.p_two_sided(0.0, 1.0) == 1.0
+
+
+def test_ranking_is_family_wise_and_symmetric():
+    # a < b < c, each adjacent pair within noise, but a and c clearly apart: c is beaten by a only
     n = 400
     rng = np.random.default_rng(1)
     base = 1 + rng.random(n)
-    e = {"a": base, "b": base + 0.02 + 0.2 * rng.standard_normal(n), "c": base + 0.04, "ref": base}
+    noise = 0.4 * rng.standard_normal(n)
+    e = {"a": base, "b": base + 0.02 + noise - noise.mean(), "c": base + 0.04, "ref": base}   # z(b - a) = 1
     r = fake(e, {"a": 1, "b": 1, "c": 1}, families={"a": "A", "b": "B", "c": "C"})
     rk = S.ranking(r)
     assert list(rk.index) == ["a", "b", "c"]
-    assert rk.loc["b", "rank"] == 1 and rk.loc["b", "tie"] == "= a"
-    assert rk.loc["c", "rank"] == 3                              # chaining b~c would have made it 1
+    assert rk.loc["a", "rank"] == 1 and rk.loc["b", "rank"] == 1 and rk.loc["b", "tie"] == "= a"
+    assert rk.loc["c", "rank"] == 2 and rk.loc["c", "tie"] == "= b"     # beaten by a (only)
+    # a difference at z = 2.2 alone is significant; among many pairs Holm no longer calls it so
+    dd = 0.2 * rng.standard_normal(n)
+    dd = dd - dd.mean() + 2.2 * dd.std(ddof=1) / np.sqrt(n)
+    d = {"x": base, "y": base + dd}
+    small = S.ranking(fake({**d, "ref": base}, {"x": 1, "y": 1}, families={"x": "X", "y": "Y"}))
+    assert small.loc["y", "rank"] == 2
+    zs = {}
+    for i in range(6):   # six more methods, noisy and centred between x and y: no pair of them is significant
+        z = 3.0 * rng.standard_normal(n)
+        zs[f"z{i}"] = base + dd.mean() / 2 + z - z.mean()
+    many = {**d, **zs, "ref": base}
+    big = S.ranking(fake(many, {k: 1 for k in many if k != "ref"}, families={k: k for k in many}))
+    assert (big["rank"] == 1).all() and "x" in big.loc["y", "tie"]
 
 
 def test_ranking_lists_diverged_last():
     e = {"a": BASE, "x": np.r_[np.nan, BASE[1:]], "ref": BASE}
     rk = S.ranking(fake(e, {"a": 1, "x": 1}, families={"a": "A", "x": "X"}))
     assert list(rk.index) == ["a", "x"] and np.isnan(rk.loc["x", "rank"])
-    assert "diverged (1 runs)" in rk.loc["x", "tie"]
+    assert "diverged (1 run)" in rk.loc["x", "tie"]
 
 
 def test_distance_to_a_bound_reference():
@@ -213,3 +236,24 @@ def test_imm_benchmark_from_the_imm_chapters_record(tmp_path):
     assert list(rows["method"]) == [f"IMMPFOR({n})"]
     assert reg.claims[0].basis == "count" and reg.claims[0].verdict in ("reproduced", "not reproduced",
                                                                           "inconclusive")
+
+
+def test_bot_claim_is_decided_under_both_prior_readings():
+    """A BOT claim holds only if it holds with the printed (offset) prior and with the centred one."""
+    from pfrepro.choices import as_choice_map
+    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "G": 1.2 * BASE, "ref": BASE}
+    cost = {"PF(10)": 20, "PF(100)": 200, "G": 60}
+    off = fake(err, cost, families={"G": "GPFF"}, papers={"G": "gpff_zhang2016"})
+    cen = fake({**err, "G": 5 * BASE}, cost, families={"G": "GPFF"}, papers={"G": "gpff_zhang2016"})
+    reg = ClaimsRegistry("synthesis", choices=S.CHOICES)
+    rows = S.record_claims(reg, {"bot": off, "bot_centred": cen})
+    assert list(rows["benchmark"]) == ["bot"]                       # the centred row is a reading, not a claim
+    c = reg.claims[0]
+    assert c.readings == {"bot_prior=offset": True, "bot_prior=centred": False} and c.depends_on == ["bot_prior"]
+    assert c.verdict == "inconclusive" and "centred prior" in c.note
+    assert as_choice_map(S.CHOICES)["bot_prior"].status == "reading"
+
+
+def test_plural():
+    assert S.plural(1, "claim") == "1 claim" and S.plural(3, "claim") == "3 claims"
+    assert S.plural(1, "is", "are") == "1 is" and S.plural(0, "is", "are") == "0 are"

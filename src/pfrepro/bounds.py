@@ -21,6 +21,13 @@ What the bound refers to depends on the distribution of x_0 (``init``):
 * ``"prior"`` — x_0 ~ N(m0, P0), J_0 = P0⁻¹: the Bayesian setting the filters assume.
   It bounds the MSE averaged over truths drawn from that prior, not the MSE on data whose
   truth starts at a fixed ``x0``.
+* ``"prior_info"`` — J_0 = P0⁻¹ (the filters' own prior information), the truths simulated
+  as the data are (from ``model.x0``, or from the prior when ``model.truth_init == "prior"``):
+  the yardstick usual in tracking (Ristic, Arulampalam & Gordon 2004, ch. 4) for filters
+  started from N(m0, P0) on data whose truth starts elsewhere. It is a bound for an estimator
+  whose knowledge of x_0 is that prior; it is not a strict bound on every estimator's MSE on
+  data from a fixed start (an estimator that guessed ``x0`` would beat it early on), and not
+  the optimal filter's MSE.
 * ``"fixed"`` — x_0 = ``model.x0`` known exactly (J_0⁻¹ = 0), trajectories from ``x0``: the
   true distribution of data simulated with ``truth_init="fixed"``, so a valid lower bound on
   every estimator's MSE on such data, but one that credits the estimator with knowing x_0
@@ -57,7 +64,8 @@ def pcrb_linear_dynamics(model, T: int, runs: int, rng: np.random.Generator, ini
     runs : number of simulated truth trajectories for the Monte Carlo estimate of
         E[H_kᵀ R⁻¹ H_k] (all advanced together; vectorised over runs).
     rng : generator for the truth trajectories (use ``montecarlo.truth_rng``).
-    init : ``"prior"`` (x_0 ~ N(m0, P0), J_0 = P0⁻¹) or ``"fixed"`` (x_0 = x0 known, J_0⁻¹ = 0).
+    init : ``"prior"`` (x_0 ~ N(m0, P0), J_0 = P0⁻¹), ``"prior_info"`` (J_0 = P0⁻¹, truths
+        from the model's own truth start) or ``"fixed"`` (x_0 = x0 known, J_0⁻¹ = 0).
     return_cov : return the full J_k⁻¹ ``(T, dim_x, dim_x)`` instead of its diagonal.
 
     Returns
@@ -71,12 +79,15 @@ def pcrb_linear_dynamics(model, T: int, runs: int, rng: np.random.Generator, ini
         raise TypeError("pcrb_linear_dynamics needs a model with linear dynamics (a matrix attribute F)")
     if not isinstance(model.measurement_noise, GaussianNoise):
         raise TypeError("pcrb_linear_dynamics needs Gaussian measurement noise (Fisher information R^-1)")
-    if init not in ("prior", "fixed"):
-        raise ValueError("init must be 'prior' or 'fixed'")
+    if init not in ("prior", "prior_info", "fixed"):
+        raise ValueError("init must be 'prior', 'prior_info' or 'fixed'")
     F, Q, d = np.asarray(model.F, float), model.Q, model.dim_x
     W = np.linalg.cholesky(np.linalg.inv(model.R))               # R⁻¹ = W Wᵀ
-    if init == "prior":
+    if init == "prior" or (init == "prior_info" and getattr(model, "truth_init", "fixed") == "prior"):
         x = model.sample_initial(rng, runs)
+        J_inv = model.P0.copy()
+    elif init == "prior_info":
+        x = np.broadcast_to(model.x0, (runs, d)).copy()
         J_inv = model.P0.copy()
     else:
         x = np.broadcast_to(model.x0, (runs, d)).copy()

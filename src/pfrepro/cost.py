@@ -23,6 +23,15 @@ column            model method                 what it is
 ``jacobian_h``    ``jacobian_h``               Jacobians of h (EKF)
 ================= ============================ ================================
 
+Parameterised models (:class:`~pfrepro.models.parameterized.ParameterizedModel`: ``f(x, k,
+theta)``, ``sample_transition(x, k, theta, rng)``, ``jacobian_f(x, k, theta)``) evaluate the
+model once per *state × parameter* pair of the broadcast of ``x`` and ``theta``: ``f`` at one
+state estimate ``(runs, 1, d)`` and ``N_θ`` parameter draws ``(runs, N_θ, 1)`` is ``runs * N_θ``
+evaluations (the dual PF's parameter weights), not ``runs``. The proxy counts
+``prod(broadcast(x.shape[:-1], theta.shape[:-1]))`` for these calls (``theta`` with its
+trailing ``dim_theta`` axis, as the models take it; a scalar or a ``(dim_theta,)`` vector
+broadcasts to every state).
+
 Calls a model makes to itself (``sample_transition`` calls ``f``,
 ``log_likelihood`` calls ``h``) are not counted twice: the proxy sees only what the
 filter asks. ``model_evaluations`` is the sum of the six columns, a unit-cost model in
@@ -66,9 +75,23 @@ _STATE_KW = {"sample_transition": "x", "log_likelihood": "x", "f": "x", "h": "x"
              "jacobian_h": "x"}
 
 
-def _n_states(x) -> int:
+#: the positional index of the parameter argument of the counted methods that take one
+#: (:class:`~pfrepro.models.parameterized.ParameterizedModel`; absent for a plain model)
+_THETA_ARG = {"sample_transition": 2, "f": 2, "jacobian_f": 2}
+
+
+def _lead(x) -> tuple:
     shape = np.shape(x)
-    return int(math.prod(shape[:-1])) if len(shape) >= 1 else 1
+    return tuple(shape[:-1]) if len(shape) >= 1 else ()
+
+
+def _n_states(x, theta=None) -> int:
+    """States passed through one call: ``prod(x.shape[:-1])``, broadcast against the parameter's
+    leading axes when a parameter array is given (one model evaluation per state × parameter pair)."""
+    lead = _lead(x)
+    if theta is not None:
+        lead = np.broadcast_shapes(lead, _lead(theta))
+    return int(math.prod(lead))
 
 
 class CountingModel:
@@ -87,11 +110,17 @@ class CountingModel:
         if name not in COUNTED:
             return attr
         column, pos, kw = COUNTED[name], _STATE_ARG[name], _STATE_KW[name]
+        tpos = _THETA_ARG.get(name)
         counts = self.counts
 
         def counted(*args, **kwargs):
             x = kwargs[kw] if kw in kwargs else args[pos]
-            counts[column] += _n_states(x)
+            theta = None
+            if tpos is not None:   # a parameterised model's call f(x, k, theta): count x × theta
+                theta = kwargs["theta"] if "theta" in kwargs else (args[tpos] if len(args) > tpos else None)
+                if theta is not None and not isinstance(theta, np.ndarray):
+                    theta = None if np.ndim(theta) == 0 else np.asarray(theta)
+            counts[column] += _n_states(x, theta)
             return attr(*args, **kwargs)
 
         return counted
