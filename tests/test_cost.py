@@ -5,8 +5,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pfrepro.cost import (COUNT_COLUMNS, CountingModel, cost_counts, count_model_calls, median_interval,
-                          time_repeats, time_summary)
+from pfrepro.cost import (COUNT_COLUMNS, PRINTED_COLUMNS, CountingModel, cost_counts, count_model_calls,
+                          median_interval, time_repeats, time_summary)
 from pfrepro.filters import (BootstrapParticleFilter, CMSParticleFilter, EvolutionSamplingParticleFilter,
                              ExtendedKalmanFilter, GaussianParticleFlowFilter, GridFilter, KalmanFilter,
                              UnscentedKalmanFilter)
@@ -113,7 +113,9 @@ def test_counts_do_not_depend_on_the_rng(ung):
 def test_cost_counts_table(ung):
     m, sim = ung
     df = cost_counts({"EKF": ExtendedKalmanFilter(m), "PF(10)": BootstrapParticleFilter(m, 10)}, sim.y[:1])
-    assert list(df.columns) == COUNT_COLUMNS + ["per step"]
+    assert list(df.columns) == COUNT_COLUMNS + PRINTED_COLUMNS + ["per step"]
+    assert df.loc["PF(10)", "resampled"] == 10 * T     # every step, N copies
+    assert df.loc["EKF", "printed_operations"] == df.loc["EKF", "model_evaluations"]
     assert df.loc["PF(10)", "model_evaluations"] == 2 * 10 * T
     assert df.loc["EKF", "per step"] == 4
     with pytest.raises(ValueError, match="one run"):

@@ -244,3 +244,83 @@ def test_field_from_cached_coefficients_is_the_field():
             want = 0.5 * np.einsum("rdm,rmk,rnk->rnd", Pxy, C,
                                    (y[:, None] - hx) + np.einsum("mk,rkj,rj->rm", R, C, y - yh)[:, None])
             np.testing.assert_allclose(ref, want, rtol=1e-10, atol=1e-12)
+
+
+# --------------------------------------------------------------- free choices, readings, claims statistics
+from pfrepro.experiments import gpff_zhang2016 as E  # noqa: E402
+
+
+def test_choices_rows_and_reading_labels():
+    from pfrepro.choices import FIXED, as_choice_map
+    cmap = as_choice_map(E.CHOICES)
+    # every choice the reading filters vary is a non-fixed row of the table
+    for which in ("ung", "bot", "cwpa_gaussian"):
+        for label, (_, tags) in E.reading_filters(which).items():
+            assert " | " in label
+            for c in tags:
+                assert c in cmap and cmap[c].status != FIXED
+    assert E.reading_label("PF(500)", "pf_resampling", "systematic", "systematic") == "PF(500)"
+    assert E.reading_label("PF(500)", "pf_resampling", "multinomial", "systematic") == "PF(500) | pf_resampling=multinomial"
+    with pytest.raises(ValueError):
+        E.reading_filters("nope")
+
+
+def test_convergence_time_by_hand():
+    err = np.array([[5, 3, 1, 0.5, 3, 0.5, 0.2],     # last above the band at step 5 -> converged at 6
+                    [0.1] * 7,                       # always inside -> 1
+                    [5] * 7,                         # never -> T + 1
+                    [0.1, 0.1, np.nan, 0.1, 0.1, 0.1, 0.1]])
+    tau = E.convergence_time(err, 1.0)
+    assert tau[:3].tolist() == [6, 1, 8] and np.isnan(tau[3])
+
+
+def test_equivalence_is_two_one_sided():
+    assert E.equivalence(0.03, 0.007, 0.1) is True          # significant but inside the margin
+    assert E.equivalence(0.09, 0.01, 0.1) is None           # interval crosses the margin
+    assert E.equivalence(0.2, 0.01, 0.1) is False           # wholly outside
+    assert E.equivalence(-0.2, 0.01, 0.1) is False
+    assert E.equivalence(0.0, 0.06, 0.1) is None            # too noisy to show equivalence
+
+
+def test_heavy_tail_and_robust_statistics():
+    rng = np.random.default_rng(0)
+    light = rng.normal(10, 1, 100)
+    heavy = light.copy()
+    heavy[0] = 1e4
+    assert not E.heavy_tailed(light) and E.heavy_tailed(heavy)
+    md, se = E.median_paired(heavy, np.zeros(100))
+    assert abs(md - np.median(heavy)) < 1e-12 and 0 < se < 1           # the outlier does not move it
+    assert E.median_paired(heavy, np.zeros(100)) == (md, se)           # fixed bootstrap seed
+    d, se = E.std_difference(2 * light, light)
+    assert abs(d - np.std(light, ddof=1)) < 1e-12 and se > 0
+
+
+def test_eq43_printed_differs_from_eq22_except_at_zero():
+    t = E.eq43_check()
+    assert t.loc[0.0].iloc[0] < 1e-12
+    assert (t.iloc[1:, 0] > 0.05).all()
+    assert t.attrs["landing"]["(22)"] < 1e-9 and t.attrs["landing"]["printed (43)"] > 0.05
+
+
+def test_eqs16_to_18_hold():
+    assert E.eqs16_18_check().to_numpy().max() < 1e-10
+
+
+def test_cost_counts_as_printed_by_hand():
+    """GPFF(N) with eq 43 moves d + 1 probe points, but as printed every particle moves at every
+    lambda stage; the PF copies N particles per resampling event."""
+    from pfrepro.cost import count_model_calls
+    from pfrepro.filters import BootstrapParticleFilter
+    model = BearingsOnly.zhang2016()
+    T, N = 5, 50
+    y = model.simulate(T, 1, truth_rng(3)).y
+    for integ, stages in (("euler", 1), ("rk4", 4)):
+        c = count_model_calls(GaussianParticleFlowFilter(model, N, n_steps=20, field="eq43", integrator=integ), y)
+        assert c["flow_calls"] == 20 * stages * T
+        assert c["flow_printed"] == 20 * stages * T * N
+        assert c["model_evaluations"] == T * (N + 2 * 4 + 1)               # transitions + sigma points
+        assert c["printed_operations"] == c["model_evaluations"] + c["flow_printed"]
+    c = count_model_calls(BootstrapParticleFilter(model, N), y)
+    assert c["resampled"] == N * T and c["model_evaluations"] == 2 * N * T
+    c2 = count_model_calls(BootstrapParticleFilter(model, N, ess_threshold=0.5), y)
+    assert c2["resampled"] % N == 0 and c2["resampled"] <= N * T

@@ -60,7 +60,7 @@ import pandas as pd
 from . import flow as _flow
 from .montecarlo import time_filter_repeats
 
-__all__ = ["COUNTED", "COUNT_COLUMNS", "CountingModel", "count_model_calls", "cost_counts",
+__all__ = ["COUNTED", "COUNT_COLUMNS", "PRINTED_COLUMNS", "CountingModel", "count_model_calls", "cost_counts",
            "time_repeats", "time_summary", "median_interval", "imm_evaluations"]
 
 #: counted model method -> column name
@@ -68,6 +68,8 @@ COUNTED = {"sample_transition": "transitions", "log_likelihood": "likelihoods", 
            "jacobian_f": "jacobian_f", "jacobian_h": "jacobian_h"}
 #: columns of :func:`cost_counts`
 COUNT_COLUMNS = list(COUNTED.values()) + ["model_evaluations", "flow"]
+#: further columns of :func:`cost_counts`: the algorithm as printed (see :func:`count_model_calls`)
+PRINTED_COLUMNS = ["flow_calls", "flow_printed", "resampled", "printed_operations"]
 
 # the positional index of the state argument of each counted method
 _STATE_ARG = {"sample_transition": 0, "log_likelihood": 1, "f": 0, "h": 0, "jacobian_f": 0, "jacobian_h": 0}
@@ -140,6 +142,7 @@ def _count_flow(counter: dict):
     def integrate_flow(x, field, grid, method="euler"):
         def counted_field(z, lam):
             counter["flow"] += _n_states(z)
+            counter["flow_calls"] += 1
             return field(z, lam)
 
         return original(x, counted_field, grid, method)
@@ -175,21 +178,35 @@ def _model_of(filt):
 def count_model_calls(filt, y, rng=None, **filter_kw) -> dict:
     """Run ``filt.filter(y, rng=rng)`` once with a counting proxy around its model.
 
-    Returns a dict with the six counted columns, ``model_evaluations`` (their sum) and
-    ``flow`` (states moved per flow-field evaluation, summed). ``rng``: a Generator
+    Returns a dict with the six counted columns, ``model_evaluations`` (their sum),
+    ``flow`` (states moved per flow-field evaluation, summed) and the algorithm *as printed*:
+    ``flow_calls`` (flow-field evaluations: lambda steps times integrator stages),
+    ``flow_printed`` (``flow_calls * n_particles``: every particle moved at every stage, as
+    the paper's algorithm does, even where an implementation moves only probe points),
+    ``resampled`` (particles copied by resampling: ``n_particles`` per resampling event in
+    the filter's ``resampled`` diagnostics) and ``printed_operations`` (model evaluations +
+    ``flow_printed`` + ``resampled``). ``rng``: a Generator
     (default: ``numpy.random.default_rng(0)``); the counts of the filters in this book
     do not depend on it except through data-dependent control flow (e.g. a diverged
     run that is dropped), which the fixed default makes reproducible.
     """
     proxy = CountingModel(_model_of(filt))
     counted = _with_model(filt, proxy)
-    flow_counter = {"flow": 0}
+    flow_counter = {"flow": 0, "flow_calls": 0}
     rng = np.random.default_rng(0) if rng is None else rng
     with _count_flow(flow_counter):
-        counted.filter(y, rng=rng, **filter_kw)
+        result = counted.filter(y, rng=rng, **filter_kw)
     out = dict(proxy.counts)
     out["model_evaluations"] = sum(proxy.counts.values())
     out["flow"] = flow_counter["flow"]
+    n_particles = int(getattr(filt, "n_particles", 0) or 0)
+    runs = int(np.shape(y)[0]) if np.ndim(y) == 3 else 1
+    out["flow_calls"] = flow_counter["flow_calls"]
+    out["flow_printed"] = flow_counter["flow_calls"] * n_particles * runs
+    diag = getattr(result, "diagnostics", None) or {}
+    resampled = diag.get("resampled") if isinstance(diag, dict) else None
+    out["resampled"] = int(np.sum(resampled)) * n_particles if resampled is not None else 0
+    out["printed_operations"] = out["model_evaluations"] + out["flow_printed"] + out["resampled"]
     return out
 
 
@@ -204,7 +221,7 @@ def cost_counts(filters: dict, y_one_run, rng_seed: int = 0) -> pd.DataFrame:
     if y.ndim != 3 or y.shape[0] != 1:
         raise ValueError(f"y_one_run must be one run, shape (1, T, dim_y); got {y.shape}")
     rows = {name: count_model_calls(f, y, np.random.default_rng(rng_seed)) for name, f in filters.items()}
-    df = pd.DataFrame(rows).T[COUNT_COLUMNS].astype(np.int64)
+    df = pd.DataFrame(rows).T[COUNT_COLUMNS + PRINTED_COLUMNS].astype(np.int64)
     df["per step"] = df["model_evaluations"] / y.shape[1]
     df.index.name = "filter"
     return df
