@@ -209,3 +209,97 @@ def test_published_tables_complete_and_consistent():
     np.testing.assert_allclose(runs.var(ddof=1).values, t1.loc["22"].values, atol=6e-4)
     assert published.value("cmspf_ning2011", "Table 2", "RMSE", "CMS-PF") == pytest.approx(5.2070)
     assert published.value("cmspf_ning2011", "Table 3", "1", "EKF") == pytest.approx(30.0065)
+
+
+# -- free choices of the chapter (issue 24) and the mechanism measures (issue 19) ------------
+from pfrepro.choices import FIXED, as_choice_map  # noqa: E402
+from pfrepro.experiments import cmspf_ning2011 as E  # noqa: E402
+from pfrepro.figures import cmspf_ning2011 as F  # noqa: E402
+from pfrepro.rng import RunStreams  # noqa: E402
+
+
+@pytest.mark.parametrize("kind", ["logistic", "chebyshev"])
+def test_carrier_initialisations_layout(kind):
+    T, runs, N = 4, 3, 5
+    run = ChaosCarrier(kind, init="run", burn_in=10).generate(T, (runs, N, 1), RunStreams.from_entropy(7, runs))
+    shared = ChaosCarrier(kind, init="shared", burn_in=10).generate(T, (runs, N, 1), RunStreams.from_entropy(7, runs))
+    step = (lambda x: 4 * x * (1 - x)) if kind == "logistic" else (lambda x: 1 - 2 * x ** 2)
+    for r in (run, shared):
+        assert r.shape == (T, runs, N, 1)
+        seq = r[:, 0, :, 0].ravel()            # run 0: slots of step 1, then of step 2, ...
+        np.testing.assert_allclose(seq[1:], step(seq[:-1]), atol=1e-9)
+    assert np.array_equal(shared[:, 0], shared[:, 2])          # one sequence for every run
+    assert not np.array_equal(run[:, 0], run[:, 2])            # one chain per run
+    other = ChaosCarrier(kind, init="shared", burn_in=10).generate(T, (runs, N, 1), RunStreams.from_entropy(8, runs))
+    assert np.array_equal(shared, other)                       # fixed start: no randomness
+    # run i is the same in a batch of 1 and of 3 (per-run streams)
+    one = ChaosCarrier(kind, init="run", burn_in=10).generate(T, (1, N, 1), RunStreams.from_entropy(7, 3).subset([2]))
+    np.testing.assert_array_equal(one[:, 0], run[:, 2])
+    with pytest.raises(ValueError):
+        ChaosCarrier(kind, init="random")
+
+
+def test_experiment_passes_u_burn_in_and_init_to_the_filter():
+    m = E.model()
+    f = E.cms(m, 20)
+    assert (f.carrier.kind, f.carrier.u, f.carrier.burn_in, f.carrier.init) == (
+        E.ASSUMPTIONS["carrier"], E.ASSUMPTIONS["u"], E.ASSUMPTIONS["burn_in"], E.ASSUMPTIONS["init"])
+    g = E.cms(m, 20, u=3.8, burn_in=100, init="shared", eta=0.2, big_fraction=1e-9)
+    assert (g.carrier.u, g.carrier.burn_in, g.carrier.init, g.eta, g.n_big) == (3.8, 100, "shared", 0.2, 1)
+
+
+def test_choices_rows_and_readings_name_choices():
+    cmap = as_choice_map(E.CHOICES)
+    for (c, _v) in E.CMS_READINGS:
+        assert c in cmap and cmap[c].status != FIXED
+    for tag in list(E.T2_READINGS) + list(E.T3_TAGS.values()):
+        for part in tag.split(","):
+            assert part.split("=")[0].strip() in cmap
+    assert {"u", "burn_in", "carrier_init"} <= set(cmap)
+
+
+def test_set_stats_hand_case():
+    s = E.set_stats(np.array([[1.0, 1.0, 2.0, 3.0], [0.0, 1.0, 2.0, 3.0]]))
+    np.testing.assert_allclose(s["distinct"], [0.75, 1.0])
+    np.testing.assert_array_equal(s["duplicates"], [1, 0])
+    # sorted u = (0, 0, .5, 1): max(i/M - u) = .5; evenly spaced (0, 1/3, 2/3, 1): 0.25
+    np.testing.assert_allclose(s["ks"], [0.5, 0.25])
+
+
+def test_trend_slopes_and_carrier_counts():
+    import pandas as pd
+    Ns = [10, 100, 1000]
+    t = pd.DataFrame([[3 - 2 * np.log(n) for n in Ns], [1.0, 1.0, 1.0]], columns=Ns)
+    np.testing.assert_allclose(E.trend_slopes(t), [-2.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(E.trend_slopes(t, N_min=100), [-2.0, 0.0], atol=1e-12)
+    c = E.carrier_iterations(10, T_=50, burn_in=1000, init="chain", runs=2)
+    assert c == {"carrier iterations": 2 * 10 * 1050, "model evaluations": 2 * 3 * 10 * 50}
+    assert E.carrier_iterations(10, 50, 1000, "shared", runs=2)["carrier iterations"] == 1000 + 500
+
+
+def test_printed_digits_and_divisors():
+    p3 = F.printed("Table 3")
+    assert p3.loc["22", "EKF"] == "179.3805" and p3.loc["21", "CMSR3-PF"] == "4.2601"
+    assert float(p3.loc["22", "EKF"]) == published.value(E.PAPER, "Table 3", "22", "EKF")
+    d3, d1 = F.divisor_check("Table 3"), F.divisor_check("Table 1")
+    assert d3.loc["CMSR1-PF", "divisor that matches"] == "n"        # the divisor slip
+    assert d3.loc["UKF", "divisor that matches"] == "neither"       # misprinted rows
+    assert set(d3.drop(["CMSR1-PF", "UKF"])["divisor that matches"]) == {"n − 1"}
+    assert set(d1["divisor that matches"]) == {"n − 1"}
+    # every published number shown in the chapter's tables is the printed string
+    s1 = F.table1_summary(pd_table1_dummy())
+    assert list(s1["PF paper"]) == [F.printed("Table 1").loc["21", f"N={N} PF"] for N in E.TABLE1_N]
+
+
+def pd_table1_dummy():
+    import pandas as pd
+    cols = pd.MultiIndex.from_tuples([(N, f) for N in E.TABLE1_N for f in ("PF", "CMS-PF", "PF (2N)")])
+    return pd.DataFrame(np.ones((20, len(cols))), columns=cols)
+
+
+def test_mechanism_runs_and_orders_sets():
+    d = E.mechanism(runs=2, N=20)
+    m = d.mean()
+    assert m[("CMS-PF candidates (2N)", "distinct")] == 1.0
+    assert m[("PF resampled set", "distinct")] < 1.0
+    assert m[("PF resampled set", "duplicates")] > 0

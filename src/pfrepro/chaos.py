@@ -32,7 +32,7 @@ from .validation import check_positive_int
 from .rng import RunStreams, check_rng
 
 __all__ = ["logistic_sequence", "chebyshev_sequence", "gaussian_sequence", "ChaosCarrier",
-           "CARRIERS", "DEFAULT_BURN_IN", "EDGE"]
+           "CARRIERS", "CARRIER_INITS", "DEFAULT_BURN_IN", "EDGE"]
 
 #: default number of discarded iterations T0 (sec 3.3 leaves it open)
 DEFAULT_BURN_IN = 1000
@@ -42,6 +42,14 @@ EDGE = 1e-12
 
 #: carrier names accepted by :class:`ChaosCarrier`
 CARRIERS = ("randn", "logistic", "chebyshev")
+
+#: how a :class:`ChaosCarrier` starts and lays out its chains (the paper does not say):
+#: ``"chain"`` one chain per run and map slot, random start, advanced once per step;
+#: ``"run"`` one chain per run, random start, its consecutive iterates filling the map slots
+#: of step 1, then of step 2, ...; ``"shared"`` one sequence from a fixed start (``x0 = 0.65``
+#: for eq 1, ``0.3`` for eq 6), generated once offline and used by every run, laid out as ``"run"``.
+#: The ``randn`` carrier ignores it.
+CARRIER_INITS = ("chain", "run", "shared")
 
 
 def _check_burn_in(burn_in) -> int:
@@ -143,6 +151,7 @@ class ChaosCarrier:
     kind : ``"randn"`` (CMS1), ``"logistic"`` (eq 1, CMS2) or ``"chebyshev"`` (eq 6, CMS3).
     u : logistic control parameter (eq 1).
     burn_in : T0 of sec 3.3.
+    init : one of :data:`CARRIER_INITS` (default ``"chain"``, described next).
 
     :meth:`generate` returns ``(T, *shape)`` values: one chain per entry of
     ``shape`` (runs x map slots x state components), its initial value drawn
@@ -151,7 +160,11 @@ class ChaosCarrier:
     sequence is computed "offline" before filtering, as sec 2.1 suggests.
     """
 
-    def __init__(self, kind: str = "logistic", u: float = 4.0, burn_in: int = DEFAULT_BURN_IN):
+    def __init__(self, kind: str = "logistic", u: float = 4.0, burn_in: int = DEFAULT_BURN_IN,
+                 init: str = "chain"):
+        if init not in CARRIER_INITS:
+            raise ValueError(f"unknown carrier initialisation {init!r}; choose from {CARRIER_INITS}")
+        self.init = init
         if kind not in CARRIERS:
             raise ValueError(f"unknown carrier {kind!r}; choose from {CARRIERS}")
         self.kind = kind
@@ -174,13 +187,29 @@ class ChaosCarrier:
             if isinstance(rng, RunStreams):  # runs axis first in the draw (pfrepro.rng rule 1)
                 return np.ascontiguousarray(np.moveaxis(rng.standard_normal(shape[:1] + (T,) + shape[1:]), 1, 0))
             return rng.standard_normal((T,) + shape)
+        if self.init != "chain":
+            return self._generate_sequential(T, shape, rng)
         # initial values uniform on (0.01, 0.99) of the interval: away from its end points
         # (pre-fixed points such as 0.5 have probability zero under a continuous draw)
         v = rng.uniform(0.01, 0.99, shape)
+        return self._sequence(T, v)
+
+    def _sequence(self, n, v):
+        """``n`` iterates (after burn-in) from start(s) ``v`` in (0, 1) of the interval."""
         if self.kind == "logistic":
-            return logistic_sequence(T, v, self.u, self.burn_in)
-        return chebyshev_sequence(T, 2.0 * v - 1.0, self.burn_in)
+            return logistic_sequence(n, v, self.u, self.burn_in)
+        return chebyshev_sequence(n, 2.0 * v - 1.0, self.burn_in)
+
+    def _generate_sequential(self, T, shape, rng):
+        """``"run"`` / ``"shared"``: consecutive iterates of one chain fill the slots, step by step."""
+        runs, slots = shape[0], int(np.prod(shape[1:], dtype=int))
+        if self.init == "run":
+            seq = self._sequence(T * slots, rng.uniform(0.01, 0.99, (runs,)))      # (T*slots, runs)
+        else:
+            seq = np.broadcast_to(self._sequence(T * slots, np.array([0.65])), (T * slots, runs))
+        return np.ascontiguousarray(seq.reshape(T, slots, runs).transpose(0, 2, 1)).reshape((T,) + shape)
 
     def __repr__(self) -> str:
         extra = f", u={self.u}" if self.kind == "logistic" else ""
+        extra += f", init={self.init!r}" if self.init != "chain" else ""
         return f"ChaosCarrier({self.kind!r}{extra}, burn_in={self.burn_in})"

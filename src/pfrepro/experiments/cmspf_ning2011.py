@@ -4,7 +4,10 @@ Which model, which filters, which settings, for every table and figure of the
 paper and for the chapter's extras. The chapter ``book/40_cmspf.md`` calls these
 functions; nothing here is tuned towards the published numbers: every setting
 the paper leaves open is fixed in :data:`ASSUMPTIONS` (chosen from the paper's
-text before running) and varied in :func:`sensitivity`.
+text before running), listed with its status in :data:`CHOICES` (the chapter's
+assumptions table, :mod:`pfrepro.choices`), run under its other values
+(:data:`CMS_READINGS`, :data:`T3_READINGS`, :data:`T2_READINGS`) and varied in
+:func:`sensitivity`.
 
 Model: UNGM, eq (5): x_k = 0.5 x + 25 x/(1+x^2) + 8 cos(1.2k) + w,
 y_k = x_k^2/20 + v, sigma_w^2 = 1 (as printed), x_0 = 0.1, p(x_0) = N(0, 1),
@@ -15,13 +18,16 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from ..chaos import ChaosCarrier
+from ..choices import FIXED, READING, SWEEP, FreeChoice
 from ..filters import (BootstrapParticleFilter, CMSParticleFilter, EvolutionSamplingParticleFilter,
                        ExtendedKalmanFilter, GridFilter, OracleCMSParticleFilter, UnscentedKalmanFilter)
 from ..metrics import mc_summary, rmse
 from ..models import UNGM
 from ..montecarlo import filter_streams, run_monte_carlo, time_filters, truth_streams
 
-__all__ = ["PAPER", "T", "SEEDS", "ASSUMPTIONS", "model", "cms", "pf", "grid", "ekf", "ukf", "espf",
+__all__ = ["PAPER", "T", "SEEDS", "ASSUMPTIONS", "CHOICES", "CMS_READINGS", "T2_READINGS", "POWER_RUNS",
+           "table2_rmse", "mechanism", "trend_slopes", "SENSITIVITY_GRID", "T3_TAGS", "carrier_iterations", "set_stats", "model", "cms", "pf", "grid", "ekf", "ukf", "espf",
            "table1", "table2", "fig2_run", "fig3", "table3", "one_step", "fig6", "sensitivity",
            "consistency", "summarise", "TABLE1_N", "FIG3_N", "T3_READINGS", "cost_evidence_table2",
            "cost_counts_fig3", "eta_sweep", "fig3_per_run"]
@@ -34,7 +40,11 @@ FIG3_N = (10, 25, 50, 75, 100, 200, 300, 400, 500, 600, 700, 800)
 
 #: one fixed seed per experiment (chosen once; never changed to move a number)
 SEEDS = {"table1": 20111, "table2": 20112, "fig2": 20113, "fig3": 20114, "table3": 20115,
-         "figs45": 20116, "fig6": 20117, "sensitivity": 20118, "consistency": 20119}
+         "figs45": 20116, "fig6": 20117, "sensitivity": 20118, "consistency": 20119, "mechanism": 20120}
+
+#: runs used where the paper's run count leaves an ordering undecided (stated up front in the
+#: chapter): run i is the same run at every count, so the first 20 of these are the paper-scale runs
+POWER_RUNS = 100
 
 #: every value the paper leaves open, fixed before running (see the chapter)
 ASSUMPTIONS = {
@@ -43,16 +53,90 @@ ASSUMPTIONS = {
     "big_fraction": 0.1,        # n_big = 10 % of N big (and small) particles, paired in rank order
     "n_th": 0.5,                # Step 3 threshold N_th = N / 2 (CMS-PF of Tables 1-2, CMSR of Table 3)
     "carrier": "logistic",      # eq (1) (the chaos system of sec 2.1) for Tables 1-2, Figs 2, 3, 6
-    "u": 4.0,                   # logistic control parameter: the only value where eq (1) is onto (0, 1)
-    "burn_in": 1000,            # T0 of sec 3.3
     "N_table2": 200,            # N of Table 2 / Table 3 (not stated; N = 200 is the N of Figs 2 and 6)
     "runs_fig3": 50,            # runs per point of Fig. 3 (not stated; Table 2's count)
-    "pf_resampling": "systematic, every step",
+    "u": 4.0,
+    "burn_in": 1000,
+    "init": "chain",            # carrier chains: one per run and map slot, random start (pfrepro.chaos)
+    "pf_resampling": "systematic",
     "ekf_m0": 0.1, "ekf_P0": 2.0,  # sec 3.3 (EKF initial setting); used for the UKF too
     "ukf_kappa": 2.0,           # n + kappa = 3 (Julier & Uhlmann), alpha = 1, beta = 2
     "espf_mcmc_scale": 1.0,     # ESPF reconstruction: random-walk std = sqrt(Q)
     "espf_sbx_eta": 2.0,        # ESPF reconstruction: SBX distribution index
     "grid": (-40.0, 40.0, 4001),  # exact reference: bounds and nodes (sigma_w^2 = 1)
+}
+
+#: The chapter's assumptions table (pfrepro.choices): every value the paper leaves open, with
+#: its status; the values other than the main one are run (readings) as stated in each reason.
+CHOICES = [
+    FreeChoice("sigma_w2", "1", READING,
+               "printed σ_w² = 1; the published PF numbers fit the classic UNGM benchmark's σ_w² = 10 "
+               "better (Table 1), so every table is also run with σ_w² = 10", "sec 3.1"),
+    FreeChoice("sigma_v_t1", "1", FIXED,
+               "Table 1 prints σ_v = 1 (as a standard deviation or a variance, the same value); Fig. 2 "
+               "prints σ_v² = 1", "sec 3.2, Table 1, Fig. 2"),
+    FreeChoice("sigma_v_t2", "1", READING,
+               "Table 2 gives no σ_v; 1 (Table 1's and Fig. 2's value) and σ_v² = 10 are run", "Table 2"),
+    FreeChoice("sigma_v_t3", "σ_v = 10 (R = 100)", READING,
+               "printed σ_v = 10, but the paper writes the measurement noise both ways (Table 1 "
+               "'σ_v = 1', Fig. 2 'σ_v² = 1'), so R = 10 is run as a second reading, crossed with both σ_w²",
+               "Fig. 3, Table 3"),
+    FreeChoice("eta", "0.5", READING,
+               "middle of the range [0.2, 0.8] the paper recommends; its ends 0.2 and 0.8 are run as "
+               "readings, and 0.1 to 8 in the sensitivity sweep (Fig. 6)", "Step 2.2, sec 2.3, Fig. 6"),
+    FreeChoice("n_big", "10 % of N", READING,
+               "'several big-weight particles', paired largest with smallest; n_big = 1 (one "
+               "big/small pair) is run as a reading, 0.5 % to 50 % of N in the sensitivity sweep", "sec 2.3"),
+    FreeChoice("n_th", "N/2", READING,
+               "not given; the common N/2 (CMS-PF of Tables 1-2, CMSR of Table 3); 0 (never resample) and "
+               "N (resample almost every step) are run as readings", "Step 3"),
+    FreeChoice("carrier", "logistic map, eq (1)", READING,
+               "Tables 1-2 and Figs 2, 3, 6 do not say which sequence; eq (1) is the chaos system of sec 2.1; "
+               "randn and eq (6) (Table 3's other carriers) are run as readings", "sec 2.1, sec 3.2"),
+    FreeChoice("u", "4", READING,
+               "eq (1) is onto (0, 1) only at u = 4 (errata); u = 3.8, inside the printed range (3.56, 4), "
+               "is run as a reading", "sec 2.1, eq (1)"),
+    FreeChoice("burn_in", "1000", READING,
+               "sec 3.3 leaves T0 open; T0 = 100 is run as a reading", "sec 3.3"),
+    FreeChoice("carrier_init", "chain", READING,
+               "how the sequence is started and laid out is not given; 'chain' = one chain per run and map "
+               "slot from a random start, advanced once per step; 'run' = one chain per run whose "
+               "consecutive iterates fill the map slots; 'shared' = one sequence from a fixed start, "
+               "generated once offline and used by every run (pfrepro.chaos.CARRIER_INITS); all three run",
+               "sec 2.1 (offline generation), sec 3.3"),
+    FreeChoice("centres", "x̂_k and the n_big best", FIXED,
+               "sec 2.3 note 1 replaces the true state of Step 2.2 by big-weight particles and x̂_k (a "
+               "filter cannot use the truth; the oracle that does is run separately and labelled)",
+               "Step 2.2, sec 2.3 note 1"),
+    FreeChoice("map_particles", "N", FIXED, "Step 2.2: x2 has N elements; 2N candidates, N kept (Step 2.4)",
+               "Step 2.2, 2.4"),
+    FreeChoice("N_t23", "200", READING,
+               "N of Tables 2 and 3 not given; 200 is the N of Figs 2 and 6; N = 100 is run as a reading",
+               "Tables 2-3"),
+    FreeChoice("pf_resampling", "systematic", READING,
+               "the PF's resampling scheme is not given; systematic at every step, and multinomial "
+               "(Gordon et al.'s SIR) as a reading", "Tables 1-2"),
+    FreeChoice("ukf", "α = 1, β = 2, κ = 2", READING,
+               "not given; n + κ = 3 (Julier & Uhlmann); κ = 0 is run as a reading; started like the EKF",
+               "Tables 2-3"),
+    FreeChoice("ekf_init", "x̂₀ = 0.1, P₀ = 2", FIXED, "printed for the EKF (used for the UKF too)", "sec 3.3"),
+    FreeChoice("espf", "MH std = σ_w, SBX index 2", READING,
+               "our reconstruction of the cited ESPF (see Algorithm); MH std 0.5 σ_w with SBX index 10 is "
+               "run as a reading", "Table 2 (ESPF only cited)"),
+    FreeChoice("runs_fig3", "50", SWEEP,
+               "runs per point of Fig. 3 not given (Table 2's count); a run count sets only the precision, "
+               "and the trend is decided with its standard error", "Fig. 3"),
+]
+
+#: The other values of the CMS-PF's free choices: (choice, value) -> keyword overrides of :func:`cms`
+#: (keys of :data:`ASSUMPTIONS`; ``u``, ``burn_in``, ``init`` build the carrier).
+CMS_READINGS = {
+    ("eta", 0.2): {"eta": 0.2}, ("eta", 0.8): {"eta": 0.8},
+    ("n_big", 1): {"big_fraction": 1e-9},
+    ("n_th", 0): {"n_th": 0.0}, ("n_th", "N"): {"n_th": 1.0},
+    ("carrier", "randn"): {"carrier": "randn"}, ("carrier", "eq (6)"): {"carrier": "chebyshev"},
+    ("u", 3.8): {"u": 3.8}, ("burn_in", 100): {"burn_in": 100},
+    ("carrier_init", "run"): {"init": "run"}, ("carrier_init", "shared"): {"init": "shared"},
 }
 
 
@@ -67,6 +151,19 @@ T3_READINGS = {
     "σv² = 100, σw² = 10": (10.0, 10.0),
     "σv² = 10, σw² = 10": (float(np.sqrt(10.0)), 10.0),
 }
+#: the same readings as (choice, value) tags for pfrepro.choices.over (label -> tag string)
+T3_TAGS = {"σv² = 100, σw² = 1": "sigma_v_t3=R 100, sigma_w2=1",
+           "σv² = 10, σw² = 1": "sigma_v_t3=R 10, sigma_w2=1",
+           "σv² = 100, σw² = 10": "sigma_v_t3=R 100, sigma_w2=10",
+           "σv² = 10, σw² = 10": "sigma_v_t3=R 10, sigma_w2=10"}
+
+#: readings of Table 2's noise levels (the paper gives no sigma_v for Table 2): tag -> (sigma_v, sigma_w2)
+T2_READINGS = {
+    "sigma_v_t2=R 1, sigma_w2=1": (1.0, None),
+    "sigma_v_t2=R 1, sigma_w2=10": (1.0, 10.0),
+    "sigma_v_t2=R 10, sigma_w2=1": (float(np.sqrt(10.0)), None),
+    "sigma_v_t2=R 10, sigma_w2=10": (float(np.sqrt(10.0)), 10.0),
+}
 
 
 # -- building blocks -----------------------------------------------------------------------
@@ -78,37 +175,45 @@ def model(sigma_v: float = 1.0, sigma_w2: float | None = None) -> UNGM:
     return UNGM(time_offset=0, Q=q, R=sigma_v**2, x0=0.1, m0=0.0, P0=1.0)
 
 
+def _cms_kwargs(over) -> dict:
+    """Filter keywords from the assumptions and ``over``: the carrier (with ``u``, ``burn_in``
+    and ``init``, which the carrier takes) is built here, so every one of them reaches the filter."""
+    a = {k: ASSUMPTIONS[k] for k in ("carrier", "eta", "big_fraction", "n_th", "u", "burn_in", "init")}
+    a.update(over)
+    car = a.pop("carrier")
+    u, burn_in, init = a.pop("u"), a.pop("burn_in"), a.pop("init")
+    if not isinstance(car, ChaosCarrier):
+        car = ChaosCarrier(car, u=u, burn_in=burn_in, init=init)
+    return dict(carrier=car, **a)
+
+
 def cms(m, N: int, **over) -> CMSParticleFilter:
-    """CMS-PF with the chapter's assumptions (``over`` overrides any of them)."""
-    kw = dict(carrier=ASSUMPTIONS["carrier"], eta=ASSUMPTIONS["eta"],
-              big_fraction=ASSUMPTIONS["big_fraction"], n_th=ASSUMPTIONS["n_th"])
-    kw.update(over)
-    return CMSParticleFilter(m, N, **kw)
+    """CMS-PF with the chapter's assumptions (``over`` overrides any of them, e.g.
+    ``eta``, ``big_fraction``, ``n_th``, ``carrier``, ``u``, ``burn_in``, ``init``)."""
+    return CMSParticleFilter(m, N, **_cms_kwargs(over))
 
 
 def oracle(m, N: int, **over) -> OracleCMSParticleFilter:
-    kw = dict(carrier=ASSUMPTIONS["carrier"], eta=ASSUMPTIONS["eta"],
-              big_fraction=ASSUMPTIONS["big_fraction"], n_th=ASSUMPTIONS["n_th"])
-    kw.update(over)
-    return OracleCMSParticleFilter(m, N, **kw)
+    return OracleCMSParticleFilter(m, N, **_cms_kwargs(over))
 
 
-def pf(m, N: int) -> BootstrapParticleFilter:
-    """Bootstrap PF, systematic resampling at every step."""
-    return BootstrapParticleFilter(m, N, resampling="systematic")
+def pf(m, N: int, resampling: str | None = None) -> BootstrapParticleFilter:
+    """Bootstrap PF, resampling at every step (systematic unless ``resampling`` says otherwise)."""
+    return BootstrapParticleFilter(m, N, resampling=resampling or ASSUMPTIONS["pf_resampling"])
 
 
-def espf(m, N: int) -> EvolutionSamplingParticleFilter:
-    return EvolutionSamplingParticleFilter(m, N, mcmc_scale=ASSUMPTIONS["espf_mcmc_scale"],
-                                           sbx_eta=ASSUMPTIONS["espf_sbx_eta"])
+def espf(m, N: int, mcmc_scale: float | None = None, sbx_eta: float | None = None) -> EvolutionSamplingParticleFilter:
+    return EvolutionSamplingParticleFilter(
+        m, N, mcmc_scale=ASSUMPTIONS["espf_mcmc_scale"] if mcmc_scale is None else mcmc_scale,
+        sbx_eta=ASSUMPTIONS["espf_sbx_eta"] if sbx_eta is None else sbx_eta)
 
 
 def ekf(m) -> ExtendedKalmanFilter:
     return ExtendedKalmanFilter(m, m0=[ASSUMPTIONS["ekf_m0"]], P0=ASSUMPTIONS["ekf_P0"])
 
 
-def ukf(m) -> UnscentedKalmanFilter:
-    return UnscentedKalmanFilter(m, alpha=1.0, beta=2.0, kappa=ASSUMPTIONS["ukf_kappa"],
+def ukf(m, kappa: float | None = None) -> UnscentedKalmanFilter:
+    return UnscentedKalmanFilter(m, alpha=1.0, beta=2.0, kappa=ASSUMPTIONS["ukf_kappa"] if kappa is None else kappa,
                                  m0=[ASSUMPTIONS["ekf_m0"]], P0=ASSUMPTIONS["ekf_P0"])
 
 
@@ -135,24 +240,38 @@ class _OfflineCarrierCMS:
 
 
 # -- Table 1 -------------------------------------------------------------------------------
-def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table1"], *, executor=None):
+def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table1"], *,
+           cms_over: dict | None = None, pf_resampling: str | None = None, extras: bool = True,
+           filters=("PF", "CMS-PF"), executor=None):
     """Per-run RMSE of PF and CMS-PF (20 runs, each N), plus PF(2N) and the grid reference.
 
-    One set of 20 trajectories is shared by every N (common random numbers).
-    Returns ``(per_run, grid_rmse)``: ``per_run`` has columns (N, filter).
+    One set of trajectories is shared by every N (common random numbers); run i is the
+    same run for any ``runs`` >= i. ``cms_over`` / ``pf_resampling`` run another value of
+    the free choices (:data:`CMS_READINGS`); ``extras=False`` skips PF(2N) and the grid;
+    ``filters`` limits the run to PF or CMS-PF. Returns ``(per_run, grid_rmse, lost_mass)``:
+    ``per_run`` has columns (N, filter); without extras the grid outputs are None.
     """
     m = model(sigma_v, sigma_w2)
     sim = m.simulate(T, runs, truth_streams(seed, runs))
     cols = {}
     for N in Ns:
-        fs = {f"PF N={N}": pf(m, N), f"CMS-PF N={N}": cms(m, N), f"PF N={2 * N}": pf(m, 2 * N)}
+        fs = {}
+        if "PF" in filters:
+            fs[f"PF N={N}"] = pf(m, N, pf_resampling)
+        if "CMS-PF" in filters:
+            fs[f"CMS-PF N={N}"] = cms(m, N, **(cms_over or {}))
+        if extras:
+            fs[f"PF N={2 * N}"] = pf(m, 2 * N, pf_resampling)
         res = run_monte_carlo(m, fs, T, runs, seed, sim=sim, executor=executor)
-        cols[(N, "PF")] = res.rmse(f"PF N={N}")
-        cols[(N, "CMS-PF")] = res.rmse(f"CMS-PF N={N}")
-        cols[(N, "PF (2N)")] = res.rmse(f"PF N={2 * N}")
-    g = grid(m).filter(sim.y)
+        for f in filters:
+            cols[(N, f)] = res.rmse(f"{f} N={N}")
+        if extras:
+            cols[(N, "PF (2N)")] = res.rmse(f"PF N={2 * N}")
     per_run = pd.DataFrame(cols, index=pd.RangeIndex(1, runs + 1, name="run"))
     per_run.columns = pd.MultiIndex.from_tuples(per_run.columns, names=["N", "filter"])
+    if not extras:
+        return per_run, None, None
+    g = grid(m).filter(sim.y)
     return per_run, rmse(sim.x[:, 1:], g.x), float(g.diagnostics["lost_mass"].max())
 
 
@@ -188,6 +307,21 @@ def table2(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=
     return df, times, res
 
 
+def table2_rmse(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table2"], *,
+                filters=("EKF", "UKF", "PF", "ESPF", "CMS-PF"), cms_over: dict | None = None,
+                pf_resampling: str | None = None, ukf_kappa: float | None = None, espf_kw: dict | None = None,
+                executor=None) -> pd.DataFrame:
+    """Per-run RMSE of Table 2's filters (no timing) under other values of the free choices:
+    the same truths and filter streams as :func:`table2` (columns = filters, rows = runs)."""
+    N = ASSUMPTIONS["N_table2"] if N is None else N
+    m = model(sigma_v, sigma_w2)
+    make = {"EKF": lambda: ekf(m), "UKF": lambda: ukf(m, ukf_kappa), "PF": lambda: pf(m, N, pf_resampling),
+            "ESPF": lambda: espf(m, N, **(espf_kw or {})), "CMS-PF": lambda: cms(m, N, **(cms_over or {})),
+            "Grid (exact)": lambda: grid(m)}
+    res = run_monte_carlo(m, {f: make[f]() for f in filters}, T, runs, seed, executor=executor)
+    return pd.DataFrame({f: res.rmse(f) for f in filters}, index=pd.RangeIndex(1, runs + 1, name="run"))
+
+
 # -- Fig. 2 --------------------------------------------------------------------------------
 def fig2_run(N: int = 200, sigma_v: float = 1.0, seed=SEEDS["fig2"]):
     """One run: truth, EKF and CMS-PF estimates (Fig. 2, sigma_v^2 = 1, N = 200)."""
@@ -199,15 +333,18 @@ def fig2_run(N: int = 200, sigma_v: float = 1.0, seed=SEEDS["fig2"]):
 
 # -- Fig. 3 --------------------------------------------------------------------------------
 def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["fig3"], timing_repeats=9,
-         *, executor=None):
-    """RMSE and time per run of CMS-PF (and PF) against N, sigma_v = 10."""
+         *, executor=None, per_run: bool = False):
+    """RMSE and time per run of CMS-PF (and PF) against N, sigma_v = 10.
+
+    ``per_run=True`` adds a third output: CMS-PF's per-run RMSE (rows = runs, columns = N)."""
     runs = ASSUMPTIONS["runs_fig3"] if runs is None else runs
     m = model(sigma_v)
     sim = m.simulate(T, runs, truth_streams(seed, runs))
-    out, timed = [], {}
+    out, timed, cms_runs = [], {}, {}
     for N in Ns:
         fs = {"CMS-PF": cms(m, N), "PF": pf(m, N)}
         res = run_monte_carlo(m, fs, T, runs, seed, sim=sim, executor=executor)
+        cms_runs[N] = res.rmse("CMS-PF")
         timed[("CMS-PF", N)] = _OfflineCarrierCMS(fs["CMS-PF"], T, seed)
         timed[("PF", N)] = fs["PF"]
         c, p = summarise(res.rmse("CMS-PF")), summarise(res.rmse("PF"))
@@ -219,7 +356,10 @@ def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["
     for row in out:
         row["CMS-PF time [s]"], row["PF time [s]"] = tt[("CMS-PF", row["N"])], tt[("PF", row["N"])]
     g = grid(m).filter(sim.y)
-    return pd.DataFrame(out).set_index("N"), summarise(rmse(sim.x[:, 1:], g.x))
+    df, gs = pd.DataFrame(out).set_index("N"), summarise(rmse(sim.x[:, 1:], g.x))
+    if per_run:
+        return df, gs, pd.DataFrame(cms_runs, index=pd.RangeIndex(1, runs + 1, name="run"))
+    return df, gs
 
 
 # -- Table 3 -------------------------------------------------------------------------------
@@ -227,17 +367,29 @@ TABLE3_COLUMNS = ("EKF", "UKF", "CMS1-PF", "CMSR1-PF", "CMS2-PF", "CMSR2-PF", "C
 
 
 def table3(runs: int = 20, N: int | None = None, sigma_v: float = 10.0, sigma_w2=None, seed=SEEDS["table3"],
-           *, executor=None):
+           *, cms_over: dict | None = None, only_cms: bool = False, with_grid: bool = True,
+           filters=None, ukf_kappa: float | None = None, executor=None):
     """Per-run RMSE, sigma_v = 10: EKF, UKF and CMS-PF with randn (1), eq-1 (2), eq-6 (3)
-    carriers, without (CMS) and with (CMSR, N_eff < N_th) resampling; + PF and grid."""
+    carriers, without (CMS) and with (CMSR, N_eff < N_th) resampling; + PF and grid.
+
+    ``cms_over`` runs other values of the CMS-PF's free choices (the carrier stays the
+    column's; ``n_th`` applies to the CMSR columns only, the CMS columns never resample);
+    ``only_cms`` runs the six CMS columns only; ``with_grid=False`` skips the grid; ``filters``
+    keeps only the named columns; ``ukf_kappa`` another UKF kappa."""
     N = ASSUMPTIONS["N_table2"] if N is None else N
     m = model(sigma_v, sigma_w2)
-    fs = {"EKF": ekf(m), "UKF": ukf(m)}
+    over = dict(cms_over or {})
+    n_th_r = over.pop("n_th", ASSUMPTIONS["n_th"])
+    fs = {} if only_cms else {"EKF": ekf(m), "UKF": ukf(m, ukf_kappa)}
     for i, car in enumerate(("randn", "logistic", "chebyshev"), start=1):
-        fs[f"CMS{i}-PF"] = cms(m, N, carrier=car, n_th=0.0)
-        fs[f"CMSR{i}-PF"] = cms(m, N, carrier=car, n_th=ASSUMPTIONS["n_th"])
-    fs["PF"] = pf(m, N)
-    fs["Grid (exact)"] = grid(m)
+        fs[f"CMS{i}-PF"] = cms(m, N, **{**over, "carrier": car, "n_th": 0.0})
+        fs[f"CMSR{i}-PF"] = cms(m, N, **{**over, "carrier": car, "n_th": n_th_r})
+    if not only_cms:
+        fs["PF"] = pf(m, N)
+        if with_grid:
+            fs["Grid (exact)"] = grid(m)
+    if filters is not None:
+        fs = {k: fs[k] for k in filters}
     res = run_monte_carlo(m, fs, T, runs, seed, executor=executor)
     per_run = pd.DataFrame({k: res.rmse(k) for k in fs}, index=pd.RangeIndex(1, runs + 1, name="run"))
     return per_run, res
@@ -296,28 +448,46 @@ def fig6(alphas=(0.05, 0.2, 0.5, 0.8, 2.0), k: int = 20, N: int = 200, seed=SEED
 
 
 # -- sensitivity -----------------------------------------------------------------------------
+#: values of each setting in :func:`sensitivity` (the chosen value included; eta is swept until the
+#: curve turns or the map particles land far outside the predicted cloud)
+SENSITIVITY_GRID = {
+    "eta": (0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 1.0, 1.5, 2.0, 3.0, 5.0, 8.0),
+    "big_fraction": (0.005, 0.02, 0.05, 0.1, 0.25, 0.5),
+    "n_th": (0.0, 0.25, 0.5, 2 / 3, 1.0),
+    "carrier": ("randn", "logistic", "chebyshev"),
+    "u": (3.6, 3.8, 3.9, 4.0),
+    "burn_in": (0, 100, 1000),
+    "init": ("chain", "run", "shared"),
+}
+
+
 def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed=SEEDS["sensitivity"],
-                *, executor=None):
-    """Mean RMSE of CMS-PF when one assumption at a time is varied over its reasonable range."""
+                *, executor=None, per_run: bool = False):
+    """Mean RMSE of CMS-PF when one assumption at a time is varied over its reasonable range.
+
+    Table 2's setting (N = 200, sigma_v = 1, 50 runs) on its own truths. The reference
+    filters (PF, exact grid, EKF, UKF, ESPF) run on the same truths. ``per_run=True`` adds a
+    third output: ``{(parameter, value): per-run RMSE}`` and ``{reference: per-run RMSE}``
+    for paired comparisons (same truths, same filter stream for every value)."""
     N = ASSUMPTIONS["N_table2"] if N is None else N
     m = model(sigma_v)
     sim = m.simulate(T, runs, truth_streams(seed, runs))
-    grids = {
-        "eta": (0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 1.0, 1.5),
-        "big_fraction": (0.005, 0.02, 0.05, 0.1, 0.25, 0.5),
-        "n_th": (0.0, 0.25, 0.5, 2 / 3, 1.0),
-        "carrier": ("randn", "logistic", "chebyshev"),
-    }
-    rows = []
-    for par, values in grids.items():
+    rows, runs_out = [], {}
+    for par, values in SENSITIVITY_GRID.items():
         for v in values:
             res = run_monte_carlo(m, {"CMS-PF": cms(m, N, **{par: v})}, T, runs, seed, sim=sim,
                                   executor=executor)
-            s = summarise(res.rmse("CMS-PF"))
+            runs_out[(par, v)] = res.rmse("CMS-PF")
+            s = summarise(runs_out[(par, v)])
             rows.append({"parameter": par, "value": v, "RMSE": s["mean"], "se": s["se"],
                          "chosen": v == ASSUMPTIONS[par]})
-    ref = run_monte_carlo(m, {"PF": pf(m, N), "Grid (exact)": grid(m)}, T, runs, seed, sim=sim, executor=executor)
-    return pd.DataFrame(rows), {k: summarise(ref.rmse(k)) for k in ("PF", "Grid (exact)")}
+    refs = ("PF", "Grid (exact)", "EKF", "UKF", "ESPF")
+    ref = run_monte_carlo(m, {"PF": pf(m, N), "Grid (exact)": grid(m), "EKF": ekf(m), "UKF": ukf(m),
+                              "ESPF": espf(m, N)}, T, runs, seed, sim=sim, executor=executor)
+    out = pd.DataFrame(rows), {k: summarise(ref.rmse(k)) for k in refs}
+    if per_run:
+        return out + ({"cms": runs_out, "ref": {k: ref.rmse(k) for k in refs}},)
+    return out
 
 
 # -- consistency (improper weights) ------------------------------------------------------------
@@ -400,7 +570,7 @@ def eta_sweep(values=(0.1, 0.2, 0.35, 0.5, 0.65, 0.8, 1.0, 1.5), runs: int = 50,
 
 
 def fig3_per_run(Ns=(FIG3_N[0], FIG3_N[-1]), runs: int | None = None, sigma_v: float = 10.0, sigma_w2=None,
-                 seed=SEEDS["fig3"], *, executor=None) -> pd.DataFrame:
+                 seed=SEEDS["fig3"], *, cms_over: dict | None = None, executor=None) -> pd.DataFrame:
     """Per-run RMSE of CMS-PF at the given N on the Fig. 3 runs (the same data and filter
     stream as :func:`fig3`, without the timing), columns = N; for paired comparisons
     between N and for other readings of the noise levels (``sigma_v``, ``sigma_w2``)."""
@@ -409,6 +579,109 @@ def fig3_per_run(Ns=(FIG3_N[0], FIG3_N[-1]), runs: int | None = None, sigma_v: f
     sim = m.simulate(T, runs, truth_streams(seed, runs))
     out = {}
     for N in Ns:
-        res = run_monte_carlo(m, {"CMS-PF": cms(m, N)}, T, runs, seed, sim=sim, executor=executor)
+        res = run_monte_carlo(m, {"CMS-PF": cms(m, N, **(cms_over or {}))}, T, runs, seed, sim=sim,
+                              executor=executor)
         out[N] = res.rmse("CMS-PF")
     return pd.DataFrame(out, index=pd.RangeIndex(1, runs + 1, name="run"))
+
+
+def trend_slopes(per_run: pd.DataFrame, N_min: int | None = None) -> np.ndarray:
+    """Per-run least-squares slope of RMSE against log N (columns = N), over N >= ``N_min``."""
+    cols = [N for N in per_run.columns if N_min is None or N >= N_min]
+    x = np.log(np.asarray(cols, float))
+    x = x - x.mean()
+    return per_run[cols].to_numpy() @ x / np.sum(x * x)
+
+
+# -- the mechanism (issue: fewer repeated, more uniform, more diverse candidates) --------------
+def set_stats(x) -> dict:
+    """Diversity and uniformity of particle sets ``x`` (runs, M): per run,
+
+    ``distinct``: fraction of distinct values (1 = no repeated particle); ``duplicates``:
+    M minus the number of distinct values; ``ks``: Kolmogorov-Smirnov distance of the
+    set's empirical distribution from the uniform distribution on its own range
+    [min, max] (0 = evenly spread; clumps and gaps raise it).
+    """
+    x = np.sort(np.asarray(x, dtype=float), axis=1)
+    M = x.shape[1]
+    n_distinct = 1 + np.sum(np.diff(x, axis=1) != 0, axis=1)
+    lo, hi = x[:, :1], x[:, -1:]
+    u = (x - lo) / np.where(hi > lo, hi - lo, 1.0)
+    i = np.arange(1, M + 1)
+    ks = np.maximum(np.max(i / M - u, axis=1), np.max(u - (i - 1) / M, axis=1))
+    return {"distinct": n_distinct / M, "duplicates": M - n_distinct, "ks": ks}
+
+
+def mechanism(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=None,
+              seed=SEEDS["mechanism"], cms_over: dict | None = None) -> pd.DataFrame:
+    """The sets each filter works with, step by step, on the same truths (Table 2's setting).
+
+    Bootstrap PF (systematic resampling every step): its **resampled set** (what it
+    propagates). CMS-PF: its **candidate set** (N predicted + N map particles, Step 2.3),
+    its **map particles** alone, and its **carried set** (the N kept particles after Step 3,
+    what it propagates). Per run, the mean over the T steps of :func:`set_stats`; returns a
+    DataFrame with columns (set, statistic), rows = runs.
+    """
+    from ..filters.particle import normalize_log_weights
+    from ..filters.resampling import resample_counts
+    from ..rng import take_runs
+
+    N = ASSUMPTIONS["N_table2"] if N is None else N
+    m = model(sigma_v, sigma_w2)
+    sim = m.simulate(T, runs, truth_streams(seed, runs))
+    f = cms(m, N, **(cms_over or {}))
+    rng_c = filter_streams(seed, "CMS-PF", runs)
+    rng_p = filter_streams(seed, "PF", runs)
+    r = f.carrier.generate(T, (runs, N, 1), rng_c)
+    xc = f.sample_prior(rng_c, (runs, N))
+    lwc = np.full((runs, N), -np.log(N))
+    xp = f.sample_prior(rng_p, (runs, N))
+    acc = {}
+
+    def add(name, x):
+        for k, v in set_stats(x[..., 0]).items():
+            acc.setdefault((name, k), []).append(v)
+
+    with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
+        for k in range(1, T + 1):
+            y = sim.y[:, k - 1]
+            # bootstrap PF: predict, weight, resample (systematic, every step)
+            xp = m.sample_transition(xp, k, rng_p)
+            add("PF candidates (N predicted)", xp)
+            w, _, _ = normalize_log_weights(m.log_likelihood(y, xp))
+            counts = resample_counts(w, rng_p, "systematic")
+            xp = np.repeat(xp.reshape(-1, 1), counts.ravel(), axis=0).reshape(runs, N, 1)
+            add("PF resampled set", xp)
+            # CMS-PF: Steps 2.1-2.5, then Step 3 as in CMSParticleFilter
+            st = f.step(xc, lwc, y, k, r[k - 1], rng_c)
+            add("CMS-PF candidates (2N)", np.concatenate([st.x_pred, st.x_map], axis=1))
+            add("CMS-PF map particles", st.x_map)
+            xc, lwc = st.x, st.logw
+            wc = np.exp(lwc)
+            do = np.round(1.0 / np.sum(wc * wc, axis=1)) < f.n_th * N
+            if do.any():
+                sel = np.flatnonzero(do)
+                cnt = resample_counts(wc[sel], take_runs(rng_c, sel), f.resampling)
+                xc = xc.copy()
+                xc[sel] = np.repeat(xc[sel].reshape(-1, 1), cnt.ravel(), axis=0).reshape(len(sel), N, 1)
+                lwc = lwc.copy()
+                lwc[sel] = -np.log(N)
+            add("CMS-PF carried set", xc)
+    out = pd.DataFrame({k: np.mean(v, axis=0) for k, v in acc.items()}, index=pd.RangeIndex(1, runs + 1, name="run"))
+    out.columns = pd.MultiIndex.from_tuples(out.columns, names=["set", "statistic"])
+    return out
+
+
+def carrier_iterations(N: int, T_: int = T, burn_in: int | None = None, init: str | None = None,
+                       runs: int = 1) -> dict:
+    """Chaotic-map iterations needed for ``runs`` runs of CMS-PF (dim_x = 1), by layout.
+
+    ``chain``: N chains per run, each burnt in and advanced T times: runs N (T0 + T);
+    ``run``: one chain per run of T N values: runs (T0 + T N); ``shared``: one sequence
+    for every run: T0 + T N. Generated offline (sec 2.1) these leave the filtering loop,
+    whose model evaluations (N transitions, 2N likelihoods per step) do not change.
+    """
+    burn_in = ASSUMPTIONS["burn_in"] if burn_in is None else burn_in
+    init = ASSUMPTIONS["init"] if init is None else init
+    its = {"chain": runs * N * (burn_in + T_), "run": runs * (burn_in + T_ * N), "shared": burn_in + T_ * N}[init]
+    return {"carrier iterations": its, "model evaluations": runs * 3 * N * T_}

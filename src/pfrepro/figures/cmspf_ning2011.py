@@ -14,13 +14,136 @@ from .. import published
 from ..experiments import cmspf_ning2011 as E
 from . import new_figure
 
-__all__ = ["table1_side_by_side", "table1_summary", "table2_vs_published", "table3_vs_published",
+__all__ = ["printed", "styled", "divisor_check", "table1_per_run_long", "table1_strip", "sensitivity_fig",
+           "table1_side_by_side", "table1_summary", "table2_vs_published", "table3_vs_published",
            "table1_plot", "fig2", "fig3", "fig_one_step", "fig6", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
 
 TABLES = ("Table 1", "Table 1 (means)", "Table 2", "Table 3")
 FIGURES = ("Fig. 2", "Fig. 3", "Fig. 4", "Fig. 5", "Fig. 6")
 N_STEPS = 8
 TABLE2_FILTERS = ["EKF", "UKF", "PF", "ESPF", "CMS-PF"]
+
+
+def printed(table_id: str) -> pd.DataFrame:
+    """A published table as the paper prints it: the value strings of the data file (no float
+    round trip, so 179.3805 stays 179.3805 wherever it is shown)."""
+    from importlib import resources
+
+    path = resources.files("pfrepro") / "data" / "published" / f"{E.PAPER}.csv"
+    with path.open("r", encoding="utf-8") as fh:
+        df = pd.read_csv(fh, comment="#", dtype=str)
+    sub = df[df["table"] == table_id]
+    if sub.empty:
+        raise KeyError(f"{E.PAPER} has no published table {table_id!r}")
+    rows, cols = list(dict.fromkeys(sub["row"])), list(dict.fromkeys(sub["column"]))
+    return sub.pivot(index="row", columns="column", values="value").loc[rows, cols]
+
+
+def styled(df: pd.DataFrame, digits: int = 3, na_rep: str = "—"):
+    """A table for the page: our numbers to ``digits`` decimals, the paper's printed strings as
+    they are, and an empty cell (no value exists, e.g. the paper has none) shown as ``na_rep``."""
+    return df.style.format(precision=digits, na_rep=na_rep)
+
+
+def divisor_check(table_id: str, runs=range(1, 21), tol: float = 2e-4) -> pd.DataFrame:
+    """Which divisor reproduces each column's printed variance (row 22) from its printed rows.
+
+    For every column: the printed mean (row 21) and variance (row 22) as strings, the mean
+    of the rows, their variance with divisor n - 1 and with divisor n, and which of the two
+    matches the printed value (relative difference below ``tol``, the rounding of
+    four printed digits; "neither" when no divisor reproduces it)."""
+    pt = printed(table_id)
+    rows = [str(i) for i in runs]
+    out = {}
+    for c in pt.columns:
+        v = pt.loc[rows, c].astype(float).to_numpy()
+        pv, pm = float(pt.loc["22", c]), float(pt.loc["21", c])
+        v1, v0 = float(v.var(ddof=1)), float(v.var(ddof=0))
+        r1, r0 = abs(v1 - pv) / pv, abs(v0 - pv) / pv
+        match = "n − 1" if r1 < tol and r1 <= r0 else ("n" if r0 < tol else "neither")
+        out[c] = {"printed mean (row 21)": pt.loc["21", c], "mean of the rows": v.mean(),
+                  "printed variance (row 22)": pt.loc["22", c], "variance, divisor n − 1": v1,
+                  "variance, divisor n": v0, "divisor that matches": match,
+                  "mean matches": abs(v.mean() - pm) < 1e-4 + 1e-4 * abs(pm)}
+    return pd.DataFrame(out).T.rename_axis("column")
+
+
+def table1_per_run_long(per_run: pd.DataFrame) -> pd.DataFrame:
+    """Table 1's per-run RMSEs, the paper's (printed strings) and ours, one row per run, N and filter."""
+    pt = printed("Table 1")
+    rows = []
+    for N in E.TABLE1_N:
+        for f in ("PF", "CMS-PF"):
+            for i in range(1, len(per_run) + 1):
+                rows.append({"N": N, "filter": f, "run": i,
+                             "paper": pt.loc[str(i), f"N={N} {f}"] if i <= 20 else None,
+                             "ours": float(per_run[(N, f)].iloc[i - 1])})
+    return pd.DataFrame(rows)
+
+
+def table1_strip(per_run: pd.DataFrame, grid_rmse=None):
+    """Table 1 as two distributions per setting: the paper's 20 per-run RMSEs (rows 1-20) and our
+    20, side by side for each N and filter (the runs are independent draws: only the
+    distributions, not run i against run i, can be compared). Bars: the means."""
+    pub = published.table(E.PAPER, "Table 1")
+    fig, ax = new_figure(figsize=(7, 4))
+    rng = np.random.default_rng(0)  # horizontal jitter of the dots only (display)
+    ticks, labels = [], []
+    for j, N in enumerate(E.TABLE1_N):
+        for h, f in enumerate(("PF", "CMS-PF")):
+            for s_, (src, vals) in enumerate((("paper", pub.loc[[str(i) for i in range(1, 21)], f"N={N} {f}"].to_numpy(float)),
+                                              ("ours", per_run[(N, f)].to_numpy()))):
+                x0 = j * 5 + h * 2 + s_
+                col = f"C{h}"
+                ax.plot(x0 + rng.uniform(-0.25, 0.25, vals.size), vals, "o" if src == "ours" else "x", ms=3.5,
+                        color=col, mfc="none" if src == "paper" else col, alpha=0.8)
+                ax.plot([x0 - 0.35, x0 + 0.35], [vals.mean()] * 2, color="k", lw=1.5)
+            ticks.append(j * 5 + h * 2 + 0.5); labels.append(f"{f}\nN={N}")
+    if grid_rmse is not None:
+        ax.axhline(np.mean(grid_rmse), color="grey", lw=1, ls=":")
+    ax.set_xticks(ticks, labels, fontsize=7)
+    ax.set_ylabel("per-run RMSE")
+    from matplotlib.lines import Line2D
+    ax.legend([Line2D([], [], marker="x", ls="", color="C0"), Line2D([], [], marker="o", ls="", color="C0"),
+               Line2D([], [], color="k"), Line2D([], [], color="grey", ls=":")],
+              ["paper (rows 1–20)", "ours (20 runs)", "mean", "exact posterior mean"], fontsize=8, ncol=2)
+    ax.set_title("Table 1, sigma_v = 1: 20 runs each, paper (x) and ours (o)")
+    fig.tight_layout()
+    return fig
+
+
+SENS_LABELS = {"eta": "adjustment factor eta", "big_fraction": "n_big / N", "n_th": "N_th / N",
+               "carrier": "carrier", "u": "logistic u", "burn_in": "burn-in T0", "init": "carrier initialisation"}
+
+
+def sensitivity_fig(sens: pd.DataFrame, sens_ref: dict):
+    """CMS-PF's mean RMSE against each unstated setting, one panel per setting (star: the chosen
+    value), with the PF and the exact posterior mean; laid out two panels wide so that the text
+    stays legible at the book's column width."""
+    pars = list(dict.fromkeys(sens["parameter"]))
+    nrow = (len(pars) + 2) // 2
+    fig, axs = new_figure(nrow, 2, figsize=(7, 2.3 * nrow), sharey=True)
+    axs = np.atleast_2d(axs)
+    for ax, par in zip(axs.flat, pars):
+        s = sens[sens.parameter == par]
+        x = np.arange(len(s))
+        ax.errorbar(x, s["RMSE"], 2 * s["se"], marker="o", capsize=3, color="C1", label="CMS-PF (±2 se)")
+        ch = s["chosen"].to_numpy(bool)
+        ax.plot(x[ch], s["RMSE"].to_numpy()[ch], "r*", ms=12, label="chosen value")
+        ax.set_xticks(x, [f"{v:.3g}" if not isinstance(v, str) else v for v in s["value"]],
+                      rotation=45 if len(s) > 6 else 0)
+        ax.axhline(sens_ref["PF"]["mean"], color="C0", ls="--", label="PF")
+        ax.axhline(sens_ref["Grid (exact)"]["mean"], color="k", lw=1, label="exact posterior mean")
+        ax.set_xlabel(SENS_LABELS.get(par, par))
+    for ax in axs[:, 0]:
+        ax.set_ylabel("mean RMSE")
+    h, l = axs.flat[0].get_legend_handles_labels()
+    spare = list(axs.flat)[len(pars):]
+    for ax in spare:
+        ax.axis("off")
+    (spare[0] if spare else axs.flat[0]).legend(h, l, loc="center", fontsize=9)
+    fig.tight_layout()
+    return fig
 
 
 def table1_side_by_side(per_run: pd.DataFrame) -> pd.DataFrame:
@@ -47,7 +170,7 @@ def table1_side_by_side(per_run: pd.DataFrame) -> pd.DataFrame:
 
 def table1_summary(per_run: pd.DataFrame) -> pd.DataFrame:
     """Table 1's mean row: published and our mean RMSE (se) of PF and CMS-PF, and PF with 2N, by N."""
-    pub1 = published.table(E.PAPER, "Table 1")
+    pub1 = printed("Table 1")
     m1 = per_run.mean().unstack()
     se1 = (per_run.std(ddof=1) / np.sqrt(len(per_run))).unstack()
     return pd.DataFrame({
@@ -62,7 +185,8 @@ def table1_summary(per_run: pd.DataFrame) -> pd.DataFrame:
 def table2_vs_published(t2: pd.DataFrame, t2_q10: pd.DataFrame | None = None) -> pd.DataFrame:
     """Table 2 beside the published one: RMSE (se), time ratio to the PF, likelihood evaluations."""
     pub2 = published.table(E.PAPER, "Table 2")
-    cols = {"RMSE paper": pd.Series({n: pub2.loc["RMSE", n] for n in TABLE2_FILTERS}),
+    p2 = printed("Table 2")
+    cols = {"RMSE paper": pd.Series({n: p2.loc["RMSE", n] for n in TABLE2_FILTERS}),
             "RMSE ours": t2["mean"], "se": t2["se"]}
     if t2_q10 is not None:
         cols["RMSE ours (sigma_w^2=10)"] = t2_q10["mean"]
@@ -76,7 +200,7 @@ def table2_vs_published(t2: pd.DataFrame, t2_q10: pd.DataFrame | None = None) ->
 
 def table3_vs_published(t3: pd.DataFrame, t3_q10: pd.DataFrame | None = None) -> pd.DataFrame:
     """Table 3's mean (row 21) and variance (row 22) beside ours, plus the PF and the exact posterior mean."""
-    pub3 = published.table(E.PAPER, "Table 3")
+    pub3 = printed("Table 3")
     cols3 = list(E.TABLE3_COLUMNS)
     mean3, se3 = t3.mean(), t3.std(ddof=1) / np.sqrt(len(t3))
     data = {"paper mean (row 21)": pub3.loc["21", cols3], "ours mean": mean3[cols3], "ours se": se3[cols3],
@@ -101,8 +225,8 @@ def table1_plot(per_run: pd.DataFrame, grid_rmse):
     ax.errorbar(Ns, m1["PF"], 2 * se1["PF"], marker="o", capsize=3, label="PF (ours)")
     ax.errorbar(Ns * 1.04, m1["CMS-PF"], 2 * se1["CMS-PF"], marker="s", capsize=3, label="CMS-PF (ours)")
     ax.plot(Ns, m1["PF (2N)"], "^-", label="PF with 2N particles (ours)")
-    ax.plot(Ns, s["PF paper"], "o--", color="C0", alpha=0.6, label="PF (paper)")
-    ax.plot(Ns, s["CMS-PF paper"], "s--", color="C1", alpha=0.6, label="CMS-PF (paper)")
+    ax.plot(Ns, s["PF paper"].astype(float), "o--", color="C0", alpha=0.6, label="PF (paper)")
+    ax.plot(Ns, s["CMS-PF paper"].astype(float), "s--", color="C1", alpha=0.6, label="CMS-PF (paper)")
     ax.axhline(np.mean(grid_rmse), color="k", lw=1, label="exact posterior mean (grid)")
     ax.set_xscale("log"); ax.set_xlabel("number of particles N"); ax.set_ylabel(f"mean RMSE over {len(per_run)} runs")
     ax.set_title("Table 1, sigma_v = 1 (bars: ±2 se)"); ax.legend(fontsize=8)
@@ -189,6 +313,7 @@ def fig6(f6_base: dict, f6_maps: dict, sens: pd.DataFrame | None = None, sens_re
         axs[1].axhline(sens_ref["PF"]["mean"], color="C3", ls="--", label="PF")
         axs[1].axhline(sens_ref["Grid (exact)"]["mean"], color="k", lw=1, label="exact posterior mean")
         axs[1].axvspan(0.2, 0.8, color="grey", alpha=0.15, label="paper's range [0.2, 0.8]")
+        axs[1].set_xscale("log")
         axs[1].set_xlabel("adjustment factor alpha (eta)"); axs[1].set_ylabel("mean RMSE"); axs[1].legend(fontsize=8)
         axs[1].set_title("RMSE against alpha (sigma_v = 1, N = 200)")
     fig.tight_layout()
@@ -219,15 +344,18 @@ def reproduce(runs: int | None = None, seed: int | None = None, executor=None, s
     tab1 = table1_summary(t1)
     tab2 = table2_vs_published(t2)
     tab3 = table3_vs_published(t3)
-    reg = cell_claims(E.PAPER, tab1.rename(columns={"CMS-PF paper": "published", "CMS-PF ours": "ours", "CMS-PF se": "se"}),
+    def _num(t):  # the printed strings as numbers for the claims
+        return t.assign(published=pd.to_numeric(t["published"]))
+
+    reg = cell_claims(E.PAPER, _num(tab1.rename(columns={"CMS-PF paper": "published", "CMS-PF ours": "ours", "CMS-PF se": "se"})),
                       lambda r: f"t1_cms_mean_N{r['N']}", lambda r: f"Table 1: mean RMSE of CMS-PF, N = {r['N']}", "Table 1")
-    cell_claims(E.PAPER, tab1.rename(columns={"PF paper": "published", "PF ours": "ours", "PF se": "se"}),
+    cell_claims(E.PAPER, _num(tab1.rename(columns={"PF paper": "published", "PF ours": "ours", "PF se": "se"})),
                 lambda r: f"t1_pf_mean_N{r['N']}", lambda r: f"Table 1: mean RMSE of PF, N = {r['N']}", "Table 1",
                 registry=reg)
-    cell_claims(E.PAPER, tab2.rename(columns={"RMSE paper": "published", "RMSE ours": "ours"}),
+    cell_claims(E.PAPER, _num(tab2.rename(columns={"RMSE paper": "published", "RMSE ours": "ours"})),
                 lambda r: f"t2_rmse_{r['index']}", lambda r: f"Table 2: mean RMSE of {r['index']}", "Table 2",
                 registry=reg)
-    cell_claims(E.PAPER, tab3.rename(columns={"paper mean (row 21)": "published", "ours mean": "ours", "ours se": "se"}),
+    cell_claims(E.PAPER, _num(tab3.rename(columns={"paper mean (row 21)": "published", "ours mean": "ours", "ours se": "se"})),
                 lambda r: f"t3_mean_{r['index']}", lambda r: f"Table 3: mean RMSE of {r['index']}", "Table 3",
                 registry=reg)
     figures = {"Fig. 2": fig2(f2), "Fig. 3": fig3(f3, f3_grid),
