@@ -43,7 +43,7 @@ EDGE = 1e-12
 #: carrier names accepted by :class:`ChaosCarrier`
 CARRIERS = ("randn", "logistic", "chebyshev")
 
-#: how a :class:`ChaosCarrier` starts and lays out its chains (the paper does not say):
+#: how a :class:`ChaosCarrier` starts and lays out its chains (the paper does not say) —
 #: ``"chain"`` one chain per run and map slot, random start, advanced once per step;
 #: ``"run"`` one chain per run, random start, its consecutive iterates filling the map slots
 #: of step 1, then of step 2, ...; ``"shared"`` one sequence from a fixed start (``x0 = 0.65``

@@ -89,7 +89,7 @@ def over(choice: str, values: dict) -> dict:
     Parameters
     ----------
     choice : str
-        The :attr:`FreeChoice.name` the readings vary.
+        The ``FreeChoice.name`` the readings vary.
     values : dict
         Value of the choice (printed as given) -> what holds or was measured under it.
 

@@ -68,7 +68,7 @@ COUNTED = {"sample_transition": "transitions", "log_likelihood": "likelihoods", 
            "jacobian_f": "jacobian_f", "jacobian_h": "jacobian_h"}
 #: columns of :func:`cost_counts`
 COUNT_COLUMNS = list(COUNTED.values()) + ["model_evaluations", "flow"]
-#: further columns of :func:`cost_counts`: the algorithm as printed (see :func:`count_model_calls`)
+#: further columns of :func:`cost_counts` — the algorithm as printed (see :func:`count_model_calls`)
 PRINTED_COLUMNS = ["flow_calls", "flow_printed", "resampled", "printed_operations"]
 
 # the positional index of the state argument of each counted method

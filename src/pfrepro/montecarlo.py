@@ -122,7 +122,7 @@ class MonteCarloResult:
     batch_seconds: dict[str, float]
     seconds_per_run: dict[str, float] = field(default_factory=dict)
     seed: int = 0
-    #: every interleaved single-run timing repeat behind ``seconds_per_run`` (``{name: [s, ...]}``),
+    #: every interleaved single-run timing repeat behind ``seconds_per_run`` (``{name — [s, ...]}``),
     #: for callers that want the spread (e.g. :func:`pfrepro.cost.time_summary`) without timing again
     timing_repeats: dict[str, list[float]] = field(default_factory=dict)
 
@@ -305,7 +305,7 @@ def _concat(parts: list):
                     "return arrays (runs axis first), FilterResults, or tuples/dicts of them")
 
 
-#: diagnostics that count events over runs: a chunked call adds them up
+#: diagnostics that count events over runs — a chunked call adds them up
 _SUMMED_KEYS = frozenset({"n_collapsed", "n_diverged"})
 
 

@@ -66,7 +66,7 @@ ASSUMPTIONS = {
     "grid": (-40.0, 40.0, 4001),  # exact reference: bounds and nodes (sigma_w^2 = 1)
 }
 
-#: The chapter's assumptions table (pfrepro.choices): every value the paper leaves open, with
+#: The chapter's assumptions table (pfrepro.choices) — every value the paper leaves open, with
 #: its status; the values other than the main one are run (readings) as stated in each reason.
 CHOICES = [
     FreeChoice("sigma_w2", "1", READING,
@@ -128,7 +128,7 @@ CHOICES = [
                "and the trend is decided with its standard error", "Fig. 3"),
 ]
 
-#: The other values of the CMS-PF's free choices: (choice, value) -> keyword overrides of :func:`cms`
+#: The other values of the CMS-PF's free choices — (choice, value) -> keyword overrides of :func:`cms`
 #: (keys of :data:`ASSUMPTIONS`; ``u``, ``burn_in``, ``init`` build the carrier).
 CMS_READINGS = {
     ("eta", 0.2): {"eta": 0.2}, ("eta", 0.8): {"eta": 0.8},
@@ -157,7 +157,7 @@ T3_TAGS = {"σv² = 100, σw² = 1": "sigma_v_t3=R 100, sigma_w2=1",
            "σv² = 100, σw² = 10": "sigma_v_t3=R 100, sigma_w2=10",
            "σv² = 10, σw² = 10": "sigma_v_t3=R 10, sigma_w2=10"}
 
-#: readings of Table 2's noise levels (the paper gives no sigma_v for Table 2): tag -> (sigma_v, sigma_w2)
+#: readings of Table 2's noise levels (the paper gives no sigma_v for Table 2) — tag -> (sigma_v, sigma_w2)
 T2_READINGS = {
     "sigma_v_t2=R 1, sigma_w2=1": (1.0, None),
     "sigma_v_t2=R 1, sigma_w2=10": (1.0, 10.0),

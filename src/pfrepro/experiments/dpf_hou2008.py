@@ -165,7 +165,7 @@ CHOICES = [
 
 
 def assumptions_table() -> pd.DataFrame:
-    """The chapter's assumptions table (:func:`pfrepro.choices.choices_table` of :data:`CHOICES`)."""
+    """The chapter's assumptions table (:func:`pfrepro.choices.choices_table` of ``CHOICES``)."""
     return choices_table(CHOICES)
 
 
@@ -652,7 +652,7 @@ def table_52(run: Run, names=("DPF", "DEKF", "Liu-West"), T=None) -> pd.DataFram
 
 
 def convergence_time(theta_hat, truth, band):
-    """Per run: the first step k after which |θ̂_j − θ| ≤ ``band`` for every j ≥ k (T + 1 if never)."""
+    """Per run: the first step k after which abs(θ̂_j − θ) ≤ ``band`` for every j ≥ k (T + 1 if never)."""
     ok = np.abs(np.asarray(theta_hat) - truth) <= band                    # (runs, T)
     T = ok.shape[1]
     # last step that is outside the band; converged from the step after it

@@ -72,7 +72,7 @@ RESAMPLING_SWEEP = ("multinomial", "systematic", "stratified", "residual")
 N_SWEEP = (50, 100, 200, 500, 1000, 2000, 5000)
 #: mass allowed to leave the grid before the grid reference is refused
 MAX_LOST_MASS = 1e-6
-#: tests of the two ratio claims. Model 1: the paper's own words, "the EKF's RMSE is more
+#: tests of the two ratio claims. Model 1 — the paper's own words, "the EKF's RMSE is more
 #: than 7 times the PF's" (sec 2, with the printed PF/EKF swap corrected), decided on
 #: EKF/PF - 7 > 0 (an earlier version of this chapter tested a bar of 2, weaker than the
 #: claim). Model 2: "about the same" means EKF/PF < 1.2, fixed before running (the
@@ -84,7 +84,7 @@ STATISTICS = ("mean_run_rmse", "pooled", "mean_time_rmse")
 STATISTIC_LABELS = {"mean_run_rmse": "mean over runs of the per-run RMSE",
                     "pooled": "root of the MSE pooled over runs and times",
                     "mean_time_rmse": "time average of the per-time RMSE over runs (Figs. 2, 4)"}
-#: SIS degeneracy (sec 1.3.2: "after some iterations all but very few particles have
+#: SIS degeneracy (sec 1.3.2 — "after some iterations all but very few particles have
 #: negligible weight"): "very few" read as an ESS below 1 % or 5 % of N, averaged over the
 #: second half of the run (k = 31..60), fixed before running
 FEW_FRACTIONS = (0.01, 0.05)
@@ -95,7 +95,7 @@ SIS_RUNS = 20
 #: before running: the Table 1 seed and ten more
 SEEDS_SPREAD = (SEED_TABLE,) + tuple(range(2101, 2111))
 
-#: The assumptions table: every value the paper leaves open, with its status
+#: The assumptions table — every value the paper leaves open, with its status
 #: (pfrepro.choices; CONTRIBUTING "Free choices").
 CHOICES = [
     FreeChoice("model", "Q = 10, R = 1, x0 = 0.1, T = 60, N = 1000; 100 runs (Table 1), 50 (Figs.)",

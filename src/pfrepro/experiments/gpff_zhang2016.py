@@ -586,17 +586,17 @@ from ..choices import FIXED, READING, FreeChoice  # noqa: E402
 
 #: the GPFF integrators run as readings ("numerical integration" with Delta lambda = 0.05, sec 4)
 INTEGRATORS = ("euler", "midpoint", "rk4")
-#: PF resampling schemes run as readings (the paper only says "resampling"): name -> filter options
+#: PF resampling schemes run as readings (the paper only says "resampling") — name -> filter options
 PF_SCHEMES = {"systematic": {"resampling": "systematic"},
               "multinomial": {"resampling": "multinomial"},
               "ESS<N/2": {"resampling": "systematic", "ess_threshold": 0.5}}
-#: UT parameter sets run as readings (not given by the paper): name -> (alpha, beta, kappa)
+#: UT parameter sets run as readings (not given by the paper) — name -> (alpha, beta, kappa)
 UT_SETS = {"alpha=1": {"alpha": 1.0, "beta": 2.0, "kappa": 0.0},
            "alpha=0.5": {"alpha": 0.5, "beta": 2.0, "kappa": 0.0},
            "alpha=1e-3": {"alpha": 1e-3, "beta": 2.0, "kappa": 0.0}}
-#: equivalence margin of "approximately the same MSE" (Fig. 1a), fixed before the runs: 10 % of the KF's MSE
+#: equivalence margin of "approximately the same MSE" (Fig. 1a), fixed before the runs — 10 % of the KF's MSE
 EQUIV_MARGIN = 0.10
-#: a comparison is heavy-tailed when its largest run carries more than this share of the total |value|
+#: a comparison is heavy-tailed when its largest run carries more than this share of the total absolute value
 HEAVY_SHARE = 0.10
 #: convergence band (position error, same units as the state) of the "converges faster" claim, and readings
 CONV_BANDS = (2.0, 1.0, 4.0)
@@ -736,7 +736,7 @@ def reading_label(base: str, choice: str, value: str, main_value: str) -> str:
 
 # ============================================================================ statistics for the claims
 def heavy_tailed(v, share=HEAVY_SHARE) -> bool:
-    """True if the largest |value| carries more than ``share`` of the total (finite values)."""
+    """True if the largest absolute value carries more than ``share`` of the total (finite values)."""
     v = np.abs(np.asarray(v, float))
     v = v[np.isfinite(v)]
     return bool(v.size and v.sum() > 0 and v.max() > share * v.sum())

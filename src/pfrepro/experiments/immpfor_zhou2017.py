@@ -90,18 +90,18 @@ ALTERNATIVES = {
     "sticky Markov": {"p_stay": 0.98},
 }
 
-#: step coefficients of the d sweep (eq 22/23), chosen from the text before running: the paper says only
+#: step coefficients of the d sweep (eq 22/23), chosen from the text before running — the paper says only
 #: that d "removes the effect of the distance"; a step is a multiple of one neighbour spacing, so the
 #: grid spans "no move" (1e-6), a small fraction (0.01, 0.1, 0.3), one spacing (1, the main reading) and
 #: a few spacings (3)
 D_GRID = (1e-6, 0.01, 0.1, 0.3, 1.0, 3.0)
-#: the second step coefficient run at N = 2000 and in each robustness scenario: the value at which the
+#: the second step coefficient run at N = 2000 and in each robustness scenario — the value at which the
 #: review found IMMPFOR ahead on the main scenario, i.e. the reading most favourable to the paper
 D_FAVOURABLE = 0.1
 #: the other readings of the main scenario (name -> IMMPFOR keywords), each against the IMMPF on the
 #: same runs; the model-likelihood reading changes both filters (see :func:`reading_builders`)
 READINGS = {"replace=always": {"replace": "always"}, "density=weights": {"density": "weights"}}
-#: the tail of the RMSE curve ("converges more strongly"): from 40 s after the second turn to the end
+#: the tail of the RMSE curve ("converges more strongly") — from 40 s after the second turn to the end
 TAIL = (251, 300)
 #: a track is lost when the position error exceeds this many metres at the final step
 LOST_KM = 5.0
@@ -111,7 +111,7 @@ SEEDS = {"main": 20170501, "robust": 20170502, "checks": 20170503}
 
 
 _S = SCENARIO
-#: the chapter's assumptions table: every setting the text does not fix, with its status (fixed by the
+#: the chapter's assumptions table — every setting the text does not fix, with its status (fixed by the
 #: paper / swept / run as readings) and the reason, shown whole in the chapter (``choices_table``)
 CHOICES = [
     FreeChoice("x0_T_N_runs", f"x0 = {_S['x0']}, T = {_S['T_s']} s, N = {_S['N']} ({_S['N_fig5']} in Fig. 5), "
@@ -158,7 +158,7 @@ CHOICES = [
                f"reading ({_S['runs_lik']} runs).", "eqs 11-15"),
 ]
 
-#: settings the paper does not fix that this round holds at one value without varying them: a verdict
+#: settings the paper does not fix that this round holds at one value without varying them — a verdict
 #: may still depend on them (a limitation, said in the chapter), so they are listed apart from CHOICES
 #: rather than marked "fixed by the paper". Rows: (name, value, reason, where in the paper).
 HELD = [

@@ -108,7 +108,7 @@ ALPHA = 0.05
 PF_N = {"ung_zhang": (10, 30, 100, 300, 1000), "ung_li": (10, 30, 100, 300, 1000),
         "ung_ning": (10, 30, 100, 300, 1000), "bot": (100, 300, 1000, 2000),
         "bot_centred": (100, 300, 1000, 2000)}
-#: runs per task in the pool on the BOT benchmarks: a batch of more than ~25000 four-dimensional particles
+#: runs per task in the pool on the BOT benchmarks — a batch of more than ~25000 four-dimensional particles
 #: falls out of the processor's cache (PF(2000) on 25 runs took 7x the CPU time of 10 runs, measured)
 BOT_CHUNK_RUNS = 10
 #: the other resampling schemes, run at one particle number on the scalar benchmarks
@@ -120,9 +120,9 @@ METHOD_N = 100
 #: this chapter's budget); PF(2000) is the dearest PF run (it brackets the GPFF's count), and the yardstick is the
 #: PCRB with the filters' prior information (J0 = P0^-1), a bound that no filter need attain
 BOT_REF_N = None
-#: the two readings of the bearings-only start (free choice ``bot_prior``): the benchmark key of each
+#: the two readings of the bearings-only start (free choice ``bot_prior``) — the benchmark key of each
 BOT_READINGS = {"offset": "bot", "centred": "bot_centred"}
-#: runs per benchmark where fewer than :data:`RUNS` are used (a reading; stated in the chapter)
+#: runs per benchmark where fewer than ``RUNS`` are used (a reading; stated in the chapter)
 RUNS_OF = {"bot_centred": 50}
 #: truth trajectories of the PCRB's Monte Carlo expectation
 PCRB_RUNS = 200

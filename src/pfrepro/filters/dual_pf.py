@@ -71,7 +71,7 @@ __all__ = ["DualParticleFilter", "beta_moment_fit", "beta_moments", "weighted_me
            "PARAMETER_WEIGHTS", "THETA_LAWS", "check_parameterized", "init_parameterized_filter"]
 
 PARAMETER_WEIGHTS = ("predictive", "plugin", "literal")
-#: sampling laws of the parameter draws (step 3a): the paper's Beta, or a Gaussian with its moments
+#: sampling laws of the parameter draws (step 3a) — the paper's Beta, or a Gaussian with its moments
 THETA_LAWS = ("beta", "gaussian")
 #: status codes of :func:`beta_moment_fit`
 FIT_OK, FIT_TOO_WIDE, FIT_ZERO_VAR, FIT_CAPPED = 0, 1, 2, 3

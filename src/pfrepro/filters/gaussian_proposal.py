@@ -7,7 +7,7 @@ proposal p(x_k | x_{k-1}, y_k) avoids that; for additive Gaussian noise it is Ga
 when h is linear, and a local linearisation (Doucet, Godsill & Andrieu 2000, sec. II-D-2)
 or an unscented transform (van der Merwe, Doucet, de Freitas & Wan 2000, the "UPF"
 proposal, here around each particle's transition) gives a Gaussian approximation of it.
-For particle i, with mu = f(x_{k-1}^i, k):
+For particle i, with mu = f(x_{k-1}^i, k)::
 
     prior            N(mu, Q)
     local update     m_i = mu + K_i r(y_k, y_hat_i),  Sigma_i = Q - K_i S_i K_i^T

@@ -11,7 +11,7 @@ Boers & Driessen 2005, the "multiple model PF"):
     w_k^i ∝ w_{k-1}^i p(y_k | x_k^i)           (the shared measurement model)
 
 Mode probabilities are the weight sums per mode; the estimate is the weighted mean. The
-transitions are drawn as in :meth:`pfrepro.models.JumpMarkovSystem.simulate`: one
+transitions are drawn as in ``JumpMarkovSystem.simulate``: one
 standard-normal draw per particle, mapped through the active mode's square root of Q, so
 every draw has the runs axis first and run i is the same in any batch.
 """

@@ -17,7 +17,7 @@ from .resampling import check_scheme, resampling_counts_function
 __all__ = ["BootstrapParticleFilter", "normalize_log_weights", "WeightCollapseWarning", "warn_collapse",
            "BLOCK_PARTICLES"]
 
-#: the most particles (runs x N) one batched step moves at once: a larger batch drawing from
+#: the most particles (runs x N) one batched step moves at once — a larger batch drawing from
 #: per-run streams is filtered in blocks of whole runs, so that a step's arrays (a few MB) stay in
 #: cache -- at N = 10^5 ten runs in one block ran 8 % slower per run than one run alone. The
 #: blocks change no number (each run draws from its own stream).

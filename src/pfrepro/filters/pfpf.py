@@ -9,7 +9,7 @@ moved particle eta_1 can be weighted exactly (their eq. 20, Algorithms 1–2):
 
     eta_0^i ~ p(x_k | x_{k-1}^i)                       (a transition draw)
     eta_1^i = T_i(eta_0^i)                             (the flow, pseudo-time 0 -> 1)
-    w_k^i  ∝ w_{k-1}^i p(y_k | eta_1^i) p(eta_1^i | x_{k-1}^i) |det dT_i/deta_0| / p(eta_0^i | x_{k-1}^i)
+    w_k^i  ∝ w_{k-1}^i p(y_k | eta_1^i) p(eta_1^i | x_{k-1}^i) abs(det dT_i/deta_0) / p(eta_0^i | x_{k-1}^i)
 
 The flow at pseudo-time lambda, linearised at eta_bar (EDH: one point, the flowed
 prediction; LEDH: per particle, its own flowed prediction eta_bar^i), with
@@ -21,7 +21,7 @@ H = dh/dx(eta_bar), e = h(eta_bar) - H eta_bar and the predictive covariance P
 
 integrated with Euler steps on an exponentially spaced pseudo-time grid (29 steps,
 ratio 1.2, as in Li & Coates 2017, sec. VI). The Jacobian of one Euler step is
-I + eps_j A(lambda_j), so |det dT/deta_0| = prod_j |det(I + eps_j A_j)| (their eq. 22).
+I + eps_j A(lambda_j), so abs(det dT/deta_0) = prod_j abs(det(I + eps_j A_j)) (their eq. 22).
 P comes from an EKF run alongside (prediction with the Jacobian of f at the previous
 estimate; update with the Jacobian of h at the prediction), as in their Algorithm 1.
 
@@ -42,7 +42,7 @@ from .small_linalg import det_small, inv_small
 
 __all__ = ["ParticleFlowParticleFilter", "edh_coefficients", "FLOWS"]
 
-#: the two flows of Li & Coates (2017): one linearisation for all particles, or one per particle
+#: the two flows of Li & Coates (2017) — one linearisation for all particles, or one per particle
 FLOWS = ("edh", "ledh")
 
 
@@ -100,7 +100,7 @@ class ParticleFlowParticleFilter(Filter):
     Notes
     -----
     Diagnostics: ``ess`` (runs, T), ``resampled`` (runs, T), ``log_evidence`` (runs,),
-    ``log_det`` (runs, T) the EDH map's log |det| (LEDH: its weighted mean over particles),
+    ``log_det`` (runs, T) the EDH map's log abs(det) (LEDH: its weighted mean over particles),
     ``collapsed`` and ``n_collapsed``.
     """
 
@@ -130,7 +130,7 @@ class ParticleFlowParticleFilter(Filter):
         return -0.5 * np.einsum("...i,...i->...", z, z)
 
     def _flow(self, eta, eta_bar, P, y):
-        """Move ``eta`` (runs, N, n) from pseudo-time 0 to 1; returns (eta_1, log|det| per particle)."""
+        """Move ``eta`` (runs, N, n) from pseudo-time 0 to 1; returns (eta_1, log abs(det) per particle)."""
         model, R = self.model, np.asarray(self.model.R, float)
         runs, N, n = eta.shape
         ledh = self.flow == "ledh"

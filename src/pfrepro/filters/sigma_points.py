@@ -97,7 +97,7 @@ class ScaledSigmaPoints:
         """Points for batched ``x`` (..., n), ``P`` (..., n, n) -> (..., 2n + 1, n).
 
         ``on_error="nan"``: a ``P`` without a square root gives NaN points for its own
-        batch entry only (see :func:`safe_cholesky`)."""
+        batch entry only (see ``safe_cholesky``)."""
         L = safe_cholesky((self.n + self.lam) * P, on_error=on_error)
         offsets = np.swapaxes(L, -1, -2)  # rows = columns of L
         x = x[..., None, :]
