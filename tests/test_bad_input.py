@@ -10,6 +10,7 @@ from pfrepro.filters import (BootstrapParticleFilter, CMSParticleFilter, Evoluti
                              ExtendedKalmanFilter, GaussianParticleFlowFilter, GridFilter, KalmanFilter,
                              UnscentedKalmanFilter, resample)
 from pfrepro.filters.ekf_variants import PreviousEstimateJacobianEKF
+from pfrepro.filters.particle import WeightCollapseWarning
 from pfrepro.metrics import mc_summary
 from pfrepro.models import (CWPA, UNGM, BearingsOnly, LinearGaussianModel, ModelContractError,
                             StochasticVolatility)
@@ -45,14 +46,16 @@ def test_grid_filter_outlier_is_not_nan_and_is_reported():
     sim = m.simulate(10, 2, np.random.default_rng(1))
     y = sim.y.copy()
     y[1, 4, 0] = 1e200
-    res = GridFilter(m, **GRID).filter(y)
+    with pytest.warns(WeightCollapseWarning, match="1 of 20 run-steps"):   # reported loudly, once
+        res = GridFilter(m, **GRID).filter(y)
     assert np.all(np.isfinite(res.x)) and np.all(np.isfinite(res.P))
     assert res.diagnostics["collapsed"][1, 4] and res.diagnostics["n_collapsed"] == 1
     # posterior at the outlier step = the prediction from step 4's posterior (run 1), and
     # the other run is untouched
     ref = GridFilter(m, **GRID).filter(sim.y)
     np.testing.assert_array_equal(res.x[0], ref.x[0])
-    no_update = GridFilter(m, **GRID).filter(np.concatenate([sim.y[1:, :4], y[1:, 4:5]], axis=1))
+    with pytest.warns(WeightCollapseWarning, match="1 of 5 run-steps"):
+        no_update = GridFilter(m, **GRID).filter(np.concatenate([sim.y[1:, :4], y[1:, 4:5]], axis=1))
     assert no_update.diagnostics["collapsed"][0, 4]
     np.testing.assert_allclose(res.x[1, :5], no_update.x[0], rtol=1e-12)
 
