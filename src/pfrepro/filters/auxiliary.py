@@ -22,18 +22,11 @@ import numpy as np
 
 from ..validation import check_positive_int
 from .base import Filter, FilterResult
-from .particle import normalize_log_weights, warn_collapse
+from .particle import normalize_log_weights
 from .resampling import check_scheme, resampling_counts_function
+from .smc_steps import particle_result, repeat_rows
 
 __all__ = ["AuxiliaryParticleFilter"]
-
-
-def repeat_rows(counts, *arrays):
-    """Each array ``(runs, N, ...)`` with row i of run r repeated ``counts[r, i]`` times
-    (counts sum to N in every run): the resampled arrays, ancestors in order."""
-    runs, N = counts.shape
-    c = counts.ravel()
-    return [np.repeat(a.reshape((runs * N,) + a.shape[2:]), c, axis=0).reshape(a.shape) for a in arrays]
 
 
 class AuxiliaryParticleFilter(Filter):
@@ -96,12 +89,7 @@ class AuxiliaryParticleFilter(Filter):
                 xs[:, k - 1] = np.einsum("rn,rni->ri", w, x)
                 ess[:, k - 1] = 1.0 / np.einsum("rn,rn->r", w, w)
                 logw = np.log(w)
-        n_collapsed = int(collapsed.sum())
-        if n_collapsed:
-            warn_collapse(self.name, n_collapsed, runs, T)
-        return FilterResult(xs, None, diagnostics={
-            "ess": ess, "first_stage_ess": ess1, "log_evidence": log_inc.sum(axis=1),
-            "collapsed": collapsed, "n_collapsed": n_collapsed})
+        return particle_result(self.name, xs, log_inc, collapsed, ess=ess, first_stage_ess=ess1)
 
     def __repr__(self) -> str:
         return f"AuxiliaryParticleFilter(N={self.n_particles}, resampling={self.resampling!r})"

@@ -24,13 +24,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..rng import take_runs
 from ..validation import check_positive_int, check_probability
-from .auxiliary import repeat_rows
 from .base import Filter, FilterResult
-from .particle import normalize_log_weights, warn_collapse
+from .particle import normalize_log_weights
 from .resampling import check_scheme, resampling_counts_function
 from .small_linalg import inv_small
+from .smc_steps import particle_result, resample_runs
 
 __all__ = ["GaussianProposalParticleFilter", "PROPOSALS"]
 
@@ -176,17 +175,8 @@ class GaussianProposalParticleFilter(Filter):
                 logw = np.log(w)
                 do = np.ones(runs, dtype=bool) if self.ess_threshold is None else e < self.ess_threshold * N
                 resampled[:, k - 1] = do
-                if do.any():
-                    sel = np.flatnonzero(do)
-                    (xr,) = repeat_rows(counts_of(w[sel], rng if do.all() else take_runs(rng, sel)), x[sel])
-                    x[sel] = xr
-                    logw[sel] = -np.log(N)
-        n_collapsed = int(collapsed.sum())
-        if n_collapsed:
-            warn_collapse(self.name, n_collapsed, runs, T)
-        return FilterResult(xs, None, diagnostics={
-            "ess": ess, "resampled": resampled, "log_evidence": log_inc.sum(axis=1),
-            "collapsed": collapsed, "n_collapsed": n_collapsed})
+                resample_runs(do, w, logw, rng, counts_of, x)
+        return particle_result(self.name, xs, log_inc, collapsed, ess=ess, resampled=resampled)
 
     def __repr__(self) -> str:
         return (f"GaussianProposalParticleFilter(N={self.n_particles}, proposal={self.proposal!r}, "

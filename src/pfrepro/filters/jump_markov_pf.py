@@ -19,12 +19,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..rng import take_runs
 from ..validation import check_positive_int, check_probability
-from .auxiliary import repeat_rows
 from .base import Filter, FilterResult
-from .particle import normalize_log_weights, warn_collapse
+from .particle import normalize_log_weights
 from .resampling import check_scheme, resampling_counts_function
+from .smc_steps import particle_result, resample_runs
 
 __all__ = ["JumpMarkovParticleFilter"]
 
@@ -108,18 +107,8 @@ class JumpMarkovParticleFilter(Filter):
                 logw = np.log(w)
                 do = np.ones(runs, dtype=bool) if self.ess_threshold is None else e < self.ess_threshold * N
                 resampled[:, k - 1] = do
-                if do.any():
-                    sel = np.flatnonzero(do)
-                    counts = counts_of(w[sel], rng if do.all() else take_runs(rng, sel))
-                    xr, mr = repeat_rows(counts, x[sel], mode[sel])
-                    x[sel], mode[sel] = xr, mr
-                    logw[sel] = -np.log(N)
-        n_collapsed = int(collapsed.sum())
-        if n_collapsed:
-            warn_collapse(self.name, n_collapsed, runs, T)
-        return FilterResult(xs, None, diagnostics={
-            "mode_probs": probs, "ess": ess, "resampled": resampled, "log_evidence": log_inc.sum(axis=1),
-            "collapsed": collapsed, "n_collapsed": n_collapsed})
+                resample_runs(do, w, logw, rng, counts_of, x, mode)
+        return particle_result(self.name, xs, log_inc, collapsed, mode_probs=probs, ess=ess, resampled=resampled)
 
     def __repr__(self) -> str:
         return (f"JumpMarkovParticleFilter(N={self.n_particles}, r={self.system.r}, "

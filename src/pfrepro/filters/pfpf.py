@@ -34,11 +34,11 @@ import numpy as np
 
 from ..flow import lambda_schedule
 from ..validation import check_positive_int, check_probability
-from .auxiliary import repeat_rows
 from .base import Filter, FilterResult
-from .particle import normalize_log_weights, warn_collapse
+from .particle import normalize_log_weights
 from .resampling import check_scheme, resampling_counts_function
 from .small_linalg import det_small, inv_small
+from .smc_steps import particle_result, resample_runs
 
 __all__ = ["ParticleFlowParticleFilter", "edh_coefficients", "FLOWS"]
 
@@ -200,24 +200,9 @@ class ParticleFlowParticleFilter(Filter):
                 logw = np.log(w)
                 do = np.ones(runs, dtype=bool) if self.ess_threshold is None else e < self.ess_threshold * N
                 resampled[:, k - 1] = do
-                if do.all():
-                    (x,) = repeat_rows(counts_of(w, rng), x)
-                    logw.fill(-np.log(N))
-                elif do.any():
-                    from ..rng import take_runs
-
-                    sel = np.flatnonzero(do)
-                    (xr,) = repeat_rows(counts_of(w[sel], take_runs(rng, sel)), x[sel])
-                    x[sel] = xr
-                    logw[sel] = -np.log(N)
-        bad = ~np.isfinite(xs).all(axis=2)
-        diverged = bad.any(axis=1)
-        n_collapsed = int(collapsed.sum())
-        if n_collapsed:
-            warn_collapse(self.name, n_collapsed, runs, T)
-        return FilterResult(xs, None, diagnostics={
-            "ess": ess, "resampled": resampled, "log_evidence": log_inc.sum(axis=1), "log_det": log_dets,
-            "collapsed": collapsed, "n_collapsed": n_collapsed, "diverged": diverged})
+                resample_runs(do, w, logw, rng, counts_of, x)
+        return particle_result(self.name, xs, log_inc, collapsed, ess=ess, resampled=resampled, log_det=log_dets,
+                               diverged=~np.isfinite(xs).all(axis=(1, 2)))
 
     def __repr__(self) -> str:
         return (f"ParticleFlowParticleFilter(N={self.n_particles}, flow={self.flow!r}, "

@@ -22,10 +22,10 @@ import numpy as np
 
 from ..rng import take_runs
 from ..validation import as_finite_float, check_positive_int, check_probability
-from .auxiliary import repeat_rows
 from .base import Filter, FilterResult
-from .particle import normalize_log_weights, warn_collapse
+from .particle import normalize_log_weights
 from .resampling import check_scheme, resampling_counts_function
+from .smc_steps import particle_result, resample_runs
 
 __all__ = ["RegularizedParticleFilter", "optimal_bandwidth"]
 
@@ -113,20 +113,11 @@ class RegularizedParticleFilter(Filter):
                 resampled[:, k - 1] = do
                 logw = np.log(w)
                 if do.any():
-                    sel = np.flatnonzero(do)
-                    r = rng if do.all() else take_runs(rng, sel)
-                    L = _weighted_cholesky(w[sel], x[sel])
-                    (xr,) = repeat_rows(counts_of(w[sel], r), x[sel])
-                    eps = r.standard_normal((len(sel), N, n))
-                    xr += self.bandwidth * (eps @ np.swapaxes(L, -1, -2))  # per-run (N, n) @ (n, n)
-                    x[sel] = xr
-                    logw[sel] = -np.log(N)
-        n_collapsed = int(collapsed.sum())
-        if n_collapsed:
-            warn_collapse(self.name, n_collapsed, runs, T)
-        return FilterResult(xs, None, diagnostics={
-            "ess": ess, "resampled": resampled, "log_evidence": log_inc.sum(axis=1),
-            "collapsed": collapsed, "n_collapsed": n_collapsed})
+                    L = _weighted_cholesky(w[do], x[do])                # of the cloud before resampling
+                    sel = resample_runs(do, w, logw, rng, counts_of, x)
+                    eps = (rng if do.all() else take_runs(rng, sel)).standard_normal((len(sel), N, n))
+                    x[sel] += self.bandwidth * (eps @ np.swapaxes(L, -1, -2))  # per-run (N, n) @ (n, n)
+        return particle_result(self.name, xs, log_inc, collapsed, ess=ess, resampled=resampled)
 
     def __repr__(self) -> str:
         return (f"RegularizedParticleFilter(N={self.n_particles}, resampling={self.resampling!r}, "

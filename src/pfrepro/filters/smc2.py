@@ -23,11 +23,11 @@ import numpy as np
 
 from ..rng import take_runs
 from ..validation import as_finite_float, check_positive_int, check_probability
-from .auxiliary import repeat_rows
 from .base import Filter, FilterResult
 from .dual_pf import init_parameterized_filter
 from .particle import normalize_log_weights
 from .resampling import check_scheme, resampling_counts_function
+from .smc_steps import repeat_rows
 
 __all__ = ["SMC2"]
 
