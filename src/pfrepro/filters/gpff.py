@@ -45,6 +45,22 @@ def particle_moments(x):
     return m, 0.5 * (P + np.swapaxes(P, -1, -2))
 
 
+def _visited_lambdas(grid, integrator):
+    """The distinct pseudo-times at which :func:`pfrepro.flow.integrate_flow` evaluates the
+    field on ``grid``: the grid points and, for RK2/RK4, the midpoints ``l0 + 0.5 * h`` with the
+    integrator's own arithmetic (so that a float lookup finds them). Returns the array and a
+    ``{lambda: index}`` map."""
+    lams = []
+    for l0, l1 in zip(grid[:-1], grid[1:]):
+        lams.append(l0)
+        if integrator in ("midpoint", "rk4"):
+            lams.append(l0 + 0.5 * (l1 - l0))
+        if integrator == "rk4":
+            lams.append(l1)
+    lams = list(dict.fromkeys(lams))
+    return np.asarray(lams, float), {lam: i for i, lam in enumerate(lams)}
+
+
 class GaussianParticleFlowFilter(Filter):
     """Gaussian particle flow filter (Zhang, Zhou & Feng 2016, sec 4): unweighted particles moved by a Gaussian flow.
 
@@ -150,6 +166,7 @@ class GaussianParticleFlowFilter(Filter):
         self.ratio = float(ratio)
         self.n_steps = check_positive_int(n_steps, "n_steps")
         self.grid = flow.lambda_schedule(self.n_steps, schedule, ratio)
+        self._lams, self._lam_index = _visited_lambdas(self.grid, integrator)
         self.points = ScaledSigmaPoints(model.dim_x, alpha, beta, kappa)
         self.return_cov = bool(return_cov)
 
@@ -172,28 +189,35 @@ class GaussianParticleFlowFilter(Filter):
             return m1[:, None, :] + (x - m[:, None, :]) @ np.swapaxes(Phi, -1, -2)
         m, P, y_hat, Pyy, Pxy = self.prior_statistics(x)
         R, res = model.R, model.residual_y
-        cache = {}
+        r = (lambda a, b: a - b) if res is None else res
+        # G(lam), c(lam) do not depend on the particles: all the lambdas the integrator
+        # visits (grid points, and RK midpoints computed as the integrator computes them)
+        # in one batched call instead of one call per field evaluation; each lambda's
+        # values are bit-identical to flow.flow_field_coefficients(lam, ...) alone
+        G_all, c_all = flow.flow_field_coefficients(self._lams[:, None, None, None], y, y_hat, Pxy, Pyy, R,
+                                                    residual=res)
+        GT_all = np.swapaxes(G_all, -1, -2)                           # (L, runs, m, d)
+        cN_all = c_all[:, :, None, :]                                 # (L, runs, 1, m)
+        yN = y[:, None, :]
+        at = self._lam_index
 
-        def coefficients(lam):
-            # G(lam), c(lam) do not depend on the particles: once per distinct lam of the
-            # grid (RK4 evaluates the field twice at each midpoint, and a step's end is the
-            # next step's start); the same arithmetic as flow.gaussian_flow_field
-            if lam not in cache:
-                cache[lam] = flow.flow_field_coefficients(lam, y, y_hat, Pxy, Pyy, R, residual=res)
-            return cache[lam]
-
+        # f = 1/2 [r(y, h(z)) + c] G^T, flow.field_from_coefficients with the transposes hoisted
         if self.field == "eq41":
             def field(z, lam):
-                return flow.field_from_coefficients(model.h(z), y, *coefficients(lam), residual=res)
+                i = at[lam]
+                return 0.5 * (r(yN, model.h(z)) + cN_all[i]) @ GT_all[i]
         else:
             # h(z) ~ y_hat + J (z - m), J = Pxy^T P^{-1}; innovations r(y, y_hat) - J (z - m)
             J = np.swapaxes(flow.solve_per_run(P, Pxy), -1, -2)       # (runs, m, d)
-            r0 = model.residual_y(y, y_hat)
+            JT = np.swapaxes(J, -1, -2)
+            base = (y - model.residual_y(y, y_hat))[:, None, :]
+            mN = m[:, None, :]
 
             def field(z, lam):
-                hz = (y - r0)[:, None, :] + (z - m[:, None, :]) @ np.swapaxes(J, -1, -2)
+                i = at[lam]
+                hz = base + (z - mN) @ JT
                 # the model's residual (angles wrap) in every innovation term, as in eq 41
-                return flow.field_from_coefficients(hz, y, *coefficients(lam), residual=res)
+                return 0.5 * (r(yN, hz) + cN_all[i]) @ GT_all[i]
 
             # The field is affine in z, so the integrator's map over the whole grid is an
             # affine map z -> c + M (z - m): integrate d + 1 probe points, not N particles
