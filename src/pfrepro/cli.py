@@ -221,7 +221,9 @@ def cmd_run(args) -> int:
     executor = client = None
     if args.scheduler is not None:
         client = _connect_scheduler(args.scheduler, args.connect_timeout)
-        executor = client.get_executor(pure=False)  # pure=False: no hashing of the (large) task arguments
+        from .montecarlo import dask_executor
+
+        executor = dask_executor(client)
     elif (args.jobs or 1) > 1:
         from .montecarlo import process_pool
 
