@@ -3,14 +3,19 @@
 ::
 
     pfrepro list
-    pfrepro run <paper> [--runs R] [--seed S] [--jobs J] [--out DIR]
+    pfrepro run <paper> [--runs R] [--seed S] [--jobs J | --scheduler ADDRESS] [--out DIR]
     pfrepro scorecard [--format table|csv|json] [--dir DIR]
 
 ``run`` calls the same experiment functions as the paper's chapter (through
 ``pfrepro.figures.<paper>.reproduce``, see :mod:`pfrepro.papers`), writes every table as
 CSV and every figure as PNG into ``--out`` (default ``pfrepro-<paper>``), saves the claims
 of the table cells to ``<out>/claims/<paper>.json`` and prints the verdict summary.
-Bad arguments end with a one-line message on stderr and exit code 2.
+``--jobs J`` spreads the runs over J local processes, ``--scheduler ADDRESS`` over the
+workers of a running dask.distributed scheduler (several machines; every worker needs the
+same environment, e.g. ``pip install -e .`` of the same commit): the files are the same
+bytes either way (per-run random streams, :mod:`pfrepro.montecarlo`).
+Bad arguments -- an unreachable scheduler included -- end with a one-line message on
+stderr and exit code 2.
 """
 from __future__ import annotations
 
@@ -24,6 +29,8 @@ from pathlib import Path
 __all__ = ["main", "build_parser", "UsageError"]
 
 EXIT_USAGE = 2
+#: seconds to wait for a --scheduler to answer, and for its first worker
+DEFAULT_CONNECT_TIMEOUT = 10.0
 
 
 class UsageError(Exception):
@@ -43,6 +50,18 @@ def _positive_int(name):
             raise argparse.ArgumentTypeError(f"{name} must be an integer >= 1, got {text!r}") from None
         if v < 1:
             raise argparse.ArgumentTypeError(f"{name} must be >= 1, got {v}")
+        return v
+    return parse
+
+
+def _positive_float(name):
+    def parse(text):
+        try:
+            v = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} must be a number > 0, got {text!r}") from None
+        if not v > 0 or v == float("inf"):
+            raise argparse.ArgumentTypeError(f"{name} must be a finite number > 0, got {text}")
         return v
     return parse
 
@@ -68,8 +87,13 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--runs", type=_positive_int("--runs"), default=None,
                    help="Monte Carlo runs of every experiment (default: the paper's)")
     r.add_argument("--seed", type=_seed, default=None, help="base seed (default: the book's fixed seeds)")
-    r.add_argument("--jobs", type=_positive_int("--jobs"), default=1,
+    r.add_argument("--jobs", type=_positive_int("--jobs"), default=None,
                    help="worker processes (default 1: one batched call per filter)")
+    r.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on the workers of a dask.distributed scheduler, e.g. tcp://HOST:8786 "
+                        "(every worker needs this environment: pip install -e .); not with --jobs")
+    r.add_argument("--connect-timeout", type=_positive_float("--connect-timeout"), default=DEFAULT_CONNECT_TIMEOUT,
+                   metavar="SECONDS", help=f"give up on --scheduler after this long (default {DEFAULT_CONNECT_TIMEOUT:g})")
     r.add_argument("--out", default=None, help="output directory (default: ./pfrepro-<paper>)")
     s = sub.add_parser("scorecard", help="the claims of a book build or of a run")
     s.add_argument("--format", choices=("table", "csv", "json"), default="table")
@@ -192,8 +216,15 @@ def cmd_run(args) -> int:
 
     from .export import write_table
 
-    executor = None
-    if args.jobs > 1:
+    if args.scheduler is not None and args.jobs is not None:
+        raise UsageError("--scheduler and --jobs cannot be used together (the scheduler's workers are the jobs)")
+    executor = client = None
+    if args.scheduler is not None:
+        client = _connect_scheduler(args.scheduler, args.connect_timeout)
+        from .montecarlo import dask_executor
+
+        executor = dask_executor(client)
+    elif (args.jobs or 1) > 1:
         from .montecarlo import process_pool
 
         executor = process_pool(args.jobs)
@@ -203,7 +234,10 @@ def cmd_run(args) -> int:
         rep = paper.reproduce(runs=args.runs, seed=args.seed, executor=executor, steps=steps)
     finally:
         steps.close()
-        if executor is not None:
+        if client is not None:
+            executor.shutdown(wait=False)   # cancels what is left (after an error or Ctrl-C)
+            client.close()
+        elif executor is not None:
             executor.shutdown()
     written = []
     for label, df in rep.tables.items():
@@ -228,6 +262,114 @@ def cmd_run(args) -> int:
         print()
         print(_claims_table(df))
     return 0
+
+
+# -- --scheduler ------------------------------------------------------------------------------
+def _worker_environment_probe():
+    """A function reporting the versions and the pfrepro source digest of the process it runs in.
+
+    Built in a closure so that it is pickled by value (cloudpickle): a worker that cannot
+    import pfrepro can still run it and say so.
+    """
+    def probe():
+        import hashlib
+        import importlib
+        import platform
+        from pathlib import Path
+
+        out = {"python": ".".join(platform.python_version_tuple()[:2])}
+        for name in ("numpy", "scipy", "pfrepro"):
+            try:
+                out[name] = importlib.import_module(name).__version__
+            except Exception as exc:  # noqa: BLE001 - reported, not raised
+                out[name] = f"cannot import ({type(exc).__name__}: {exc})"
+        try:
+            root = Path(importlib.import_module("pfrepro").__file__).parent
+            h = hashlib.sha256()
+            for f in sorted(root.rglob("*")):
+                if f.suffix in (".py", ".csv") and f.is_file():
+                    h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
+            out["pfrepro source"] = h.hexdigest()[:12]
+        except Exception:  # noqa: BLE001
+            out["pfrepro source"] = "unknown"
+        return out
+    return probe
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip()
+    return f"{type(exc).__name__}: {text.splitlines()[0]}" if text else type(exc).__name__
+
+
+def _probe_scheduler(address: str, timeout: float) -> None:
+    """Open and close one connection to ``address`` (distributed's handshake included), in a
+    thread of its own so that a caller's running event loop (Jupyter) does not matter."""
+    import asyncio
+    from concurrent.futures import ThreadPoolExecutor
+
+    from distributed.comm import connect
+
+    async def probe():
+        comm = await connect(address, timeout=timeout)
+        await comm.close()
+
+    with ThreadPoolExecutor(1) as pool:
+        pool.submit(asyncio.run, probe()).result(timeout=2 * timeout + 5)
+
+
+def _connect_scheduler(address: str, timeout: float):
+    """A ``dask.distributed.Client`` of the scheduler at ``address``, checked before any work.
+
+    One-line :class:`UsageError` (exit 2) when the address is malformed, nothing answers
+    within ``timeout`` seconds, the scheduler has no worker within ``timeout`` seconds, or a
+    worker runs another environment (python, numpy, scipy, or pfrepro version or source)
+    than this process: its numbers could then differ from a serial run.
+    """
+    try:
+        from distributed import Client
+    except ImportError:  # pragma: no cover - dask[distributed] is in requirements.txt
+        raise UsageError("--scheduler needs dask.distributed: pip install 'dask[distributed]'") from None
+    address = address.strip()
+    hint = "start one with `dask scheduler` and workers with `dask worker tcp://HOST:8786 --nthreads 1`"
+    if not address:
+        raise UsageError(f"--scheduler needs an address such as tcp://HOST:8786 ({hint})")
+    try:
+        _probe_scheduler(address, timeout)
+    except ValueError as exc:
+        raise UsageError(f"--scheduler {address!r} is not a scheduler address ({_first_line(exc)}); "
+                         f"expected tcp://HOST:PORT (the default port is 8786)") from None
+    except (OSError, TimeoutError) as exc:
+        raise UsageError(f"no dask scheduler reachable at {address!r} within {timeout:g} s "
+                         f"({_first_line(exc)}); {hint}") from None
+    except Exception as exc:  # noqa: BLE001 - something answered, but not a dask scheduler
+        raise UsageError(f"no dask scheduler answered at {address!r} (a connection opened, but the dask handshake failed: "
+                         f"{_first_line(exc)})") from None
+    try:
+        client = Client(address, timeout=timeout, set_as_default=False)
+    except Exception as exc:  # noqa: BLE001 - e.g. the scheduler went away since the probe
+        raise UsageError(f"cannot connect to the dask scheduler at {address!r}: {_first_line(exc)}") from None
+    try:
+        try:
+            client.wait_for_workers(1, timeout=timeout)
+        except (TimeoutError, OSError):
+            raise UsageError(f"the dask scheduler at {address!r} has no worker after {timeout:g} s; start "
+                             f"workers with `dask worker {address} --nthreads 1`") from None
+        probe = _worker_environment_probe()
+        here = probe()
+        try:
+            there = client.run(probe)
+        except Exception as exc:  # noqa: BLE001
+            raise UsageError(f"cannot check the workers of {address!r}: {_first_line(exc)}") from None
+        for worker, env in sorted(there.items()):
+            diff = [f"{k} {env.get(k)!r} (here {v!r})" for k, v in here.items() if env.get(k) != v]
+            if diff:
+                raise UsageError(f"worker {worker} runs another environment than this process: {'; '.join(diff)}; "
+                                 f"install the same pfrepro (pip install -e . of this commit) and packages "
+                                 f"on every worker and restart it")
+    except BaseException:
+        client.close()
+        raise
+    return client
 
 
 def _claims_table(df) -> str:
