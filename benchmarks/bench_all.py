@@ -197,8 +197,9 @@ WHY = {
     "today": "per-particle linear algebra: a Jacobian or sigma-point set and a d x d solve for every "
              "particle (EKF/UKF proposal, LEDH), the flow's lambda steps (PFPF), the kernel draw "
              "(RPF)",
-    "PF": "the multi-sensor bearings model (two arctan2 and a wrap a particle) and, at small N, the "
-          "per-step numpy overhead",
+    "PF": "work outside the model calls: the resampling scheme's own (residual and multinomial draw "
+          "and search uniforms), the bearings model's two arctan2 and angle wrap a particle (BOT), "
+          "numpy's fixed cost per step at small N",
 }
 
 
