@@ -126,18 +126,18 @@ BOT_REF_N = None
 #: today's methods (issue 22) on the scalar and bearings-only benchmarks -- APF, RPF, EKF-proposal PF, PFPF-EDH --
 #: at the N of the papers' methods (GPFF's paper N), each with its defaults
 TODAY_N = METHOD_N
-#: PFPF-LEDH on the two short scalar benchmarks only: it costs 61 N + 3 model evaluations per step (an h and a
+#: PFPF-LEDH on the two short scalar benchmarks only, because it costs 61 N + 3 model evaluations per step (an h and a
 #: Jacobian per particle in each of 29 pseudo-time steps), so N = 30 (1833 per step) sits inside the PF's range of
 #: costs; on ung_zhang (T = 500) and BOT its per-particle Jacobians cost more CPU time than the budget leaves
 LEDH_N = 30
-#: SMC² on theta_hou: M θ-particles x N_x state particles (its PMMH reruns multiply the cost ~7x on T = 100)
+#: SMC² on theta_hou, M θ-particles x N_x state particles (its PMMH reruns multiply the cost ~7x on T = 100)
 SMC2_SIZE = (50, 20)
-#: the jump-Markov PF on the manoeuvring target: as many particles in all as IMMPF(500) has over its 3 modes
+#: the jump-Markov PF on the manoeuvring target, with as many particles in all as IMMPF(500) has over its 3 modes
 #: (2 model evaluations per particle and step: the IMMPF(500)'s count)
 JMPF_N = 3 * IMM.SCENARIO["N"]
 #: the method families of today (not the papers'; the equal-budget table of these is its own Holm family)
 TODAY_FAMILIES = ("APF", "RPF", "EKF-prop. PF", "PFPF-EDH", "PFPF-LEDH", "SMC²", "JMPF")
-#: a reference better than the PCRB on BOT: PFPF-EDH at growing N on the first runs of the BOT truths
+#: a reference better than the PCRB on BOT, PFPF-EDH at growing N on the first runs of the BOT truths
 BOT_FLOW_REF_N = (500, 2000, 8000)
 BOT_FLOW_REF_RUNS = 10
 #: the largest-N PFPF counts as converged when its estimated excess MSE over the posterior mean (1/N law, see
