@@ -18,6 +18,7 @@ Run from the repository root with the project's environment active::
     python benchmarks/bench_all.py                 # all filters, a few minutes on 2 cores
     python benchmarks/bench_all.py --quick         # fewer repeats and steps
     python benchmarks/bench_all.py --only GPFF     # configurations whose name contains GPFF
+    python benchmarks/bench_all.py --only APF,RPF  # ... any of these
 
 It is a script, not a test: the book does not rerun it (the filters chapter shows the saved
 CSV with its date and machine).
@@ -55,6 +56,7 @@ def configurations():
     from pfrepro.filters.jump_markov_pf import JumpMarkovParticleFilter
     from pfrepro.filters.pfpf import ParticleFlowParticleFilter
     from pfrepro.filters.regularized import RegularizedParticleFilter
+    from pfrepro.filters.smc2 import SMC2
     from pfrepro.experiments import cmspf_ning2011 as CMS
     from pfrepro.experiments import dpf_hou2008 as DPF
     from pfrepro.experiments import immpfor_zhou2017 as IMM
@@ -97,6 +99,7 @@ def configurations():
     add("PFPF(EDH) (BOT)", "today", "bot", 1000, lambda m: ParticleFlowParticleFilter(m, 1000, flow="edh"))
     add("PFPF(LEDH) (BOT)", "today", "bot", 100, lambda m: ParticleFlowParticleFilter(m, 100, flow="ledh"))
     add("JMPF (IMM)", "today", "imm", 1500, lambda s: JumpMarkovParticleFilter(IMM.filter_system(), 1500))
+    add("SMC² 50x20 (UNGM θ)", "today", "theta", None, lambda m: SMC2(m, 50, 20))
     return c
 
 
@@ -228,7 +231,7 @@ def machine() -> str:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="T = 20, 2 repeats, 20 runs")
-    ap.add_argument("--only", default="", help="configurations whose name contains this text")
+    ap.add_argument("--only", default="", help="configurations whose name contains this text (comma: any of them)")
     ap.add_argument("--T", type=int, default=50)
     ap.add_argument("--runs", type=int, default=100)
     ap.add_argument("--repeats", type=int, default=3)
@@ -237,7 +240,8 @@ def main(argv=None):
                     help=f"also save the table and its machine line for the book ({BOOK_CSV.relative_to(ROOT)})")
     a = ap.parse_args(argv)
     T, runs, repeats = (20, 20, 2) if a.quick else (a.T, a.runs, a.repeats)
-    configs = [c for c in configurations() if a.only in c[0] or c[0].startswith("PF systematic")]
+    only = a.only.split(",")
+    configs = [c for c in configurations() if any(o in c[0] for o in only) or c[0].startswith("PF systematic")]
     info = machine()
     df = annotate(measure(configs, T, runs, repeats))
     out = Path(a.out)

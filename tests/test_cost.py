@@ -188,3 +188,66 @@ def test_parameter_broadcast_counts_pairs():
     assert proxy.counts["f"] == 12 + 18 + 18
     proxy.sample_transition(np.zeros((2, 5, 1)), 1, np.full((2, 1, 1), 0.5), np.random.default_rng(0))
     assert proxy.counts["transitions"] == 10
+
+
+# -- today's methods (issue 22): hand counts per step and run ------------------------------------
+def test_todays_particle_filters_hand_counts(ung, bot):
+    """APF: f and a likelihood at the look-ahead point, then a transition and a likelihood (4N);
+    RPF: the bootstrap PF's 2N (the kernel jitter is no model call); EKF-proposal PF: f, h and
+    dh/dx at each particle's transition mean, one likelihood (4N); UKF-proposal PF: f, h at the
+    2n+1 sigma points, one likelihood; PFPF: the EKF alongside (f, Jacobian of f, Jacobian of h:
+    one each), f and a transition per particle, h and its Jacobian at the linearisation point in
+    each pseudo-time step (EDH: one point; LEDH: one per particle), one likelihood per particle."""
+    from pfrepro.filters import (AuxiliaryParticleFilter, GaussianProposalParticleFilter,
+                                 ParticleFlowParticleFilter, RegularizedParticleFilter)
+    m, sim = ung
+    N, runs = 11, sim.runs
+    c = count_model_calls(AuxiliaryParticleFilter(m, N), sim.y)
+    zeros_except(c, f=runs * N * T, likelihoods=2 * runs * N * T, transitions=runs * N * T)
+    c = count_model_calls(RegularizedParticleFilter(m, N), sim.y)
+    zeros_except(c, transitions=runs * N * T, likelihoods=runs * N * T)
+    c = count_model_calls(GaussianProposalParticleFilter(m, N), sim.y)
+    zeros_except(c, f=runs * N * T, h=runs * N * T, jacobian_h=runs * N * T, likelihoods=runs * N * T)
+    mb, sb = bot
+    n = mb.dim_x
+    c = count_model_calls(GaussianProposalParticleFilter(mb, N, proposal="unscented"), sb.y)
+    zeros_except(c, f=sb.runs * N * T, h=sb.runs * N * (2 * n + 1) * T, likelihoods=sb.runs * N * T)
+    S = 7    # pseudo-time steps
+    for flow, pts in (("edh", 1), ("ledh", N)):
+        c = count_model_calls(ParticleFlowParticleFilter(mb, N, flow=flow, n_steps=S), sb.y)
+        r = sb.runs
+        zeros_except(c, jacobian_f=r * T, f=r * (N + 1) * T, transitions=r * N * T,
+                     h=r * S * pts * T, jacobian_h=r * (S * pts + 1) * T, likelihoods=r * N * T)
+    assert cost_counts({"p": ParticleFlowParticleFilter(mb, 100)}, sb.y[:1]).loc["p", "per step"] == 3 * 100 + 61
+
+
+def test_jump_markov_pf_counts_its_mode_models():
+    """The jump-Markov PF moves each particle with its mode's f (one per particle) and weights it
+    once: 2N per step, counted through the system's mode models."""
+    from pfrepro.experiments import immpfor_zhou2017 as IMM
+    from pfrepro.filters import JumpMarkovParticleFilter
+
+    sim = IMM.simulate(runs=2)
+    N = 13
+    c = count_model_calls(JumpMarkovParticleFilter(IMM.filter_system(), N), sim.y[:, :T])
+    zeros_except(c, f=2 * N * T, likelihoods=2 * N * T)
+
+
+def test_smc2_count_is_its_hand_count_per_run():
+    """SMC²: 2 M N_x per PF step, T steps plus the PMMH reruns of its diagnostics, per run
+    (:func:`pfrepro.cost.smc2_evaluations` equals the proxy's count on each run)."""
+    from pfrepro.cost import smc2_evaluations
+    from pfrepro.filters import SMC2
+    from pfrepro.models.linear_theta import LinearTheta
+    from pfrepro.rng import RunStreams
+
+    m = LinearTheta(theta_true=0.7, c=1.0)
+    sim = m.simulate(12, 3, RunStreams.from_entropy(3, 3))
+    f = SMC2(m, 16, 5)
+    res = f.filter(sim.y, RunStreams.from_entropy(4, 3))
+    per_run = smc2_evaluations(res, 16, 5)
+    assert res.diagnostics["pmmh_steps"].max() > 0          # the moves are part of the count
+    for i in range(3):
+        c = count_model_calls(f, sim.y[i:i + 1], RunStreams.from_entropy(4, 1, start=i))
+        zeros_except(c, transitions=c["transitions"], likelihoods=c["likelihoods"])
+        assert c["transitions"] == c["likelihoods"] and c["model_evaluations"] == per_run[i]

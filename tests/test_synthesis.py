@@ -257,3 +257,50 @@ def test_bot_claim_is_decided_under_both_prior_readings():
 def test_plural():
     assert S.plural(1, "claim") == "1 claim" and S.plural(3, "claim") == "3 claims"
     assert S.plural(1, "is", "are") == "1 is" and S.plural(0, "is", "are") == "0 are"
+
+
+# -- today's methods (issue 22) --------------------------------------------------------------------
+def test_todays_methods_are_their_own_family_and_leave_the_papers_verdicts_alone():
+    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "M": 1.2 * BASE, "T1": 1.1 * BASE, "ref": BASE}
+    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "M": 60, "T1": 60}, papers={"M": "gpff_zhang2016"})
+    before = S.verdicts({"fake": fake({k: v for k, v in err.items() if k != "T1"},
+                                      {"PF(10)": 20, "PF(100)": 200, "M": 60}, papers={"M": "gpff_zhang2016"})})
+    r.bench.methods[[m.name for m in r.bench.methods].index("T1")].today = True
+    papers, today = S.verdicts({"fake": r}), S.verdicts({"fake": r}, today=True)
+    assert list(papers["method"]) == ["M"] and list(today["method"]) == ["T1"]
+    pd.testing.assert_frame_equal(papers, before)
+
+
+def test_what_to_use_is_the_cheapest_of_rank_one():
+    rng = np.random.default_rng(5)
+    noise = lambda s: s * rng.standard_normal(RUNS)          # noqa: E731
+    err = {"PF(10)": 3 * BASE, "PF(100)": BASE + noise(1e-3), "cheap": BASE + noise(1e-3),
+           "bad": 2 * BASE, "ref": BASE}
+    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "cheap": 50, "bad": 5}, families={"cheap": "C", "bad": "B"},
+             papers={"bad": "gpff_zhang2016"})
+    r.bench.methods[[m.name for m in r.bench.methods].index("cheap")].today = True
+    w = S.what_to_use({"ung_zhang": r})
+    row = w.iloc[0]
+    assert row["use"] == "cheap" and "PF(100)" in row["also rank 1"]
+    assert row["best paper's method"].startswith("bad (rank") and row["best of today's"].startswith("cheap (rank 1")
+
+
+def test_bot_reference_convergence_rule():
+    """Estimates at N with independent errors of variance c/N: the rule estimates the largest N's excess
+    c/N_max from d² at the middle N and checks the 1/N law's ratio."""
+    rng = np.random.default_rng(3)
+    runs, T = 40, 200
+    truth = rng.standard_normal((runs, T, 4))
+    post = truth + 0.5 * rng.standard_normal((runs, T, 4))   # the posterior mean: MSE 0.25
+    c = 2.0
+    x = {N: post + math.sqrt(c / N) * rng.standard_normal((runs, T, 4)) for N in (500, 2000, 8000)}
+    err = {"PF(100)": np.full(runs, 1.0), "EKF": np.full(runs, 0.5), "PCRB": np.full(runs, 0.1)}
+    r = fake(err, {"PF(100)": 200, "EKF": 4}, ref="PCRB", families={"EKF": "EKF"})
+    out = S.bot_reference_tables({"x_true": truth, "x": x}, r)
+    assert out["excess"] == pytest.approx(c / 8000, rel=0.05)
+    assert out["law_ratio"][0] == pytest.approx(out["law_ratio"][1], rel=0.05)
+    assert out["converged"] and out["excess_share"] < 0.01
+    assert out["methods"].loc["EKF", "MSE / ref."] == pytest.approx(0.5 / (0.25 + c / 8000), rel=0.02)
+    # a filter still far from the posterior mean is not taken as the reference
+    x_bad = {N: post + math.sqrt(400 / N) * rng.standard_normal((runs, T, 4)) for N in (500, 2000, 8000)}
+    assert not S.bot_reference_tables({"x_true": truth, "x": x_bad}, r)["converged"]

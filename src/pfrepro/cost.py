@@ -32,6 +32,10 @@ evaluations (the dual PF's parameter weights), not ``runs``. The proxy counts
 trailing ``dim_theta`` axis, as the models take it; a scalar or a ``(dim_theta,)`` vector
 broadcasts to every state).
 
+A jump-Markov system (``models``: one model per mode) is counted through its mode
+models: the proxy hands out proxies of them that add to the same columns (the jump-Markov
+PF's transition of a particle in mode j is a call of mode j's ``f``).
+
 Calls a model makes to itself (``sample_transition`` calls ``f``,
 ``log_likelihood`` calls ``h``) are not counted twice: the proxy sees only what the
 filter asks. ``model_evaluations`` is the sum of the six columns, a unit-cost model in
@@ -61,7 +65,7 @@ from . import flow as _flow
 from .montecarlo import time_filter_repeats
 
 __all__ = ["COUNTED", "COUNT_COLUMNS", "PRINTED_COLUMNS", "CountingModel", "count_model_calls", "cost_counts",
-           "time_repeats", "time_summary", "median_interval", "imm_evaluations"]
+           "time_repeats", "time_summary", "median_interval", "imm_evaluations", "smc2_evaluations"]
 
 #: counted model method -> column name
 COUNTED = {"sample_transition": "transitions", "log_likelihood": "likelihoods", "f": "f", "h": "h",
@@ -109,6 +113,9 @@ class CountingModel:
 
     def __getattr__(self, name):
         attr = getattr(self._model, name)
+        if name == "models" and isinstance(attr, (list, tuple)):
+            # a jump-Markov system's mode models: their calls count into the same columns
+            return [_SharedCounter(m, self.counts) for m in attr]
         if name not in COUNTED:
             return attr
         column, pos, kw = COUNTED[name], _STATE_ARG[name], _STATE_KW[name]
@@ -132,6 +139,14 @@ class CountingModel:
 
     def __repr__(self) -> str:
         return f"CountingModel({self._model!r})"
+
+
+class _SharedCounter(CountingModel):
+    """A :class:`CountingModel` that adds to another proxy's ``counts`` (a mode model of a system)."""
+
+    def __init__(self, model, counts):
+        object.__setattr__(self, "_model", model)
+        object.__setattr__(self, "counts", counts)
 
 
 @contextmanager
@@ -292,3 +307,29 @@ def imm_evaluations(result, n_particles: int, r: int = 3) -> np.ndarray:
     lik = np.asarray(d["likelihood_evals"], float)
     den = np.asarray(d.get("density_evals", np.zeros_like(lik)), float)
     return r * n_particles * T + lik + den
+
+
+def smc2_evaluations(result, n_theta: int, n_x: int) -> np.ndarray:
+    """Deterministic cost per run of :class:`~pfrepro.filters.smc2.SMC2`, in model evaluations.
+
+    Every PF step of every θ-particle draws N_x transitions and evaluates N_x likelihoods; the
+    filter makes T such steps plus ``pmmh_steps`` (its diagnostic: the PF steps rerun by the
+    particle-marginal Metropolis-Hastings moves, which depend on the data), so a run costs
+    2 M N_x (T + pmmh_steps): what :func:`count_model_calls` counts on that run, for every run
+    at once (the count varies from run to run, unlike the other filters').
+
+    Parameters
+    ----------
+    result : FilterResult
+        Output of ``SMC2.filter`` (``x`` of shape (runs, T, n)).
+    n_theta, n_x : int
+        M and N_x of that filter.
+
+    Returns
+    -------
+    numpy.ndarray
+        (runs,) evaluations per run over the whole horizon.
+    """
+    T = np.asarray(result.x).shape[1]
+    pmmh = np.asarray(result.diagnostics["pmmh_steps"], float)
+    return 2.0 * n_theta * n_x * (T + pmmh)

@@ -69,8 +69,9 @@ import pandas as pd
 from ..bounds import pcrb_linear_dynamics
 from ..choices import FIXED, READING, SWEEP, FreeChoice, over
 from ..claims import ClaimsRegistry, ordering_holds
-from ..cost import cost_counts, time_repeats
-from ..filters import BootstrapParticleFilter, GridFilter
+from ..cost import cost_counts, smc2_evaluations, time_repeats
+from ..filters import (AuxiliaryParticleFilter, BootstrapParticleFilter, GaussianProposalParticleFilter, GridFilter,
+                       JumpMarkovParticleFilter, ParticleFlowParticleFilter, RegularizedParticleFilter, SMC2)
 from ..filters.liu_west import LiuWestFilter
 from ..models import BearingsOnly
 from ..metrics import mse
@@ -88,7 +89,9 @@ __all__ = ["PAPER", "RUNS", "SEEDS", "TIMING_REPEATS", "PF_N", "SCHEMES", "SCHEM
            "build", "run_benchmark", "run_all", "efficient_frontier", "pf_at_cost", "equal_budget", "distance_table",
            "ranking", "verdicts", "frontier", "record_claims", "benchmarks_table", "bot_pcrb", "methods_table",
            "ranking_compact", "paper_lines", "LW_N", "DPF_N", "PCRB_RUNS", "CLAIM_TEXT", "ALL_BENCHMARKS", "build_imm",
-           "run_imm"]
+           "run_imm", "TODAY_N", "LEDH_N", "SMC2_SIZE", "JMPF_N", "TODAY_FAMILIES", "BOT_FLOW_REF_N",
+           "BOT_FLOW_REF_RUNS", "BOT_FLOW_REF_TOL", "bot_flow_reference", "bot_reference_tables", "what_to_use",
+           "PROBLEM_CLASS"]
 
 PAPER = "synthesis"
 RUNS = 100
@@ -120,6 +123,26 @@ METHOD_N = 100
 #: this chapter's budget); PF(2000) is the dearest PF run (it brackets the GPFF's count), and the yardstick is the
 #: PCRB with the filters' prior information (J0 = P0^-1), a bound that no filter need attain
 BOT_REF_N = None
+#: today's methods (issue 22) on the scalar and bearings-only benchmarks -- APF, RPF, EKF-proposal PF, PFPF-EDH --
+#: at the N of the papers' methods (GPFF's paper N), each with its defaults
+TODAY_N = METHOD_N
+#: PFPF-LEDH on the two short scalar benchmarks only, because it costs 61 N + 3 model evaluations per step (an h and a
+#: Jacobian per particle in each of 29 pseudo-time steps), so N = 30 (1833 per step) sits inside the PF's range of
+#: costs; on ung_zhang (T = 500) and BOT its per-particle Jacobians cost more CPU time than the budget leaves
+LEDH_N = 30
+#: SMC² on theta_hou, M θ-particles x N_x state particles (its PMMH reruns multiply the cost ~7x on T = 100)
+SMC2_SIZE = (50, 20)
+#: the jump-Markov PF on the manoeuvring target, with as many particles in all as IMMPF(500) has over its 3 modes
+#: (2 model evaluations per particle and step: the IMMPF(500)'s count)
+JMPF_N = 3 * IMM.SCENARIO["N"]
+#: the method families of today (not the papers'; the equal-budget table of these is its own Holm family)
+TODAY_FAMILIES = ("APF", "RPF", "EKF-prop. PF", "PFPF-EDH", "PFPF-LEDH", "SMC²", "JMPF")
+#: a reference better than the PCRB on BOT, PFPF-EDH at growing N on the first runs of the BOT truths
+BOT_FLOW_REF_N = (500, 2000, 8000)
+BOT_FLOW_REF_RUNS = 10
+#: the largest-N PFPF counts as converged when its estimated excess MSE over the posterior mean (1/N law, see
+#: :func:`bot_reference_tables`) is below this share of its own MSE (fixed before the runs)
+BOT_FLOW_REF_TOL = 0.05
 #: the two readings of the bearings-only start (free choice ``bot_prior``) — the benchmark key of each
 BOT_READINGS = {"offset": "bot", "centred": "bot_centred"}
 #: runs per benchmark where fewer than ``RUNS`` are used (a reading; stated in the chapter)
@@ -134,6 +157,11 @@ NOT_RUN = {
     "resampling schemes on BOT": "each extra PF(1000) on BOT costs ~2.5 CPU-s; the schemes are compared on the "
                                  "three scalar benchmarks",
     "GPFF eq (43) field on BOT": "the paper's BOT filter is the eq (41) field (run with both lambda schedules)",
+    "PFPF-LEDH on ung_zhang and BOT": "61 N + 3 model evaluations per step and N small solves per pseudo-time "
+                                      "step; on T = 500 or a 4-D state it costs more CPU time than the chapter's "
+                                      "budget leaves (run on ung_li and ung_ning)",
+    "UKF-proposal PF": "the EKF-proposal PF stands for the Gaussian-proposal family (the UKF proposal costs 2n + 1 "
+                       "h evaluations per particle: 2.6x the time on BOT in a trial)",
     "large-N PF reference on BOT": "PF(4000) cost ~65 CPU-s on 100 runs in a trial, N = 16000 several times that, "
                                    "beyond the chapter's budget; PF(2000) is the dearest PF run (the GPFF chapter "
                                    "shows PF(4000) and PF(16000)) and the PCRB with J0 = P0^-1 the yardstick",
@@ -184,6 +212,7 @@ class Method:
     paper: str | None = None  # the paper whose proposed method this is (None: a baseline)
     timed: bool = True
     bound: float | None = None  # a reference that is a bound (per-run MSE taken as this constant), not a filter
+    today: bool = False       # one of today's methods (issue 22): not a paper's, not the baseline
 
 
 @dataclass
@@ -213,8 +242,8 @@ def _pf(model, N, scheme="systematic"):
 
 
 def _scalar_methods(model, pf_n, ekf, ukf, n_method=METHOD_N, gpff_variants=("eq43 unif.",),
-                    cms_n=(METHOD_N,)) -> list[Method]:
-    """EKF, UKF, PF frontier, PF schemes, GPFF variants, CMS-PF and ESPF on a scalar UNGM."""
+                    cms_n=(METHOD_N,), ledh_n=None) -> list[Method]:
+    """EKF, UKF, PF frontier, PF schemes, GPFF variants, CMS-PF, ESPF and today's methods on a scalar UNGM."""
     ms = [Method("EKF", "EKF", ekf), Method("UKF", "UKF", ukf)]
     ms += [Method(f"PF({N})", "PF", _pf(model, N)) for N in pf_n]
     ms += [Method(f"PF({SCHEME_N}) {s[:5]}.", f"PF {s}", _pf(model, SCHEME_N, s)) for s in SCHEMES]
@@ -225,7 +254,25 @@ def _scalar_methods(model, pf_n, ekf, ukf, n_method=METHOD_N, gpff_variants=("eq
            for v in gpff_variants]
     ms += [Method(f"CMS-PF({N})", "CMS-PF", CMS.cms(model, N), paper="cmspf_ning2011") for N in cms_n]
     ms += [Method(f"ESPF({n_method})", "ESPF", CMS.espf(model, n_method))]
+    return ms + _today_methods(model, ledh_n)
+
+
+def _today_methods(model, ledh_n: int | None = None) -> list[Method]:
+    """Today's methods at :data:`TODAY_N` with their defaults (PFPF-LEDH at ``ledh_n`` where given)."""
+    N = TODAY_N
+    ms = [Method(f"APF({N})", "APF", AuxiliaryParticleFilter(model, N), today=True),
+          Method(f"RPF({N})", "RPF", RegularizedParticleFilter(model, N), today=True),
+          Method(f"EKF-prop. PF({N})", "EKF-prop. PF", GaussianProposalParticleFilter(model, N), today=True),
+          Method(f"PFPF-EDH({N})", "PFPF-EDH", ParticleFlowParticleFilter(model, N, flow="edh"), today=True)]
+    if ledh_n:
+        ms.append(Method(f"PFPF-LEDH({ledh_n})", "PFPF-LEDH",
+                         ParticleFlowParticleFilter(model, ledh_n, flow="ledh"), today=True))
     return ms
+
+
+def _imm_today_methods() -> list[Method]:
+    """The jump-Markov PF on the IMM chapter's filter model set (:data:`JMPF_N` particles in all)."""
+    return [Method(f"JMPF({JMPF_N})", "JMPF", JumpMarkovParticleFilter(IMM.filter_system(), JMPF_N), today=True)]
 
 
 def build_imm(N_eq: int) -> Benchmark:
@@ -238,6 +285,7 @@ def build_imm(N_eq: int) -> Benchmark:
     ms = [Method("IMM-EKF", "IMM-EKF", IMM.imm_ekf()), Method("IMM-UKF", "IMM-UKF", IMM.imm_ukf()),
           Method(f"IMMPF({n})", "IMMPF", IMM.immpf(N=n)), Method(f"IMMPF({N_eq})", "IMMPF", IMM.immpf(N=N_eq)),
           Method(f"IMMPFOR({n})", "IMMPFOR", IMM.immpfor(N=n), paper=IMM.PAPER)]
+    ms += _imm_today_methods()
     ref = Method(f"IMMPF({IMM.SCENARIO['N_fig5']})", "reference", IMM.immpf(N=IMM.SCENARIO["N_fig5"]), timed=False)
     return Benchmark("imm_zhou", "manoeuvring target, 3 modes", IMM.PAPER, IMM.truth_system(),
                      IMM.SCENARIO["duration"], ms, ref, "large-N IMMPF (N = 2000 per mode)",
@@ -251,8 +299,22 @@ def _imm_names(N_eq: int) -> dict:
             "IMM-EKF": "IMM-EKF", "IMM-UKF": "IMM-UKF", "IMMPF(2000)": f"IMMPF({n5})"}
 
 
+def _imm_today_errors(runs: int, executor=None) -> pd.DataFrame:
+    """Per-run position MSE of today's methods on the IMM chapter's truths (its seed, its truth system,
+    :func:`pfrepro.montecarlo.run_monte_carlo`'s per-run streams: the record's runs)."""
+    ms = _imm_today_methods()
+    chunks = None if executor is None else math.ceil(runs / BOT_CHUNK_RUNS)
+    mc = run_monte_carlo(IMM.truth_system(), {m.name: m.filt for m in ms}, IMM.SCENARIO["duration"], runs,
+                         SEEDS["imm_zhou"], executor=executor, progress=False, chunks=chunks)
+    out = {}
+    for m in ms:
+        e = IMM.errors(mc.x_true, mc.results[m.name].x)
+        out[m.name] = np.mean(e * e, axis=1)
+    return pd.DataFrame(out)
+
+
 def run_imm(runs: int = RUNS, *, executor=None, timing_repeats: int = TIMING_REPEATS, time_it: bool = True,
-            record: dict | None = None) -> "BenchResult":
+            record: dict | None = None, today_err: pd.DataFrame | None = None) -> "BenchResult":
     """The manoeuvring-target benchmark. Errors and particle-filter costs from the IMM chapter's
     paper-scale runs of this build (:func:`~pfrepro.experiments.immpfor_zhou2017.load_synthesis_record`),
     or, without them, from the same runs made here (same seeds and truths, so the same numbers);
@@ -265,10 +327,19 @@ def run_imm(runs: int = RUNS, *, executor=None, timing_repeats: int = TIMING_REP
     names = _imm_names(N_eq)
     record_key = {v: k for k, v in names.items()}
     err = pd.DataFrame({names[k]: rec[f"mse/{k}"] for k in IMM.SYNTHESIS_FILTERS})
+    # today's methods run here, on the same truths (the record keeps the chapter's filters only)
+    today_err = _imm_today_errors(runs, executor) if today_err is None else today_err
+    for c in today_err.columns:
+        err[c] = today_err[c].to_numpy()
     y1 = IMM.simulate(runs=1).y            # run 0 (per-run streams: the record's run 0)
     rows = {}
     steps = min(COUNT_STEPS, y1.shape[1])
     for m in bench.methods + [bench.reference]:
+        if m.today:     # counted as every other filter of the book (pfrepro.cost), on run 0
+            cc = cost_counts({m.name: m.filt}, y1[:, :steps], rng_seed=bench.seed)
+            rows[m.name] = {"model evals / step": float(cc.loc[m.name, "model_evaluations"]) / steps,
+                            "likelihoods / step": float(cc.loc[m.name, "likelihoods"]) / steps}
+            continue
         key = record_key[m.name]
         if f"cost/{key}" in rec:
             rows[m.name] = {"model evals / step": float(rec[f"cost/{key}"]), "likelihoods / step": np.nan}
@@ -296,13 +367,13 @@ def build(key: str) -> Benchmark:
     if key == "ung_li":
         m = LI.make_model(1)
         f = LI.make_filters(m, ("EKF", "UKF", "Exact"))
-        ms = _scalar_methods(m, PF_N[key], f["EKF"], f["UKF"])
+        ms = _scalar_methods(m, PF_N[key], f["EKF"], f["UKF"], ledh_n=LEDH_N)
         return Benchmark(key, "UNGM model 1, Q = 10", LI.PAPER, m, LI.T, ms,
                          Method("Grid (exact)", "reference", f["Exact"], timed=False), "exact grid posterior mean")
     if key == "ung_ning":
         m = CMS.model()
         ms = _scalar_methods(m, PF_N[key], CMS.ekf(m), CMS.ukf(m),
-                             cms_n=(METHOD_N, CMS.ASSUMPTIONS["N_table2"]))
+                             cms_n=(METHOD_N, CMS.ASSUMPTIONS["N_table2"]), ledh_n=LEDH_N)
         return Benchmark(key, "UNGM, σ_w² = 1", CMS.PAPER, m, CMS.T, ms,
                          Method("Grid (exact)", "reference", CMS.grid(m), timed=False), "exact grid posterior mean")
     if key == "theta_hou":
@@ -311,6 +382,8 @@ def build(key: str) -> Benchmark:
               for N in LW_N]
         ms += [Method(f"DPF({N}+{N})", "DPF", DPF.dpf_51(m, n_x=N, n_theta=N, cap=float(N)), paper="dpf_hou2008")
                for N in DPF_N]
+        M, Nx = SMC2_SIZE
+        ms += [Method(f"SMC²({M}×{Nx})", "SMC²", SMC2(m, M, Nx), today=True)]
         return Benchmark(key, "UNGM, unknown θ", DPF.PAPER, m, DPF.S51["T"], ms,
                          Method("θ grid (exact)", "reference", DPF.grid_51(m), timed=False),
                          "exact θ posterior mean (grid)", error="theta", baseline="Liu-West")
@@ -325,6 +398,7 @@ def build(key: str) -> Benchmark:
                Method("GPFF eq41 exp.", "GPFF eq41 exp.",
                       GPFF._gpff(m, METHOD_N, field="eq41", schedule="exponential", on_divergence="drop"),
                       paper="gpff_zhang2016")]
+        ms += _today_methods(m)
         # the bound with the filters' own prior information J0 = P0^-1, on the data's truths (from x0)
         ref = Method("PCRB", "bound", None, timed=False,
                      bound=float(pcrb_linear_dynamics(m, 200, PCRB_RUNS, truth_rng(SEEDS["bot_pcrb"]),
@@ -388,7 +462,14 @@ def _monte_carlo(bench: Benchmark, runs: int, executor) -> tuple[pd.DataFrame, n
         err[bench.reference.name] = bench.reference.bound
     ess1 = {n: np.asarray(res.diagnostics["ess"])[:, 0].copy() for n, res in mc.results.items()
             if isinstance(bench_filter(bench, n), BootstrapParticleFilter)}
-    return err, mc.sim.y[:1], ess1
+    # SMC²'s count depends on the data (its PMMH reruns): the mean over the runs of its exact per-run count
+    # (pfrepro.cost.smc2_evaluations, tested equal to cost_counts run by run), not run 0's alone
+    per_step = {}
+    for n, res in mc.results.items():
+        f = bench_filter(bench, n)
+        if isinstance(f, SMC2):
+            per_step[n] = float(np.mean(smc2_evaluations(res, f.n_theta, f.n_x))) / bench.T
+    return err, mc.sim.y[:1], ess1, per_step
 
 
 def bench_filter(bench: Benchmark, name: str):
@@ -399,7 +480,7 @@ def bench_filter(bench: Benchmark, name: str):
     raise KeyError(name)
 
 
-def _counts(bench: Benchmark, y1) -> pd.DataFrame:
+def _counts(bench: Benchmark, y1, per_step: dict | None = None) -> pd.DataFrame:
     """Model evaluations and likelihoods per step of every method (and a filter reference) on the
     first :data:`COUNT_STEPS` steps of run 0 (:func:`pfrepro.cost.cost_counts`; deterministic)."""
     filters = {m.name: m.filt for m in bench.methods}
@@ -407,8 +488,11 @@ def _counts(bench: Benchmark, y1) -> pd.DataFrame:
         filters[bench.reference.name] = bench.reference.filt
     y = y1[:, :COUNT_STEPS]
     cc = cost_counts(filters, y, rng_seed=bench.seed)
-    return pd.DataFrame({"model evals / step": cc["model_evaluations"] / y.shape[1],
-                         "likelihoods / step": cc["likelihoods"] / y.shape[1]})
+    out = pd.DataFrame({"model evals / step": cc["model_evaluations"] / y.shape[1],
+                        "likelihoods / step": cc["likelihoods"] / y.shape[1]})
+    for name, v in (per_step or {}).items():   # a data-dependent count: its mean over the runs
+        out.loc[name] = [v, v / 2.0]
+    return out
 
 
 def _time_per_step(filters: dict, y1, seed: int, repeats: int) -> pd.Series:
@@ -417,8 +501,8 @@ def _time_per_step(filters: dict, y1, seed: int, repeats: int) -> pd.Series:
     return time_repeats(filters, y, seed, repeats).median() / y.shape[1]
 
 
-def _finish(bench: Benchmark, err, y1, ess1, timing_repeats: int, time_it: bool) -> BenchResult:
-    counts = _counts(bench, y1)
+def _finish(bench: Benchmark, err, y1, ess1, per_step, timing_repeats: int, time_it: bool) -> BenchResult:
+    counts = _counts(bench, y1, per_step)
     timed = {m.name: m.filt for m in bench.methods if m.timed}
     if time_it and timed:
         seconds = _time_per_step(timed, y1, bench.seed, timing_repeats)
@@ -449,18 +533,22 @@ def run_all(keys=ALL_BENCHMARKS, runs: int = RUNS, *, executor=None,
     runs = check_positive_int(runs, "runs")
     imm = "imm_zhou" in keys
     benches = {k: build(k) for k in keys if k != "imm_zhou"}
+    imm_today = None
     if executor is None:
         mcs = {k: _monte_carlo(b, min(runs, RUNS_OF.get(k, runs)), None) for k, b in benches.items()}
     else:
         from concurrent.futures import ThreadPoolExecutor
 
-        with ThreadPoolExecutor(len(benches)) as tp:
+        with ThreadPoolExecutor(len(benches) + imm) as tp:
             futs = {k: tp.submit(_monte_carlo, b, min(runs, RUNS_OF.get(k, runs)), executor)
                     for k, b in benches.items()}
+            fut_imm = tp.submit(_imm_today_errors, runs, executor) if imm else None
             mcs = {k: f.result() for k, f in futs.items()}
+            imm_today = fut_imm.result() if imm else None
     out = {k: _finish(b, *mcs[k], timing_repeats, time_it) for k, b in benches.items()}
     if imm:
-        out["imm_zhou"] = run_imm(runs, executor=executor, timing_repeats=timing_repeats, time_it=time_it)
+        out["imm_zhou"] = run_imm(runs, executor=executor, timing_repeats=timing_repeats, time_it=time_it,
+                                  today_err=imm_today)
     return out
 
 
@@ -643,17 +731,21 @@ def _word(e, significant=None):
     return _WORD[e["holds"]]
 
 
-def verdicts(results: dict, families=None, alpha: float = ALPHA) -> pd.DataFrame:
+def verdicts(results: dict, families=None, alpha: float = ALPHA, today: bool = False) -> pd.DataFrame:
     """One row per (benchmark, method of a paper, plus UKF/ESPF baselines where given):
     distance to the optimum and the equal-budget comparison by count and by time.
 
     Significance is family-wise: Holm's rule at ``alpha`` over all rows' comparisons on one cost
-    axis (``p count`` / ``p time`` unadjusted, ``sig count`` / ``sig time`` the decisions)."""
+    axis (``p count`` / ``p time`` unadjusted, ``sig count`` / ``sig time`` the decisions).
+    ``today=False``: the book's methods without today's (the family the claims rest on, as it was
+    before today's methods were added); ``today=True``: today's methods only, their own family."""
     rows, evals = [], []
     for key, r in results.items():
         dt = distance_table(r)
         for m in r.bench.methods:
             if m.family in ("PF",) or m.family == r.bench.baseline:
+                continue
+            if m.today != today:
                 continue
             if families is not None and m.family not in families:
                 continue
@@ -872,3 +964,94 @@ def paper_lines(results: dict, vt: pd.DataFrame | None = None) -> dict:
         parts = [f"{w} in {c} of {n}" for w, c in cnt.items()]
         out[paper] = ("by count: " + ", ".join(parts) + ".") if n else "not run."
     return out
+
+
+
+# ------------------------------------------------------------------ a reference on bearings-only (issue 22)
+def bot_flow_reference(runs: int = BOT_FLOW_REF_RUNS, Ns=BOT_FLOW_REF_N, *, executor=None, key: str = "bot") -> dict:
+    """PFPF-EDH at each N of ``Ns`` on the first ``runs`` truths of the BOT benchmark ``key`` (its seed and
+    per-run streams: the same truths as the benchmark's first runs). Returns ``x_true`` (runs, T, 4) and
+    ``x`` {N: estimates (runs, T, 4)}. One run per pool task (a large cloud falls out of the cache)."""
+    m = GPFF.BearingsOnly.zhang2016()
+    if key == "bot_centred":
+        m = BearingsOnly(m0=m.x0)
+    filters = {f"PFPF-EDH({N})": ParticleFlowParticleFilter(m, N, flow="edh") for N in Ns}
+    mc = run_monte_carlo(m, filters, 200, runs, SEEDS["bot"], executor=executor, progress=False,
+                         chunks=None if executor is None else runs)
+    return {"x_true": mc.x_true, "x": {N: mc.results[f"PFPF-EDH({N})"].x for N in Ns}}
+
+
+def bot_reference_tables(ref: dict, r: BenchResult, tol: float = BOT_FLOW_REF_TOL) -> dict:
+    """Is the largest-N PFPF-EDH of :func:`bot_flow_reference` a reference, and how far is every BOT method from it?
+
+    ``convergence``: per N, the mean MSE over the subset's runs (± SE), and d²(N) = the mean over runs of the
+    time- and component-averaged squared distance between the estimates at N and at N_max (the MSE's units).
+    With independent Monte Carlo errors of variance c/N, E d²(N) = c (1/N + 1/N_max), so the excess MSE of the
+    N_max estimate over the posterior mean's is c/N_max = d²(N_mid) N_mid / (N_mid + N_max) (N_mid: the next
+    largest N); ``law_ratio`` sets the observed d²(N_1)/d²(N_mid) beside the 1/N law's prediction.
+    ``converged``: that excess is below ``tol`` of the N_max MSE. ``methods``: every finite method of the
+    benchmark ``r`` on the same runs, MSE / MSE(PFPF-EDH(N_max)) (ratio of means, delta-method SE)."""
+    Ns = sorted(ref["x"])
+    xt = ref["x_true"]
+    nmax, nmid = Ns[-1], Ns[-2]
+    runs = xt.shape[0]
+    big = ref["x"][nmax]
+    rows = []
+    for N in Ns:
+        e = mse(xt, ref["x"][N])
+        d2 = np.mean((ref["x"][N] - big) ** 2, axis=(1, 2))
+        rows.append({"N": N, "MSE": float(e.mean()), "SE": float(e.std(ddof=1) / math.sqrt(runs)),
+                     "d² to N_max": float(d2.mean()), "d² SE": float(d2.std(ddof=1) / math.sqrt(runs))})
+    conv = pd.DataFrame(rows).set_index("N")
+    excess = conv.loc[nmid, "d² to N_max"] * nmid / (nmid + nmax)
+    mse_max = conv.loc[nmax, "MSE"]
+    pred = (1 / Ns[0] + 1 / nmax) / (1 / nmid + 1 / nmax)
+    obs = conv.loc[Ns[0], "d² to N_max"] / conv.loc[nmid, "d² to N_max"]
+    e_ref = mse(xt, big)
+    rows = []
+    for m in r.bench.methods:
+        v = r.err[m.name].to_numpy()[:runs]
+        if not np.all(np.isfinite(v)):
+            continue
+        ratio, se = _ratio(v, e_ref)
+        rows.append({"method": m.name, "family": m.family, "MSE / ref.": ratio, "SE": se,
+                     "evals/step": float(r.counts.loc[m.name, "model evals / step"])})
+    meth = pd.DataFrame(rows).set_index("method").sort_values("MSE / ref.")
+    return {"convergence": conv, "excess": float(excess), "excess_share": float(excess / mse_max),
+            "converged": bool(excess / mse_max < tol), "law_ratio": (float(obs), float(pred)),
+            "n_max": nmax, "runs": runs, "methods": meth, "pcrb_over_ref": float(r.err[r.ref].iloc[0] / e_ref.mean())}
+
+
+# ------------------------------------------------------------------------------ what to use (issue 22)
+#: problem class of each benchmark (the closing table of the synthesis)
+PROBLEM_CLASS = {"ung_zhang": "scalar, strongly nonlinear (UNGM, Q = R = 1)",
+                 "ung_li": "scalar, strongly nonlinear (UNGM, Q = 10)",
+                 "ung_ning": "scalar, strongly nonlinear (UNGM, σ_w² = 1)",
+                 "bot": "bearings-only, prior offset from the truth",
+                 "bot_centred": "bearings-only, prior centred (reading)",
+                 "theta_hou": "unknown static parameter",
+                 "imm_zhou": "manoeuvring target"}
+
+
+def what_to_use(results: dict, alpha: float = ALPHA) -> pd.DataFrame:
+    """Per benchmark, the method that reaches the best accuracy shown at the least cost: among the methods
+    of rank 1 of :func:`ranking` (none shown better, Holm over all pairs), the one with the fewest model
+    evaluations per step. With it: its MSE / reference, its count, the other rank-1 methods (all tied
+    with it), the best paper's method and the best of today's methods with their ranks."""
+    rows = []
+    for key, r in results.items():
+        rk = ranking(r, alpha=alpha)
+        fam = {m.name: m for m in r.bench.methods}
+        top = rk[rk["rank"] == 1]
+        pick = top["evals/step"].astype(float).idxmin()
+        def best(pred):
+            ok = np.array([pred(fam[n]) for n in rk.index], bool) & np.isfinite(rk["rank"].to_numpy(float))
+            return rk.index[ok][0] if ok.any() else None
+        bp, bt = best(lambda m: m.paper is not None), best(lambda m: m.today)
+        fmt = lambda n: "–" if n is None else f"{n} (rank {rk.loc[n, 'rank']:.0f}, {rk.loc[n, 'MSE / opt.']:.3g})"
+        rows.append({"problem": PROBLEM_CLASS.get(key, key), "benchmark": key, "use": pick,
+                     "MSE / ref.": f"{rk.loc[pick, 'MSE / opt.']:.3g} ± {rk.loc[pick, 'SE']:.2g}",
+                     "evals/step": f"{rk.loc[pick, 'evals/step']:.0f}",
+                     "also rank 1": ", ".join(n for n in top.index if n != pick) or "–",
+                     "best paper's method": fmt(bp), "best of today's": fmt(bt)})
+    return pd.DataFrame(rows).set_index("problem")

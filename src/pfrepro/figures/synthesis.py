@@ -19,6 +19,9 @@ STYLE = {
     "GPFF eq43 unif.": ("s", "C0"), "GPFF eq43 exp.": ("D", "C0"), "GPFF eq41 unif.": ("s", "C9"),
     "GPFF eq41 exp.": ("D", "C9"), "CMS-PF": ("*", "C3"), "ESPF": ("P", "C1"), "DPF": ("*", "C2"),
     "IMMPF": ("o", "black"), "IMM-EKF": ("x", "0.35"), "IMM-UKF": ("+", "0.35"), "IMMPFOR": ("*", "C4"),
+    # today's methods (issue 22): hollow coloured markers (baselines of the chapter, not papers' methods)
+    "APF": ("h", "C5"), "RPF": ("d", "C6"), "EKF-prop. PF": ("p", "C7"), "PFPF-EDH": ("X", "C8"),
+    "PFPF-LEDH": ("X", "C4"), "SMC²": ("H", "C5"), "JMPF": ("h", "C6"),
 }
 
 

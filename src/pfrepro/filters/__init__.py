@@ -18,5 +18,17 @@ __all__ = ["Filter", "FilterResult", "GaussianFilter", "FilterDivergenceError", 
            "unscented_transform", "BootstrapParticleFilter", "normalize_log_weights", "GridFilter", "GaussianParticleFlowFilter",
            "resample", "multinomial_resample", "stratified_resample", "systematic_resample",
            "residual_resample", "offspring_counts", "effective_sample_size", "RESAMPLING_SCHEMES",
-           "CMSParticleFilter", "OracleCMSParticleFilter", "EvolutionSamplingParticleFilter"]
+           "CMSParticleFilter", "OracleCMSParticleFilter", "EvolutionSamplingParticleFilter",
+           "AuxiliaryParticleFilter",
+           "RegularizedParticleFilter",
+           "GaussianProposalParticleFilter",
+           "ParticleFlowParticleFilter",
+           "JumpMarkovParticleFilter",
+           "SMC2"]
 from .dual_pf import DualParticleFilter; from .dual_ekf import DualExtendedKalmanFilter; from .liu_west import LiuWestFilter; from .theta_grid import ThetaGridReference  # noqa: E402,E702,F401
+from .auxiliary import AuxiliaryParticleFilter  # noqa: E402
+from .regularized import RegularizedParticleFilter  # noqa: E402
+from .gaussian_proposal import GaussianProposalParticleFilter  # noqa: E402
+from .pfpf import ParticleFlowParticleFilter  # noqa: E402
+from .jump_markov_pf import JumpMarkovParticleFilter  # noqa: E402
+from .smc2 import SMC2  # noqa: E402

@@ -76,7 +76,8 @@ class JumpMarkovParticleFilter(Filter):
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
         y = self._prepare(y, rng)
         runs, T, _ = y.shape
-        sysm, N, n, r = self.system, self.n_particles, self.system.dim_x, self.system.r
+        # self.model (the system): a cost count's proxy sees the mode models' and the likelihood's calls
+        sysm, N, n, r = self.model, self.n_particles, self.system.dim_x, self.system.r
         counts_of = resampling_counts_function(self.resampling)
         x = self.sample_prior(rng, (runs, N))
         mode = self._draw_modes(self._cum_init, rng.random((runs, N)))
