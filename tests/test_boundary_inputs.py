@@ -73,6 +73,12 @@ def test_monte_carlo_result_unknown_filter_name_lists_the_names():
     with pytest.raises(KeyError, match=r"no filter named 'nope'.*\['PF'\]"):
         res.mse("nope")
     assert res.n_diverged() == {"PF": 0}
+    # a run counts as lost once any of its estimates is non-finite; it counts once
+    res.results["PF"].x[1, 2, 0] = np.nan
+    assert res.n_diverged() == {"PF": 1}
+    res.results["PF"].x[1, :] = np.inf
+    res.results["PF"].x[0, 0] = np.nan
+    assert res.n_diverged() == {"PF": 2}
 
 
 def test_run_streams_checks():
