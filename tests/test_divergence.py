@@ -191,3 +191,20 @@ def test_gpff_divergence_at_step_1_is_counted_and_drop_is_silent():
         warnings.simplefilter("ignore")
         gone = GaussianParticleFlowFilter(m, 50, return_cov=True).filter(y, streams())
     assert gone.diagnostics["n_diverged"] == 3 and np.all(np.isnan(gone.x)) and np.all(np.isnan(gone.P))
+
+
+def test_gpff_prior_statistics_of_a_broken_run_is_nan_in_that_run_only():
+    """A run whose cloud has no covariance square root (NaN particle) gets NaN moments in its
+    own slot; the batch does not raise and the other run's numbers are those it has alone."""
+    from pfrepro.models import BearingsOnly
+
+    m = BearingsOnly.zhang2016()
+    g = GaussianParticleFlowFilter(m, 20)
+    x = g.sample_prior(np.random.default_rng(0), (2, 20))
+    x[1, 3] = np.nan
+    with np.errstate(all="ignore"):
+        out = g.prior_statistics(x)
+    alone = g.prior_statistics(x[:1])
+    for a, b in zip(out, alone):
+        np.testing.assert_array_equal(a[:1], b)
+        assert np.all(np.isnan(a[1]))
