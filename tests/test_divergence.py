@@ -208,3 +208,11 @@ def test_gpff_prior_statistics_of_a_broken_run_is_nan_in_that_run_only():
     for a, b in zip(out, alone):
         np.testing.assert_array_equal(a[:1], b)
         assert np.all(np.isnan(a[1]))
+
+
+def test_gpff_raise_names_at_most_ten_runs():
+    from pfrepro.models import UNGM
+
+    y = np.full((12, 2, 1), 1e200)
+    with pytest.raises(FilterDivergenceError, match=r"step 1 in runs \[0, 1, 2, 3, 4, 5, 6, 7, 8, 9\] \("):
+        GaussianParticleFlowFilter(UNGM.zhang2016(), 10, on_divergence="raise").filter(y, filter_streams(1, "g", 12))
