@@ -555,3 +555,34 @@ def test_dpf_chapter_pairs_only_through_the_run_set_check():
     src = (Path(__file__).resolve().parents[1] / "book" / "50_dpf.md").read_text(encoding="utf-8")
     assert "paired_difference(" not in src
     assert src.count("paired(") > 10
+
+
+# -- mutation-testing survivors (issue 21): diagnostics of Liu-West, the dual EKF's checks ------
+def test_liu_west_diagnostics_are_consistent_and_flag_the_outlier_step():
+    """θ's weighted variance is a variance about θ's mean (at most (hi - lo)^2 / 4 plus the
+    kernel's jitter, far below 4 E[θ]^2 here); the median lies between the outer quantiles;
+    1 <= ESS <= N; a 1e200 outlier at step 5 of run 1 is flagged at that step only;
+    theta_quantiles() is the stored array with the level axis first."""
+    m = LinearTheta(theta_true=0.7, Q=1.0, R=0.5, c=1.0)
+    y = m.simulate(8, 2, np.random.default_rng(0)).y
+    y[1, 4] = 1e200
+    f = LiuWestFilter(m, 200)
+    with np.errstate(all="ignore"):                      # (numpy's overflow warnings on the 1e200)
+        r = f.filter(y, np.random.default_rng(1))
+    d = r.diagnostics
+    lo, hi = m.bounds
+    assert np.all(d["theta_var"] > 0) and np.all(d["theta_var"] < (hi - lo) ** 2 / 4 * 1.5)
+    q = f.theta_quantiles(r)
+    assert q.shape == (3, 2, 8)
+    for i in range(3):
+        np.testing.assert_array_equal(q[i], d["theta_quantiles"][..., i])
+    assert np.all(q[0] <= q[1]) and np.all(q[1] <= q[2])
+    assert np.all((d["ess"] >= 1 - 1e-9) & (d["ess"] <= 200 + 1e-9))
+    assert d["collapsed"][1, 4] and d["collapsed"].sum() == 1
+
+
+def test_dual_ekf_q_min_must_be_nonnegative():
+    from pfrepro.experiments.dpf_hou2008 import model_51
+
+    with pytest.raises(ValueError, match="q_min"):
+        DualExtendedKalmanFilter(model_51(), 0.5, 0.1, q_min=-1e-3)

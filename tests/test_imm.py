@@ -539,3 +539,11 @@ def test_generated_prose_sign_and_plural():
     assert "exceeds" in compare_sentence(10.0, 2.0, "A", "B") and "+10.0" in compare_sentence(10.0, 2.0, "A", "B")
     assert "is below" in compare_sentence(-10.0, 2.0, "A", "B")
     assert "within two standard errors" in compare_sentence(1.0, 2.0, "A", "B")
+
+
+def test_put_rows_converts_values_to_the_arrays_dtype():
+    from pfrepro.filters.imm import _put_rows
+
+    a = np.zeros((4, 3))
+    _put_rows(a, np.array([2, 0]), np.array([[1, 2, 3], [4, 5, 6]], dtype=np.int64))
+    np.testing.assert_array_equal(a, [[4, 5, 6], [0, 0, 0], [1, 2, 3], [0, 0, 0]])
