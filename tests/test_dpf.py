@@ -586,3 +586,31 @@ def test_dual_ekf_q_min_must_be_nonnegative():
 
     with pytest.raises(ValueError, match="q_min"):
         DualExtendedKalmanFilter(model_51(), 0.5, 0.1, q_min=-1e-3)
+
+
+def test_theta_grid_quantiles_layout_and_order():
+    m = LinearTheta(theta_true=0.7, Q=1.0, R=0.5, c=1.0)
+    y = m.simulate(4, 2, np.random.default_rng(0)).y
+    g = ThetaGridReference(m, n_theta=21, x_bounds=(-12, 16), n_grid=201)
+    r = g.filter(y)
+    q = g.theta_quantiles(r)
+    assert q.shape == (3, 2, 4)
+    for i in range(3):
+        np.testing.assert_array_equal(q[i], r.diagnostics["theta_quantiles"][..., i])
+    assert np.all(q[0] <= r.diagnostics["theta"]) and np.all(r.diagnostics["theta"] <= q[2])
+    np.testing.assert_array_equal(g.theta_quantiles(r, [0.025, 0.5, 0.975]), q)
+
+
+def test_gauss_logpdf_against_scipy():
+    """log N(nu; 0, S) of the dual PF, scalar and 2-D branches, against scipy."""
+    from scipy.stats import multivariate_normal
+
+    from pfrepro.filters.dual_pf import _gauss_logpdf
+
+    rng = np.random.default_rng(0)
+    for m in (1, 2, 3):
+        A = rng.standard_normal((4, m, m))
+        S = A @ np.swapaxes(A, -1, -2) + 0.5 * np.eye(m)
+        nu = rng.standard_normal((4, m))
+        ref = [multivariate_normal(np.zeros(m), S[i]).logpdf(nu[i]) for i in range(4)]
+        np.testing.assert_allclose(_gauss_logpdf(nu, S), ref, rtol=1e-12)
