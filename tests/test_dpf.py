@@ -614,3 +614,26 @@ def test_gauss_logpdf_against_scipy():
         nu = rng.standard_normal((4, m))
         ref = [multivariate_normal(np.zeros(m), S[i]).logpdf(nu[i]) for i in range(4)]
         np.testing.assert_allclose(_gauss_logpdf(nu, S), ref, rtol=1e-12)
+
+
+def test_predictive_weight_on_a_3d_state_uses_F_P_F_transpose():
+    """The predictive parameter weight log N(z; h(m), H (F P F^T + Q) H^T + R) written out with
+    the model's Jacobians on the 3-D re-entry state, where F is not symmetric (F P F without the
+    transpose agrees on every scalar model)."""
+    m = Reentry()
+    f = DualParticleFilter(m, 10, 10, weight="predictive")
+    th = np.array([[0.0005, 0.001, 0.0015]])
+    x_prev = np.asarray(m.m0, float)[None]
+    P_prev = np.asarray(m.P0, float)[None] * 2.0
+    z = m.h(x_prev + 0.1)
+    got = f.parameter_loglik(z, th, x_prev, P_prev, None, th[0, 1:2], 1)[0]
+    F = m.jacobian_f(x_prev, 1, th[:, 1:2])[0]
+    assert not np.allclose(F, F.T)
+    Pm = F @ P_prev[0] @ F.T + m.Q
+    for j in range(3):
+        mj = m.f(x_prev[:, None, :], 1, th[:, j:j + 1, None])[0, 0]
+        H = m.jacobian_h(mj[None])[0]
+        S = H @ Pm @ H.T + m.R
+        nu = m.residual_y(z[0], m.h(mj))
+        want = -0.5 * (nu @ np.linalg.solve(S, nu) + np.log(np.linalg.det(2 * np.pi * S)))
+        assert got[j] == pytest.approx(want, rel=1e-9)
