@@ -637,3 +637,41 @@ def test_predictive_weight_on_a_3d_state_uses_F_P_F_transpose():
         nu = m.residual_y(z[0], m.h(mj))
         want = -0.5 * (nu @ np.linalg.solve(S, nu) + np.log(np.linalg.det(2 * np.pi * S)))
         assert got[j] == pytest.approx(want, rel=1e-9)
+
+
+def test_dpf_state_estimates_follow_the_kalman_filter_when_theta_is_known():
+    """θ known to 1e-6: the dual PF's state filter is a bootstrap PF on a linear-Gaussian model,
+    so estimate k is the Kalman filter's posterior mean at step k (within Monte Carlo error);
+    diagnostics: ESS of both filters in [1, N], the Beta-fit counts add up to at most T."""
+    m = LinearTheta(theta_true=0.7, bounds=(0.7 - 1e-6, 0.7 + 1e-6), Q=1.0, R=1.0, m0=0.0, P0=4.0, c=1.0)
+    sim = m.simulate(4, 1, np.random.default_rng(9))
+    N = 20_000
+    f = DualParticleFilter(m, N, 50)
+    r = f.filter(sim.y, np.random.default_rng(10))
+    x, P = 0.0, 4.0
+    for k in range(4):
+        xm, Pm = 0.7 * x + 1.0, 0.49 * P + 1.0
+        K = Pm / (Pm + 1.0)
+        x, P = xm + K * (sim.y[0, k, 0] - xm), (1 - K) * Pm
+        assert r.x[0, k, 0] == pytest.approx(x, abs=5 * np.sqrt(P / N) + 1e-3), k
+    d = r.diagnostics
+    assert np.all((d["ess_x"] >= 1 - 1e-9) & (d["ess_x"] <= N + 1e-9))
+    assert np.all((d["ess_theta"] >= 1 - 1e-9) & (d["ess_theta"] <= 50 + 1e-9))
+    assert np.all(d["n_too_wide"] + d["n_zero_var"] + d["n_capped"] <= 4)
+
+
+def test_dpf_cap_is_applied_and_theta0_named():
+    m = LinearTheta(theta_true=0.7, Q=1.0, R=0.5, c=1.0)
+    y = m.simulate(10, 2, np.random.default_rng(0)).y
+    capped = DualParticleFilter(m, 50, 50, cap=2.0).filter(y, np.random.default_rng(1))
+    assert capped.diagnostics["n_capped"].sum() > 0
+    assert np.all(np.maximum(capped.diagnostics["alpha"], capped.diagnostics["beta"]) <= 2.0 + 1e-9)
+    for bad in (5.0, float("nan"), "x"):
+        with pytest.raises((ValueError, TypeError), match="theta0"):
+            DualParticleFilter(m, 10, 10, theta0=bad)
+
+
+def test_liu_west_a_domain_is_open_at_one_third():
+    with pytest.raises(ValueError, match="delta"):
+        liu_west_a(1.0 / 3.0)
+    assert liu_west_a(1.0) == 1.0
