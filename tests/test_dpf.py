@@ -260,6 +260,10 @@ def test_posterior_summary_of_a_gaussian_log_posterior():
     assert mean[0] == pytest.approx(0.43, abs=1e-5)
     assert np.sqrt(var[0]) == pytest.approx(0.03, rel=1e-3)
     np.testing.assert_allclose(q[:, 0], [0.43 - 1.959964 * 0.03, 0.43 + 1.959964 * 0.03], atol=2e-4)
+    # a grid that does not start at 0 (the spacing is fine[1] - fine[0], not fine[1])
+    mean, var, q = posterior_summary(g + 2.0, lp[None], q=(0.025, 0.975))
+    assert mean[0] == pytest.approx(2.43, abs=1e-5)
+    assert np.sqrt(var[0]) == pytest.approx(0.03, rel=1e-3)
 
 
 # ----------------------------------------------------------------------------- batch invariance
