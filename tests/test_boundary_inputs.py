@@ -73,6 +73,12 @@ def test_monte_carlo_result_unknown_filter_name_lists_the_names():
     with pytest.raises(KeyError, match=r"no filter named 'nope'.*\['PF'\]"):
         res.mse("nope")
     assert res.n_diverged() == {"PF": 0}
+    # a run counts as lost once any of its estimates is non-finite; it counts once
+    res.results["PF"].x[1, 2, 0] = np.nan
+    assert res.n_diverged() == {"PF": 1}
+    res.results["PF"].x[1, :] = np.inf
+    res.results["PF"].x[0, 0] = np.nan
+    assert res.n_diverged() == {"PF": 2}
 
 
 def test_run_streams_checks():
@@ -85,6 +91,36 @@ def test_run_streams_checks():
         rs.standard_normal((3.7, 2))
     with pytest.raises(ValueError, match="size"):
         rs.standard_normal((3, -2))
+
+
+def test_run_streams_integers_choice_subset_checks():
+    """Issue 21: integers(5, 2), bad choice probabilities and out-of-range subsets crashed inside
+    numpy or a list (IndexError), or were accepted (a mask of the wrong length, a float index,
+    -1 read as the last run)."""
+    rs = RunStreams.from_entropy(0, 3)
+    for lo, hi in ((5, 2), (2, 2), (0, None)):
+        with pytest.raises(ValueError, match="low < high"):
+            rs.integers(lo, hi, size=(3, 2))
+    for p in ([0.5, 0.6, 0.1], [1.5, -0.5, 0.0], [0.5, 0.5], [np.nan, 0.5, 0.5], [[0.5, 0.5, 0.0]]):
+        with pytest.raises(ValueError, match="p must hold 3"):
+            rs.choice(3, size=(3, 2), p=p)
+    with pytest.raises(TypeError, match="p must be"):
+        rs.choice(3, size=(3, 2), p="abc")
+    for sel in ([3], [-1], [0, 5]):
+        with pytest.raises(ValueError, match=r"outside 0\.\.2"):
+            rs.subset(sel)
+    with pytest.raises(ValueError, match=r"shape \(3,\)"):
+        rs.subset(np.array([True, False]))
+    with pytest.raises(TypeError, match="integer run indices"):
+        rs.subset([0.5])
+    # the valid calls: same draws as each run's own Generator
+    ref = RunStreams.from_entropy(0, 3)
+    np.testing.assert_array_equal(rs.integers(2, 5, size=(3, 4)),
+                                  np.stack([g.integers(2, 5, size=4) for g in ref]))
+    np.testing.assert_array_equal(rs.choice(3, size=(3, 4), p=[0.2, 0.3, 0.5]),
+                                  np.stack([g.choice(3, size=4, p=[0.2, 0.3, 0.5]) for g in ref]))
+    assert list(rs.subset([2, 0])) == [rs[2], rs[0]]
+    assert list(rs.subset(np.array([False, True, True]))) == [rs[1], rs[2]]
 
 
 def test_normalize_log_weights_checks():
@@ -141,6 +177,14 @@ def _ungm_theta(**kw):
     return UNGMTheta(**kw)
 
 
+def _immpf(**kw):
+    from pfrepro.filters.imm import IMMParticleFilter
+    from pfrepro.models import CWPA, JumpMarkovSystem
+
+    m = CWPA.zhang2016()
+    return IMMParticleFilter(JumpMarkovSystem([m, m], [[0.9, 0.1], [0.1, 0.9]]), 10, **kw)
+
+
 def unit_ball_volume(d):
     from pfrepro.filters.imm import unit_ball_volume as u
 
@@ -178,6 +222,9 @@ TABLE = [
      st.one_of(st.tuples(st.floats()), st.tuples(st.floats(), st.floats(), st.floats()), nonfinite,
                st.tuples(st.floats(min_value=0.6, max_value=10), st.floats(min_value=0.6, max_value=10)))),
     ("unit_ball_volume d", lambda v: unit_ball_volume(v), "d", bad_count),
+    ("IMMParticleFilter n_th", lambda v: _immpf(n_th=v), "n_th",
+     st.one_of(nonfinite, not_a_number, st.floats(min_value=1.0, exclude_min=True, allow_infinity=False),
+               st.floats(max_value=0.0, exclude_max=True, allow_infinity=False))),
     ("GPFF max_shift", lambda v: GaussianParticleFlowFilter(UNG, 10, max_shift=v), "max_shift",
      st.one_of(nonfinite, not_a_number, st.floats(max_value=0.0, allow_infinity=False))),
 ]
@@ -255,6 +302,15 @@ def test_parameterized_model_theta_true_inside_bounds():
         UNGMTheta(theta_true=1.5, bounds=(0.0, 1.0))
     with pytest.raises(ValueError, match="bounds"):
         UNGMTheta(bounds=(0,))
+    from pfrepro.models.linear_theta import LinearTheta
+    from pfrepro.models.reentry import Reentry
+
+    for make in (lambda: LinearTheta(theta_true=2.0), lambda: LinearTheta(theta_true=0.5, bounds=(0.6, 0.9)),
+                 lambda: Reentry(theta_true=-5.0), lambda: Reentry(theta_true=0.003)):
+        with pytest.raises(ValueError, match="theta_true.*outside bounds"):
+            make()
+    LinearTheta(theta_true=0.7)
+    Reentry(theta_true=0.001)
 
 
 def test_jump_markov_and_imm_mismatches():

@@ -303,3 +303,30 @@ def test_mechanism_runs_and_orders_sets():
     assert m[("CMS-PF candidates (2N)", "distinct")] == 1.0
     assert m[("PF resampled set", "distinct")] < 1.0
     assert m[("PF resampled set", "duplicates")] > 0
+
+
+def test_step_k_uses_carrier_slice_k_minus_1_and_truth_k():
+    """Step k maps with r[k-1] (the carrier's k-th value) and, in the oracle, centres on x_k:
+    a one-step shift of either (r[k-2], r[k], x_true[:, k-1]) would move estimates of steps that
+    must not see the change (mutation testing found the shift unpinned)."""
+    m = UNGM.ning2011()
+    T, runs, N = 5, 2, 20
+    sim = m.simulate(T, runs, np.random.default_rng(3))
+    f = CMSParticleFilter(m, N)
+    r = f.carrier.generate(T, (runs, N, 1), np.random.default_rng(4))
+    ref = f.filter(sim.y, np.random.default_rng(5), r=r)
+    np.testing.assert_array_equal(ref.x, f.filter(sim.y, np.random.default_rng(5), r=r.copy()).x)
+    for k in range(1, T + 1):                      # changing r[k-1] leaves steps 1..k-1 alone, moves step k
+        r2 = r.copy()
+        r2[k - 1] = 1.0 - r2[k - 1] ** 2 / 2
+        got = f.filter(sim.y, np.random.default_rng(5), r=r2)
+        np.testing.assert_array_equal(got.x[:, :k - 1], ref.x[:, :k - 1])
+        assert not np.array_equal(got.x[:, k - 1], ref.x[:, k - 1]), k
+    # the oracle centres the map particles of step k on x_k: moving x_T only changes step T
+    o = OracleCMSParticleFilter(m, N)
+    base = o.filter(sim.y, np.random.default_rng(5), x_true=sim.x)
+    xt = sim.x.copy()
+    xt[:, T] += 7.0
+    moved = o.filter(sim.y, np.random.default_rng(5), x_true=xt)
+    np.testing.assert_array_equal(moved.x[:, :T - 1], base.x[:, :T - 1])
+    assert not np.array_equal(moved.x[:, T - 1], base.x[:, T - 1])

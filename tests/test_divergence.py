@@ -160,3 +160,59 @@ def test_dual_ekf_raises_like_the_ekf_when_asked():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         DualExtendedKalmanFilter(pm, 0.5, 0.1, on_divergence="drop").filter(y)   # silent, marked
+
+
+def test_gpff_divergence_at_step_1_is_counted_and_drop_is_silent():
+    """A run lost at the first step (diverged_at = 1, the smallest marker) counts in n_diverged
+    and in the warning; 'drop' gives the same numbers without a warning; 'raise' names step 1."""
+    from pfrepro.models import UNGM
+
+    m = UNGM.zhang2016()
+    y = m.simulate(6, 3, np.random.default_rng(0)).y
+    y[1, 0] = 1e200
+    streams = lambda: filter_streams(1, "g", 3)   # noqa: E731
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        res = GaussianParticleFlowFilter(m, 50).filter(y, streams())
+    msgs = [str(w.message) for w in rec if issubclass(w.category, FilterDivergenceWarning)]
+    assert len(msgs) == 1 and "1 of 3 runs diverged (first at step 1)" in msgs[0], msgs
+    assert res.diagnostics["diverged_at"].tolist() == [0, 1, 0] and res.diagnostics["n_diverged"] == 1
+    assert np.all(np.isnan(res.x[1])) and np.all(np.isfinite(res.x[[0, 2]]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        drop = GaussianParticleFlowFilter(m, 50, on_divergence="drop").filter(y, streams())
+    np.testing.assert_array_equal(drop.x, res.x)
+    assert drop.diagnostics["n_diverged"] == 1
+    with pytest.raises(FilterDivergenceError, match=r"step 1 in runs \[1\]"):
+        GaussianParticleFlowFilter(m, 50, on_divergence="raise").filter(y, streams())
+    # every run lost at step 1: all NaN, counted, no crash
+    y[:, 0] = 1e200
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        gone = GaussianParticleFlowFilter(m, 50, return_cov=True).filter(y, streams())
+    assert gone.diagnostics["n_diverged"] == 3 and np.all(np.isnan(gone.x)) and np.all(np.isnan(gone.P))
+
+
+def test_gpff_prior_statistics_of_a_broken_run_is_nan_in_that_run_only():
+    """A run whose cloud has no covariance square root (NaN particle) gets NaN moments in its
+    own slot; the batch does not raise and the other run's numbers are those it has alone."""
+    from pfrepro.models import BearingsOnly
+
+    m = BearingsOnly.zhang2016()
+    g = GaussianParticleFlowFilter(m, 20)
+    x = g.sample_prior(np.random.default_rng(0), (2, 20))
+    x[1, 3] = np.nan
+    with np.errstate(all="ignore"):
+        out = g.prior_statistics(x)
+    alone = g.prior_statistics(x[:1])
+    for a, b in zip(out, alone):
+        np.testing.assert_array_equal(a[:1], b)
+        assert np.all(np.isnan(a[1]))
+
+
+def test_gpff_raise_names_at_most_ten_runs():
+    from pfrepro.models import UNGM
+
+    y = np.full((12, 2, 1), 1e200)
+    with pytest.raises(FilterDivergenceError, match=r"step 1 in runs \[0, 1, 2, 3, 4, 5, 6, 7, 8, 9\] \("):
+        GaussianParticleFlowFilter(UNGM.zhang2016(), 10, on_divergence="raise").filter(y, filter_streams(1, "g", 12))

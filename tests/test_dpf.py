@@ -260,6 +260,10 @@ def test_posterior_summary_of_a_gaussian_log_posterior():
     assert mean[0] == pytest.approx(0.43, abs=1e-5)
     assert np.sqrt(var[0]) == pytest.approx(0.03, rel=1e-3)
     np.testing.assert_allclose(q[:, 0], [0.43 - 1.959964 * 0.03, 0.43 + 1.959964 * 0.03], atol=2e-4)
+    # a grid that does not start at 0 (the spacing is fine[1] - fine[0], not fine[1])
+    mean, var, q = posterior_summary(g + 2.0, lp[None], q=(0.025, 0.975))
+    assert mean[0] == pytest.approx(2.43, abs=1e-5)
+    assert np.sqrt(var[0]) == pytest.approx(0.03, rel=1e-3)
 
 
 # ----------------------------------------------------------------------------- batch invariance
@@ -555,3 +559,125 @@ def test_dpf_chapter_pairs_only_through_the_run_set_check():
     src = (Path(__file__).resolve().parents[1] / "book" / "50_dpf.md").read_text(encoding="utf-8")
     assert "paired_difference(" not in src
     assert src.count("paired(") > 10
+
+
+# -- mutation-testing survivors (issue 21): diagnostics of Liu-West, the dual EKF's checks ------
+def test_liu_west_diagnostics_are_consistent_and_flag_the_outlier_step():
+    """θ's weighted variance is a variance about θ's mean (at most (hi - lo)^2 / 4 plus the
+    kernel's jitter, far below 4 E[θ]^2 here); the median lies between the outer quantiles;
+    1 <= ESS <= N; a 1e200 outlier at step 5 of run 1 is flagged at that step only;
+    theta_quantiles() is the stored array with the level axis first."""
+    m = LinearTheta(theta_true=0.7, Q=1.0, R=0.5, c=1.0)
+    y = m.simulate(8, 2, np.random.default_rng(0)).y
+    y[1, 4] = 1e200
+    f = LiuWestFilter(m, 200)
+    with np.errstate(all="ignore"):                      # (numpy's overflow warnings on the 1e200)
+        r = f.filter(y, np.random.default_rng(1))
+    d = r.diagnostics
+    lo, hi = m.bounds
+    assert np.all(d["theta_var"] > 0) and np.all(d["theta_var"] < (hi - lo) ** 2 / 4 * 1.5)
+    q = f.theta_quantiles(r)
+    assert q.shape == (3, 2, 8)
+    for i in range(3):
+        np.testing.assert_array_equal(q[i], d["theta_quantiles"][..., i])
+    assert np.all(q[0] <= q[1]) and np.all(q[1] <= q[2])
+    assert np.all((d["ess"] >= 1 - 1e-9) & (d["ess"] <= 200 + 1e-9))
+    assert d["collapsed"][1, 4] and d["collapsed"].sum() == 1
+
+
+def test_dual_ekf_q_min_must_be_nonnegative():
+    from pfrepro.experiments.dpf_hou2008 import model_51
+
+    with pytest.raises(ValueError, match="q_min"):
+        DualExtendedKalmanFilter(model_51(), 0.5, 0.1, q_min=-1e-3)
+
+
+def test_theta_grid_quantiles_layout_and_order():
+    m = LinearTheta(theta_true=0.7, Q=1.0, R=0.5, c=1.0)
+    y = m.simulate(4, 2, np.random.default_rng(0)).y
+    g = ThetaGridReference(m, n_theta=21, x_bounds=(-12, 16), n_grid=201)
+    r = g.filter(y)
+    q = g.theta_quantiles(r)
+    assert q.shape == (3, 2, 4)
+    for i in range(3):
+        np.testing.assert_array_equal(q[i], r.diagnostics["theta_quantiles"][..., i])
+    assert np.all(q[0] <= r.diagnostics["theta"]) and np.all(r.diagnostics["theta"] <= q[2])
+    np.testing.assert_array_equal(g.theta_quantiles(r, [0.025, 0.5, 0.975]), q)
+
+
+def test_gauss_logpdf_against_scipy():
+    """log N(nu; 0, S) of the dual PF, scalar and 2-D branches, against scipy."""
+    from scipy.stats import multivariate_normal
+
+    from pfrepro.filters.dual_pf import _gauss_logpdf
+
+    rng = np.random.default_rng(0)
+    for m in (1, 2, 3):
+        A = rng.standard_normal((4, m, m))
+        S = A @ np.swapaxes(A, -1, -2) + 0.5 * np.eye(m)
+        nu = rng.standard_normal((4, m))
+        ref = [multivariate_normal(np.zeros(m), S[i]).logpdf(nu[i]) for i in range(4)]
+        np.testing.assert_allclose(_gauss_logpdf(nu, S), ref, rtol=1e-12)
+
+
+def test_predictive_weight_on_a_3d_state_uses_F_P_F_transpose():
+    """The predictive parameter weight log N(z; h(m), H (F P F^T + Q) H^T + R) written out with
+    the model's Jacobians on the 3-D re-entry state, where F is not symmetric (F P F without the
+    transpose agrees on every scalar model)."""
+    m = Reentry()
+    f = DualParticleFilter(m, 10, 10, weight="predictive")
+    th = np.array([[0.0005, 0.001, 0.0015]])
+    x_prev = np.asarray(m.m0, float)[None]
+    P_prev = np.asarray(m.P0, float)[None] * 2.0
+    z = m.h(x_prev + 0.1)
+    got = f.parameter_loglik(z, th, x_prev, P_prev, None, th[0, 1:2], 1)[0]
+    F = m.jacobian_f(x_prev, 1, th[:, 1:2])[0]
+    assert not np.allclose(F, F.T)
+    Pm = F @ P_prev[0] @ F.T + m.Q
+    for j in range(3):
+        mj = m.f(x_prev[:, None, :], 1, th[:, j:j + 1, None])[0, 0]
+        H = m.jacobian_h(mj[None])[0]
+        S = H @ Pm @ H.T + m.R
+        nu = m.residual_y(z[0], m.h(mj))
+        want = -0.5 * (nu @ np.linalg.solve(S, nu) + np.log(np.linalg.det(2 * np.pi * S)))
+        assert got[j] == pytest.approx(want, rel=1e-9)
+
+
+def test_dpf_state_estimates_follow_the_kalman_filter_when_theta_is_known():
+    """θ known to 1e-6: the dual PF's state filter is a bootstrap PF on a linear-Gaussian model,
+    so estimate k is the Kalman filter's posterior mean at step k (within Monte Carlo error);
+    diagnostics: ESS of both filters in [1, N], the Beta-fit counts add up to at most T."""
+    m = LinearTheta(theta_true=0.7, bounds=(0.7 - 1e-6, 0.7 + 1e-6), Q=1.0, R=1.0, m0=0.0, P0=4.0, c=1.0)
+    sim = m.simulate(4, 1, np.random.default_rng(9))
+    N = 20_000
+    f = DualParticleFilter(m, N, 50)
+    r = f.filter(sim.y, np.random.default_rng(10))
+    x, P = 0.0, 4.0
+    for k in range(4):
+        xm, Pm = 0.7 * x + 1.0, 0.49 * P + 1.0
+        K = Pm / (Pm + 1.0)
+        x, P = xm + K * (sim.y[0, k, 0] - xm), (1 - K) * Pm
+        assert r.x[0, k, 0] == pytest.approx(x, abs=5 * np.sqrt(P / N) + 1e-3), k
+    d = r.diagnostics
+    assert np.all((d["ess_x"] >= 1 - 1e-9) & (d["ess_x"] <= N + 1e-9))
+    assert np.all((d["ess_theta"] >= 1 - 1e-9) & (d["ess_theta"] <= 50 + 1e-9))
+    # every step's Beta fit has one status: the per-status counts add up to T
+    n_ok = (d["fit_status"] == FIT_OK).sum(axis=1)
+    np.testing.assert_array_equal(n_ok + d["n_too_wide"] + d["n_zero_var"] + d["n_capped"], [4])
+
+
+def test_dpf_cap_is_applied_and_theta0_named():
+    m = LinearTheta(theta_true=0.7, Q=1.0, R=0.5, c=1.0)
+    y = m.simulate(10, 2, np.random.default_rng(0)).y
+    capped = DualParticleFilter(m, 50, 50, cap=2.0).filter(y, np.random.default_rng(1))
+    assert capped.diagnostics["n_capped"].sum() > 0
+    assert np.all(np.maximum(capped.diagnostics["alpha"], capped.diagnostics["beta"]) <= 2.0 + 1e-9)
+    for bad in (5.0, float("nan"), "x"):
+        with pytest.raises((ValueError, TypeError), match="theta0"):
+            DualParticleFilter(m, 10, 10, theta0=bad)
+
+
+def test_liu_west_a_domain_is_open_at_one_third():
+    with pytest.raises(ValueError, match="delta"):
+        liu_west_a(1.0 / 3.0)
+    assert liu_west_a(1.0) == 1.0

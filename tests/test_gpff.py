@@ -74,6 +74,9 @@ def test_nonlinear_field_equals_linear_field_for_linear_h(d, m):
         np.testing.assert_allclose(f_nl, f_lin, rtol=1e-11, atol=1e-11)
         B, u = flow.nonlinear_coefficients(lam, y, yh[0], Pxy[0], Pyy[0], R, "corrected")
         np.testing.assert_allclose(X[0] @ H.T @ B.T + u, f_lin[0], rtol=1e-10, atol=1e-10)
+        # one state per run (..., d) instead of particles (..., N, d): the same field
+        one = flow.affine_flow_field(X[:, 3], lam, mean[None], P[None], H, R, y[None])
+        np.testing.assert_allclose(one, f_lin[:, 3], rtol=1e-13, atol=1e-13)
 
 
 def test_printed_eq46_is_dimensionally_inconsistent():

@@ -73,3 +73,15 @@ def test_single_run_input_shapes():
     model = lg(0.9, 1.0, 0.5)
     g = GridFilter(model, bounds=(-20, 20), n_grid=801).filter(np.array([0.1, -0.3, 0.7]))
     assert g.x.shape == (1, 3, 1) and g.P.shape == (1, 3, 1, 1)
+
+
+def test_log_domain_posterior_reads_a_nan_likelihood_as_zero():
+    """A NaN log-likelihood at one node is likelihood 0 there (not +inf, which would make the
+    row 'collapsed' and throw the measurement away)."""
+    from pfrepro.filters import GridFilter
+
+    pred = np.array([[0.25, 0.25, 0.5]])
+    post, coll = GridFilter._log_domain_posterior(pred, np.array([[0.0, np.nan, -1.0]]), k=1)
+    e = np.exp(-1.0)
+    np.testing.assert_allclose(post[0], [0.25 / (0.25 + 0.5 * e), 0.0, 0.5 * e / (0.25 + 0.5 * e)], rtol=1e-15)
+    assert not coll[0]

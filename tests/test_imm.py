@@ -539,3 +539,43 @@ def test_generated_prose_sign_and_plural():
     assert "exceeds" in compare_sentence(10.0, 2.0, "A", "B") and "+10.0" in compare_sentence(10.0, 2.0, "A", "B")
     assert "is below" in compare_sentence(-10.0, 2.0, "A", "B")
     assert "within two standard errors" in compare_sentence(1.0, 2.0, "A", "B")
+
+
+def test_put_rows_converts_values_to_the_arrays_dtype():
+    from pfrepro.filters.imm import _put_rows
+
+    a = np.zeros((4, 3))
+    _put_rows(a, np.array([2, 0]), np.array([[1, 2, 3], [4, 5, 6]], dtype=np.int64))
+    np.testing.assert_array_equal(a, [[4, 5, 6], [0, 0, 0], [1, 2, 3], [0, 0, 0]])
+
+
+# -- mutation-testing survivors (issue 21) ------------------------------------------------------
+def test_model_likelihood_weights_are_normalised_per_run_and_mode():
+    """Previous log-weights on very different scales in two runs (1e4 apart): each (run, mode)
+    row is normalised on its own, so the batch equals the rows alone (a max over the whole
+    batch would underflow the second run's weights to 0)."""
+    sysm = scalar_system(R=1.0)
+    f = IMMParticleFilter(sysm, 3)
+    eps = np.array([1.0, 2.0, 4.0, 0.5, -1.0, 3.0]).reshape(2, 1, 3, 1)
+    logw = np.log(np.array([[0.5, 0.3, 0.2], [0.2, 0.2, 0.6]]))[:, None, :]
+    logw[1] -= 1e4
+    ll = norm.logpdf(eps[..., 0])
+    both = f.model_log_likelihood(eps, logw, ll)
+    for r in range(2):
+        np.testing.assert_allclose(both[r], f.model_log_likelihood(eps[r:r + 1], logw[r:r + 1], ll[r:r + 1])[0],
+                                   rtol=1e-14)
+    assert np.all(np.isfinite(both))
+
+
+def test_m0_P0_overrides_and_diagnostic_dtypes():
+    sysm = scalar_system()
+    f = IMMParticleFilter(sysm, 20, m0=[2.0], P0=[[0.5]])
+    np.testing.assert_array_equal(f.m0, [2.0])
+    np.testing.assert_array_equal(f.P0, [[0.5]])
+    y = sysm.simulate(3, 2, RunStreams.from_entropy(0, 2)).y
+    a = f.filter(y, RunStreams.from_entropy(1, 2))
+    b = IMMParticleFilter(sysm, 20).filter(y, RunStreams.from_entropy(1, 2))
+    assert not np.array_equal(a.x, b.x)                  # the override is used
+    d = a.diagnostics
+    assert d["collapsed"].dtype == bool
+    assert d["likelihood_evals"].dtype == d["density_evals"].dtype == np.int64

@@ -136,3 +136,31 @@ def test_kalman_update_scalar_by_hand():
 def test_kf_rejects_nonlinear_model():
     with pytest.raises(TypeError, match="linear dynamics"):
         KalmanFilter(UNGM.zhang2016())
+
+
+def test_ekf_predict_evaluates_the_jacobian_at_step_k():
+    """A transition whose Jacobian depends on k (f = k x): P- = k^2 P + Q, by hand (every shipped
+    model's Jacobian is time-invariant, so the step passed to jacobian_f was unpinned)."""
+    from pfrepro.filters import ExtendedKalmanFilter
+    from pfrepro.models import StateSpaceModel
+
+    class Scaled(StateSpaceModel):
+        def __init__(self):
+            super().__init__(dim_x=1, dim_y=1, Q=0.5, measurement_noise=1.0, x0=[1.0], m0=[1.0], P0=[[2.0]])
+
+        def f(self, x, k):
+            return k * x
+
+        def jacobian_f(self, x, k):
+            return np.broadcast_to(np.array([[float(k)]]), x.shape[:-1] + (1, 1)).copy()
+
+        def h(self, x):
+            return x
+
+        def jacobian_h(self, x):
+            return np.ones(x.shape[:-1] + (1, 1))
+
+    ekf = ExtendedKalmanFilter(Scaled())
+    x, P = ekf.predict(np.array([[1.5]]), np.array([[[2.0]]]), 3)
+    np.testing.assert_allclose(x, [[4.5]])
+    np.testing.assert_allclose(P, [[[9 * 2.0 + 0.5]]])

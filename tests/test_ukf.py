@@ -165,3 +165,27 @@ def test_safe_cholesky_jitters_semidefinite_and_rejects_indefinite():
     np.testing.assert_allclose(L @ L.T, [[1.0, 1.0], [1.0, 1.0]], atol=1e-5)
     with pytest.raises(np.linalg.LinAlgError, match="P is not positive semi-definite"):
         safe_cholesky(np.array([[1.0, 0.0], [0.0, -1.0]]), name="P")
+
+
+def test_safe_cholesky_exact_factors_per_matrix():
+    """The documented ladder, exactly: a positive-definite matrix keeps its plain Cholesky
+    factor even when another matrix of the batch fails; a singular PSD one gets the factor of
+    A + 1e-12 scale I (the first jitter that works); a zero matrix gets 0; non-finite entries
+    raise naming the matrix, or give NaN in their own slot with on_error="nan"."""
+    pd_ = np.array([[4.0, 1.0], [1.0, 3.0]])
+    sing = np.array([[4.0, 4.0], [4.0, 4.0]])                    # rank 1, scale 4
+    L = safe_cholesky(np.stack([pd_, sing, np.zeros((2, 2))]))
+    np.testing.assert_array_equal(L[0], np.linalg.cholesky(pd_))
+    np.testing.assert_array_equal(L[1], np.linalg.cholesky(sing + 1e-12 * 4.0 * np.eye(2)))
+    np.testing.assert_array_equal(L[2], np.zeros((2, 2)))
+    # a matrix the first jitters cannot rescue: smallest eigenvalue -1e-9, scale ~0.5, needs 1e-8
+    V = np.array([[1.0, 1.0], [1.0, -1.0]]) / np.sqrt(2.0)
+    A = V @ np.diag([1.0, -1e-9]) @ V.T
+    s = np.max(np.abs(np.diag(A)))
+    np.testing.assert_array_equal(safe_cholesky(A[None])[0], np.linalg.cholesky(A + 1e-8 * s * np.eye(2)))
+    bad = np.array([[1.0, np.inf], [np.inf, 1.0]])
+    with pytest.raises(np.linalg.LinAlgError, match="P contains NaN or infinite entries"):
+        safe_cholesky(np.stack([pd_, bad]), name="P")
+    out = safe_cholesky(np.stack([pd_, bad]), on_error="nan")
+    np.testing.assert_array_equal(out[0], np.linalg.cholesky(pd_))
+    assert np.all(np.isnan(out[1]))

@@ -90,7 +90,19 @@ class RunStreams:
     def subset(self, sel) -> "RunStreams":
         """Streams of the runs selected by ``sel`` (boolean mask or integer indices)."""
         sel = np.asarray(sel)
-        idx = np.flatnonzero(sel) if sel.dtype == bool else sel.ravel()
+        n = len(self._gens)
+        if sel.dtype == bool:
+            if sel.shape != (n,):
+                raise ValueError(f"RunStreams.subset: a boolean sel must have shape ({n},) (one flag per run), "
+                                 f"got shape {sel.shape}")
+            idx = np.flatnonzero(sel)
+        else:
+            if sel.size and not np.issubdtype(sel.dtype, np.integer):
+                raise TypeError(f"RunStreams.subset: sel must be a boolean mask or integer run indices, "
+                                f"got {sel.dtype} values")
+            idx = sel.ravel()
+            if idx.size and (idx.min() < 0 or idx.max() >= n):
+                raise ValueError(f"RunStreams.subset: sel holds run indices outside 0..{n - 1}: {idx.tolist()}")
         return RunStreams([self._gens[int(i)] for i in idx])
 
     def __repr__(self) -> str:
@@ -284,14 +296,32 @@ class RunStreams:
             not depend on the other runs.
         """
         size = self._size(size, "integers")
+        lo, hi = (0, low) if high is None else (low, high)
+        if np.any(np.asarray(lo) >= np.asarray(hi)):
+            raise ValueError(f"RunStreams.integers draws from [low, high) and needs low < high, "
+                             f"got low={low!r}, high={high!r}")
         out = np.empty(size, dtype=dtype)
         for i, g in enumerate(self._gens):
             out[i] = g.integers(low, high, size=size[1:], dtype=dtype)
         return out
 
     def choice(self, a, size=None, replace=True, p=None):
-        """``Generator.choice`` per run; ``a`` and ``p`` are shared by every run."""
+        """``Generator.choice`` per run; ``a`` and ``p`` are shared by every run.
+
+        ``p`` (if given) must be one finite, non-negative probability per element of ``a``
+        summing to 1 (``ValueError`` naming ``p`` otherwise).
+        """
         size = self._size(size, "choice")
+        if p is not None:
+            try:
+                pa = np.asarray(p, dtype=float)
+            except (TypeError, ValueError):
+                raise TypeError(f"RunStreams.choice: p must be an array of probabilities, got {p!r}") from None
+            n_a = int(a) if np.ndim(a) == 0 else len(a)
+            if pa.shape != (n_a,) or not np.all(np.isfinite(pa)) or np.any(pa < 0) \
+                    or abs(pa.sum() - 1.0) > np.sqrt(np.finfo(float).eps):
+                raise ValueError(f"RunStreams.choice: p must hold {n_a} finite probabilities >= 0 "
+                                 f"summing to 1 (one per element of a), got {p!r}")
         first = self._gens[0].choice(a, size=size[1:], replace=replace, p=p)
         out = np.empty(size, dtype=np.asarray(first).dtype)
         out[0] = first

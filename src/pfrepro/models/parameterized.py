@@ -28,7 +28,12 @@ __all__ = ["ParameterizedModel", "FixedParameterModel", "as_theta"]
 
 def as_theta(theta, dim_theta: int, name: str = "theta") -> np.ndarray:
     """``theta`` as a float array with a trailing axis of length ``dim_theta``; finite values only."""
-    t = np.asarray(theta, dtype=float)
+    if isinstance(theta, (str, bytes)):
+        raise TypeError(f"{name} must be a number or an array of numbers, got the string {theta!r}")
+    try:
+        t = np.asarray(theta, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a number or an array of numbers, got {theta!r}") from None
     if t.ndim == 0:
         t = t[None]
     if t.shape[-1] != dim_theta:
