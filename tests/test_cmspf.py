@@ -303,3 +303,16 @@ def test_mechanism_runs_and_orders_sets():
     assert m[("CMS-PF candidates (2N)", "distinct")] == 1.0
     assert m[("PF resampled set", "distinct")] < 1.0
     assert m[("PF resampled set", "duplicates")] > 0
+
+
+def test_offline_carrier_counts_map_iterations_outside_the_loop():
+    """Counted, not assumed: the online call iterates the map N (T0 + T) times (chain layout), the
+    call with a precomputed carrier none; a randn carrier has no map to move offline (no saving)."""
+    from pfrepro.experiments import cmspf_ning2011 as E
+    o = E.carrier_operations(N=20, burn_in=30)
+    assert o["online"]["map iterations"] * E.T == 20 * (30 + E.T)
+    assert o["offline"]["map iterations"] == 0 and o["offline before the loop"] == 20 * (30 + E.T)
+    assert o["online"]["model evaluations"] == o["offline"]["model evaluations"] == 3 * 20
+    assert o["offline"]["operations"] < o["online"]["operations"]
+    r = E.carrier_operations(N=20, carrier="randn")
+    assert r["offline"]["operations"] == r["online"]["operations"]
