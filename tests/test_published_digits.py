@@ -97,13 +97,24 @@ def _ekf_pf_table1():
     return [(r["published"], r["filter"], r["model"]) for _, r in shown.iterrows()]
 
 
+def _imm_table1():
+    from pfrepro.experiments import immpfor_zhou2017 as E
+    from pfrepro.figures import immpfor_zhou2017 as F
+
+    small = {n: (fn, {**kw, "N": 20} if fn.startswith("immpf") else kw) for n, (fn, kw) in E.MAIN_BUILDERS.items()}
+    tab = F.table1_shown(F.table1_frame(E.run(small, runs=2)))
+    return [(tab.loc[r, f"paper {c}"], r, c) for r in tab.index for c in ("peak", "mean")
+            if tab.loc[r, f"paper {c}"] != "–"]
+
+
 #: paper -> [(published table id, builder)]: the builder makes the table as the chapter shows it
 #: (through the same package function) and returns (shown published cell, data row, data column)
 SHOWN_TABLES = {
     "ekf_pf_li2012": [("Table 1", _ekf_pf_table1)],
+    "immpfor_zhou2017": [("Table 1", _imm_table1)],
 }
 #: papers whose chapters pass published_text= for every claim on a printed number
-CLAIMS_WITH_PRINTED_DIGITS = ["ekf_pf_li2012"]
+CLAIMS_WITH_PRINTED_DIGITS = ["ekf_pf_li2012", "cmspf_ning2011", "immpfor_zhou2017"]
 
 
 @pytest.mark.parametrize("paper,table_id,build",
