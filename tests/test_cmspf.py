@@ -330,3 +330,16 @@ def test_step_k_uses_carrier_slice_k_minus_1_and_truth_k():
     moved = o.filter(sim.y, np.random.default_rng(5), x_true=xt)
     np.testing.assert_array_equal(moved.x[:, :T - 1], base.x[:, :T - 1])
     assert not np.array_equal(moved.x[:, T - 1], base.x[:, T - 1])
+
+
+def test_offline_carrier_counts_map_iterations_outside_the_loop():
+    """Counted, not assumed: the online call iterates the map N (T0 + T) times (chain layout), the
+    call with a precomputed carrier none; a randn carrier has no map to move offline (no saving)."""
+    from pfrepro.experiments import cmspf_ning2011 as E
+    o = E.carrier_operations(N=20, burn_in=30)
+    assert o["online"]["map iterations"] * E.T == 20 * (30 + E.T)
+    assert o["offline"]["map iterations"] == 0 and o["offline before the loop"] == 20 * (30 + E.T)
+    assert o["online"]["model evaluations"] == o["offline"]["model evaluations"] == 3 * 20
+    assert o["offline"]["operations"] < o["online"]["operations"]
+    r = E.carrier_operations(N=20, carrier="randn")
+    assert r["offline"]["operations"] == r["online"]["operations"]

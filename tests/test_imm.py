@@ -579,3 +579,40 @@ def test_m0_P0_overrides_and_diagnostic_dtypes():
     d = a.diagnostics
     assert d["collapsed"].dtype == bool
     assert d["likelihood_evals"].dtype == d["density_evals"].dtype == np.int64
+
+
+def test_diagonal_metric_equals_whitened_in_one_dimension():
+    """In 1-D the standard deviation is the Cholesky factor: both metrics give the same particles."""
+    sysm, x, w, counts = _one_mode_case()
+    u, M, other = np.array([[1.0]]), np.ones((1, 1, 1)), np.zeros((1, 1, 4), dtype=np.intp)
+    for density in ("gaussian", "weights"):
+        a = IMMPFOR(sysm, 4, density=density).replacement(x, w, u, M, counts, other)[0]
+        b = IMMPFOR(sysm, 4, density=density, metric="diagonal").replacement(x, w, u, M, counts, other)[0]
+        np.testing.assert_allclose(a, b, rtol=1e-12)
+    with pytest.raises(ValueError, match="metric"):
+        IMMPFOR(sysm, 4, metric="euclidean")
+
+
+def test_diagonal_metric_step_by_hand():
+    """2-D, one mode, correlated cloud: the new particle is x_a + frac (x_s - x_a) with
+    frac = d Gamma(3/2) / (N p(z_a) V_2)^(1/2) / ||D^-1 (x_s - x_a)||, p = N(z; 0, D^-1 C D^-1)."""
+    from math import gamma, pi
+    m1 = LinearGaussianModel(np.eye(2), np.eye(2), np.eye(2), np.eye(2), x0=[0, 0], m0=[0, 0], P0=np.eye(2))
+    sysm = JumpMarkovSystem([m1], [[1.0]])
+    x = np.array([[0.0, 0.0], [1.0, 3.0], [2.0, 5.0], [3.0, 6.5]]).reshape(1, 1, 4, 2)
+    w = np.array([0.7, 0.1, 0.1, 0.1]).reshape(1, 1, 4)
+    counts = np.array([2, 1, 1, 0]).reshape(1, 1, 4)
+    u, M = np.array([[1.0]]), np.ones((1, 1, 1))
+    new = IMMPFOR(sysm, 4, metric="diagonal").replacement(x, w, u, M, counts, np.zeros((1, 1, 4), dtype=np.intp))[0]
+    m, L, _ = IMMPFOR.joint_whitening(x, w, u)
+    C = L[0] @ L[0].T
+    sd = np.sqrt(np.diag(C))
+    Rc = C / np.outer(sd, sd)
+    xa, xs = x[0, 0, 0], x[0, 0, 3]
+    za, zs = (xa - m[0]) / sd, (xs - m[0]) / sd
+    p = np.exp(-0.5 * za @ np.linalg.solve(Rc, za)) / (2 * pi * np.sqrt(np.linalg.det(Rc)))
+    step = gamma(1.5) / np.sqrt(4 * p * pi)
+    frac = min(1.0, step / np.linalg.norm(zs - za))
+    np.testing.assert_allclose(new[0, 0, 1], xa + frac * (xs - xa), rtol=1e-10)
+    whit = IMMPFOR(sysm, 4).replacement(x, w, u, M, counts, np.zeros((1, 1, 4), dtype=np.intp))[0]
+    assert not np.allclose(whit[0, 0, 1], new[0, 0, 1])

@@ -290,3 +290,20 @@ def test_published_se_helpers():
     # row 22 is the printed variance of rows 1-20: the two readings of the spread agree
     assert published.per_run_se("cmspf_ning2011", "Table 1", "N=10 PF", range(1, 21)) == pytest.approx(
         math.sqrt(t.loc["22", "N=10 PF"] / 20), rel=1e-3)
+
+
+def test_paired_difference_refuses_unequal_run_sets():
+    """The book-wide common-runs rule (claims.common_runs): every paired difference goes through it."""
+    import pandas as pd
+    from pfrepro.claims import CommonRunsError, common_runs, paired_difference
+    a = pd.Series([1.0, 2.0, 4.0], index=pd.RangeIndex(1, 4, name="run"))
+    b = pd.Series([0.5, 1.5, 3.0], index=pd.RangeIndex(1, 4, name="run"))
+    assert paired_difference(a, b)[0] == pytest.approx(2.0 / 3.0)
+    with pytest.raises(CommonRunsError):           # runs 2-4 against runs 1-3: same size, other runs
+        paired_difference(a, pd.Series(b.to_numpy(), index=pd.RangeIndex(2, 5, name="run")))
+    with pytest.raises(CommonRunsError):           # 40 runs against 100
+        paired_difference(np.ones(100), np.zeros(40))
+    with pytest.raises(CommonRunsError):           # one value broadcast against many runs
+        paired_difference(np.arange(5.0), np.array([1.0]))
+    x, y = common_runs([1, 2], [3, 4])
+    assert x.dtype == float and y.shape == (2,)

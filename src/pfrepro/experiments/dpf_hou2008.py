@@ -24,7 +24,7 @@ from ..models.reentry import FT, Reentry
 from ..models.ungm_theta import UNGMTheta
 from ..models.base import Simulation
 from ..choices import FIXED, READING, SWEEP, FreeChoice, choices_table
-from ..claims import paired_difference
+from ..claims import CommonRunsError, paired_difference
 from ..montecarlo import run_monte_carlo, truth_streams
 
 __all__ = ["PAPER", "SEED_51", "SEED_52", "S51", "S52", "Q52", "CHOICES", "assumptions_table", "model_51",
@@ -541,10 +541,10 @@ def paired(a: pd.Series, b: pd.Series):
     """
     if not (isinstance(a, pd.Series) and isinstance(b, pd.Series)):
         raise TypeError("paired() takes per-run Series (per_run), which carry their run numbers")
-    if not a.index.equals(b.index):
-        raise ValueError(f"paired comparison over unequal run sets ({a.size} runs {_span(a.index)} against "
-                         f"{b.size} runs {_span(b.index)}): compare on common runs only")
-    return paired_difference(a.to_numpy(), b.to_numpy())
+    if not a.index.equals(b.index):   # the book-wide check (claims.common_runs), with the run spans named
+        raise CommonRunsError(f"paired comparison over unequal run sets ({a.size} runs {_span(a.index)} against "
+                              f"{b.size} runs {_span(b.index)}): compare on common runs only")
+    return paired_difference(a, b)
 
 
 def _span(idx):

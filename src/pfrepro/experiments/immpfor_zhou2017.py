@@ -41,7 +41,7 @@ __all__ = ["PAPER", "SCENARIO", "ALTERNATIVES", "SEEDS", "scenario", "truth_syst
            "table1", "rmse_curves", "bootstrap_table", "paired", "equal_compute_N", "mode_timeline",
            "lost_tracks", "PF_BUILDERS", "MAIN_BUILDERS", "equal_compute_name", "fig5_builders", "SYNTHESIS_FILTERS", "synthesis_record", "synthesis_record_path",
            "save_synthesis_record", "load_synthesis_record", "run_synthesis_record", "CHOICES", "HELD", "D_GRID",
-           "READINGS", "TAIL", "LOST_KM", "pair_stats", "median_paired", "lost_mask", "plural", "compare_sentence",
+           "READINGS", "HELD_READINGS", "TAIL", "LOST_KM", "pair_stats", "median_paired", "lost_mask", "plural", "compare_sentence",
            "posterior_distance", "reading_builders", "D_FAVOURABLE", "per_run_rms", "robustness"]
 
 #: key of this paper in ``pfrepro.published`` and the claims registry
@@ -80,6 +80,10 @@ SCENARIO = {
     "runs_ref": 10,                  # runs of the large-N reference posterior (main's first 10 truths)
     "N_ref": 4000,                   # particles per mode of the reference IMMPF (8 x the paper's N)
     "runs_fav": 25,                  # runs of the d = D_FAVOURABLE reading at N = 2000 and per robustness scenario
+    "runs_held": 10,                 # runs of the models_q, n_th and metric readings (main's first truths) ...
+    "runs_held_more": 25,            # ... and where 10 leave undecided an ordering the other readings decide
+    "runs_scen": 5,                  # runs of N = 2000 and of the ablation per scenario reading ...
+    "runs_scen_more": 10,            # ... and where 5 do not decide
 }
 
 #: alternative plausible scenarios for the robustness check, fixed with SCENARIO (one change each)
@@ -158,23 +162,35 @@ CHOICES = [
                f"reading ({_S['runs_lik']} runs).", "eqs 11-15"),
 ]
 
-#: settings the paper does not fix that this round holds at one value without varying them — a verdict
-#: may still depend on them (a limitation, said in the chapter), so they are listed apart from CHOICES
-#: rather than marked "fixed by the paper". Rows: (name, value, reason, where in the paper).
-HELD = [
-    ("models_q", f"CV q = {_S['q_cv']}, CT q = {_S['q_ct']} (|w| = the truth's turn rate), "
-               f"CA q = {_S['q_ca']}; filters' prior N(x0, diag{_S['P0_sd']}²)",
+#: the other values of the three settings the first round held fixed (models_q, n_th, metric): reading tag ->
+#: (scenario overrides, IMMPF keywords or None (the main run's IMMPF is unchanged), IMMPFOR keywords)
+HELD_READINGS = {
+    "models_q=q x4": ({"q_cv": 4 * _S["q_cv"], "q_ct": 4 * _S["q_ct"], "q_ca": 4 * _S["q_ca"]}, {}, {}),
+    "n_th=N": ({}, {"n_th": 1.0}, {"n_th": 1.0}),
+    "metric=diagonal": ({}, None, {"metric": "diagonal"}),
+}
+CHOICES += [
+    FreeChoice("models_q", f"CV q = {_S['q_cv']}, CT q = {_S['q_ct']} (|w| = the truth's turn rate), "
+               f"CA q = {_S['q_ca']}; filters' prior N(x0, diag{_S['P0_sd']}²)", READING,
                "Not printed; textbook values (Bar-Shalom, Li & Kirubarajan 2001, ch. 6 and 11): CV noise at "
-               "least the truth's, CA increments about 0.2 of the turn's acceleration. Not varied in this round.",
-               "not printed"),
-    ("n_th", f"N_th = {_S['n_th']} N",
-               "Not printed; the usual textbook threshold of eq 19, applied identically to both filters (the "
-               "IMMPF's resampling is not what the paper changes). Whether IMMPFOR's replacement also waits "
-               "for it is the separate reading 'replace'.", "eq 19 (value not printed)"),
-    ("metric", "whitened by the jointly weighted covariance",
+               "least the truth's, CA increments about 0.2 of the turn's acceleration. Every q times 4 (process "
+               f"noise SD doubled) is run as the other reading ({_S['runs_held']} runs, {_S['runs_held_more']} where "
+               "10 leave undecided an ordering the other readings decide).", "not printed"),
+    FreeChoice("n_th", f"N_th = {_S['n_th']} N", READING,
+               "Not printed; the usual textbook threshold of eq 19, applied identically to both filters. N_th = N "
+               "(resampling at every step, Gordon et al.'s SIR) is run as the other reading, for both filters "
+               f"({_S['runs_held']} runs, {_S['runs_held_more']} where needed). Whether IMMPFOR's replacement "
+               "also waits for the threshold is the separate reading 'replace'.", "eq 19 (value not printed)"),
+    FreeChoice("metric", "whitened by the jointly weighted covariance", READING,
                "Our reconstruction of eqs 22-25: the state mixes metres, m/s and m/s², so a Euclidean distance "
-               "in raw units mixes units; whitening is the unit-free choice. Another metric would change the "
-               "step lengths in each direction, which the d sweep varies only as a whole.", "eqs 22-25 (lost)"),
+               "in raw units mixes units; whitening is the unit-free choice. Scaling each component by its own "
+               "weighted standard deviation (correlations ignored, IMMPFOR(metric='diagonal')) is run as the "
+               f"other reading ({_S['runs_held']} runs, {_S['runs_held_more']} where needed).", "eqs 22-25 (lost)"),
+]
+
+#: settings the paper does not fix that are not a choice a verdict rests on (the run budget, the seeds).
+#: Rows: (name, value, reason, where in the paper).
+HELD = [
     ("budget", f"{_S['runs_readings']} runs per reading, {_S['runs_ablation']} per ablation point, "
                f"{_S['runs_robust']} per scenario, reference N = {_S['N_ref']} on {_S['runs_ref']} runs",
                "Time budget of the book, fixed before running; readings use the main run's first truths so that "

@@ -7,13 +7,14 @@ their results and bundles them for the command line (:func:`reproduce`).
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from ..experiments import gpff_zhang2016 as E
 from ..metrics import mse_per_component, mse_per_component_over_time
 from . import new_figure
 
 __all__ = ["fig1", "fig2", "fig3", "fig4", "fig5", "reproduce", "TABLES", "FIGURES", "N_STEPS",
-           "BOT_FIGURE_FILTERS", "COMPONENT_LABELS"]
+           "BOT_FIGURE_FILTERS", "COMPONENT_LABELS", "table1_shown", "table2_shown"]
 
 TABLES = ("Table 1", "Table 2")
 FIGURES = ("Fig. 1", "Fig. 2", "Fig. 3", "Fig. 4", "Fig. 5")
@@ -127,3 +128,40 @@ def reproduce(runs: int | None = None, seed: int | None = None, executor=None, s
     return Reproduction(E.PAPER, tables={"Table 1": t1, "Table 2": t2}, figures=figures, claims=reg,
                         settings={"runs": runs, "seeds": {k: seeds[k] for k in ("cwpa_gaussian", "cwpa_mixture",
                                                                                  "ung", "bot")}})
+
+
+def _printed_columns(t: pd.DataFrame, table_id: str, columns=("published mean", "published std")) -> pd.DataFrame:
+    from .. import published
+
+    fmt = published.formatter(E.PAPER, table_id)
+    out = t.copy()
+    for c in columns:
+        if c in out:
+            out[c] = [fmt(v) for v in out[c]]
+    return out
+
+
+def table1_shown(t1: pd.DataFrame) -> pd.DataFrame:
+    """Table 1 as the chapter shows it (:func:`pfrepro.experiments.gpff_zhang2016.table1`): the paper's
+    MSE mean and std as printed (``published.formatter``: the data file's text, never a rounded float),
+    and its printed time per run in ``published time (s)``; our numbers unchanged; "–" where the paper
+    has no row."""
+    from .. import published
+
+    out = _printed_columns(t1, "Table 1")
+    pub = published.printed_table(E.PAPER, "Table 1")
+    out["published time (s)"] = [pub.loc[n, "time (s)"] if n in pub.index else "–" for n in t1.index]
+    return out
+
+
+def table2_shown(t2: pd.DataFrame) -> pd.DataFrame:
+    """Table 2 as the chapter shows it (:func:`pfrepro.experiments.gpff_zhang2016.table2`, rows
+    (component, filter)): the paper's mean and std as printed, and its printed time per run in
+    ``published time (s)``."""
+    from .. import published
+
+    out = _printed_columns(t2, "Table 2")
+    pub = published.printed_table(E.PAPER, "Table 2")
+    out["published time (s)"] = [pub.loc["time (s)", f] if f in pub.columns else "–"
+                                 for f in t2.index.get_level_values("filter")]
+    return out

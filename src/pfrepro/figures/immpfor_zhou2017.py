@@ -64,6 +64,18 @@ def table1_frame(main, lik_pair=None, pub=None) -> pd.DataFrame:
     return tab1
 
 
+def table1_shown(tab1: pd.DataFrame) -> pd.DataFrame:
+    """Table 1 as the chapter shows it: the paper's cells as printed (``published.formatter``: the
+    data file's text, never a rounded float), ours to one decimal; missing cells "–"."""
+    from .. import published
+
+    fmt = published.formatter(E.PAPER, "Table 1")
+    out = tab1.astype(object).copy()
+    for c in tab1.columns:
+        out[c] = [fmt(v) if c.startswith("paper") else ("–" if pd.isna(v) else f"{v:.1f}") for v in tab1[c]]
+    return out
+
+
 def fig1(main, run: int = 0):
     """Fig. 1: the true trajectory of one run and the IMMPF and IMMPFOR estimates (km)."""
     S = E.SCENARIO

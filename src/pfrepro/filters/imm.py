@@ -486,6 +486,10 @@ class IMMPFOR(IMMParticleFilter):
     * ``density`` -- p(x) in eq 25: ``"gaussian"`` (default) the moment-matched density
       N(z; 0, I) of step c; ``"weights"``: the joint weight w' itself (eq 24) taken as p(x),
       as the prose around eq 25 reads.
+    * ``metric`` -- the distance of steps c-e: ``"whitened"`` (default) z = L^{-1}(x - m) with
+      the full jointly weighted covariance C = L L^T; ``"diagonal"``: each component scaled
+      by its own weighted standard deviation only, z = D^{-1}(x - m), D = diag(C)^(1/2)
+      (correlations ignored; the Gaussian density of step c is then N(z; 0, D^{-1} C D^{-1})).
     * ``mix_modes`` -- ``True`` (default) eq 23 as above; ``False`` (an ablation, not a
       reading): only the slot's own parent x_a^j moves, z_n = z_a^j + step, no mixing
       across modes.
@@ -500,11 +504,15 @@ class IMMPFOR(IMMParticleFilter):
     #: readings of eq 25's density p(x) and of when the replacement runs
     DENSITIES = ("gaussian", "weights")
     REPLACE = ("threshold", "always")
+    METRICS = ("whitened", "diagonal")
 
     def __init__(self, system, n_particles: int, model_likelihood: str = "gaussian", n_th: float = 0.5,
                  d: float = 1.0, m0=None, P0=None, density: str = "gaussian", replace: str = "threshold",
-                 mix_modes: bool = True):
+                 mix_modes: bool = True, metric: str = "whitened"):
         super().__init__(system, n_particles, model_likelihood, n_th, m0, P0)
+        if metric not in self.METRICS:
+            raise ValueError(f"metric must be one of {self.METRICS}, got {metric!r}")
+        self.metric = metric
         d = float(d)
         if not (np.isfinite(d) and d > 0):
             raise ValueError(f"step coefficient d must be a positive number, got {d!r}")
@@ -558,12 +566,21 @@ class IMMPFOR(IMMParticleFilter):
         do = np.ones((R_, r), dtype=bool) if do is None else np.asarray(do, bool)
         M = np.asarray(M, dtype=float)
         m, L, z = self.joint_whitening(x, w, u)                                   # (24)
+        if self.metric == "diagonal":      # scale by the standard deviations only (L = D Lc)
+            sd = np.sqrt(np.einsum("aii->ai", L @ np.swapaxes(L, -1, -2)))          # (R, n)
+            Lc = L / sd[:, :, None]                                                # Cholesky of D^-1 C D^-1
+            z = np.einsum("aij,arnj->arni", Lc, z)                                 # D^-1 (x - m)
+            L = np.einsum("ai,ij->aij", sd, np.eye(n))
+            logdet = np.sum(np.log(np.einsum("aii->ai", Lc)), axis=1)[:, None, None]
+        else:
+            Lc, logdet = None, 0.0
         if self.density == "weights":      # p(x) = w' = u_j w_l^j, the jointly normalised weight (24)
             wj = u[:, :, None] * w
             with np.errstate(divide="ignore"):
                 logp = np.log(wj / wj.sum(axis=(1, 2), keepdims=True))
         else:                              # the moment-matched Gaussian of the w'-weighted set
-            logp = -0.5 * np.einsum("arni,arni->arn", z, z) - 0.5 * n * np.log(2 * np.pi)
+            zw = z if Lc is None else np.einsum("aij,arnj->arni", np.linalg.inv(Lc), z)
+            logp = -0.5 * np.einsum("arni,arni->arn", zw, zw) - 0.5 * n * np.log(2 * np.pi) - logdet
         logL = math.lgamma(1 + 1 / n) - (np.log(r * N) + logp + np.log(unit_ball_volume(n))) / n   # (22), (25)
         logstep = np.log(self.d) + logL                                          # (R, r, N) per particle
         if idx is None:
@@ -641,7 +658,7 @@ class IMMPFOR(IMMParticleFilter):
     def __repr__(self) -> str:
         return (f"IMMPFOR(r={self.system.r}, N={self.n_particles}, model_likelihood={self.model_likelihood!r}, "
                 f"n_th={self.n_th}, d={self.d}, density={self.density!r}, replace={self.replace!r}, "
-                f"mix_modes={self.mix_modes})")
+                f"mix_modes={self.mix_modes}, metric={self.metric!r})")
 
 
 class IMMKalman(Filter):
