@@ -204,7 +204,7 @@ class Benchmark:
 
     @property
     def seed(self) -> int:
-        # the centred BOT reading runs on the offset reading's truths and filter streams (paired readings)
+        """The benchmark's seed (the centred BOT reading shares the offset reading's truths and filter streams)."""
         return SEEDS["bot" if self.key == "bot_centred" else self.key]
 
 
@@ -354,12 +354,15 @@ class BenchResult:
 
     @property
     def ref(self) -> str:
+        """Name of the benchmark's reference filter."""
         return self.bench.reference.name
 
     def finite(self, name) -> bool:
+        """Whether every error of filter ``name`` is finite (no run diverged)."""
         return bool(np.all(np.isfinite(self.err[name])))
 
     def diverged(self, name) -> int:
+        """Number of non-finite errors of filter ``name`` (diverged runs and steps)."""
         return int((~np.isfinite(self.err[name])).sum())
 
 
