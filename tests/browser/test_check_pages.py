@@ -151,7 +151,7 @@ def test_raw_rst_in_api_pages_fails(tmp_path):
 
 
 def test_wide_equation_may_scroll_on_a_phone_only_with_a_cue(tmp_path):
-    eq = ("<div class='math' style='overflow-x:auto;{style}'><mjx-container style='display:block'>"
+    eq = ("<div class='math'><mjx-container style='display:block;overflow-x:auto;{style}'>"
           "<mjx-math style='display:inline-block;width:900px'>x</mjx-math></mjx-container></div>")
     _only(_run(tmp_path, _page(eq.format(style=CUE)), 400))
     _only(_run(tmp_path, _page(eq.format(style='')), 400), equation=1, wide=1)
