@@ -428,32 +428,36 @@ PAGE_JS = r"""
 
   // ---- wide: nothing wider than the viewport, except inside an allowed, visibly cued scroll box
   const vw = de.clientWidth;
-  const reported = [];
-  let nWide = 0;
+  const offenders = [];
   for (const el of document.body.querySelectorAll('*')) {
-    if (reported.some(r => r.contains(el))) continue;
+    if (offenders.length > 400) break;
     if (el.closest('.bd-sidebar-primary, .bd-sidebar-secondary, dialog, script, style, head, svg, mjx-assistive-mml')) continue;
     const r = el.getBoundingClientRect();
     if (r.width === 0 || r.height === 0) continue;
     const sc = el.parentElement && scrollerOf(el.parentElement);
-    const out = r.right > vw + tol || r.left < -tol;
+    const st = getComputedStyle(el);
+    const ox = st.overflowX;
     // an element that scrolls sideways itself (not by name, or with no cue)
-    const ox = getComputedStyle(el).overflowX;
     const scrolls = (ox === 'auto' || ox === 'scroll') && el.scrollWidth > el.clientWidth + tol && el.clientWidth > 0;
+    // its box, or the text it holds (a long word in a heading), past the viewport's edges
+    const contentRight = ox === 'visible' ? r.left + el.scrollWidth : r.right;
+    const out = Math.max(r.right, contentRight) > vw + tol || r.left < -tol;
     let why = null;
     if (scrolls && !allowedScroller(el)) why = `scrolls sideways (${el.scrollWidth}px in ${el.clientWidth}px) but is not a box allowed to scroll`;
     else if (scrolls && !cued(el)) why = `scrolls sideways (${el.scrollWidth}px in ${el.clientWidth}px) with no visible cue`;
-    else if (out && !sc && visible(el)) why = `${Math.round(r.width)}px wide, spans ${Math.round(r.left)}..${Math.round(r.right)}px of a ${vw}px viewport`;
-    if (why) {
-      reported.push(el);
-      if (nWide++ < 5) fails.push({kind: 'wide', what: label(el) + (el.className && typeof el.className === 'string' ? '.' + el.className.trim().split(/\s+/).slice(0, 2).join('.') : ''),
-                                   detail: why, box: box(el)});
-    }
+    else if (out && !sc && visible(el)) why = `${Math.round(Math.max(r.width, contentRight - r.left))}px wide, spans ${Math.round(r.left)}..${Math.round(Math.max(r.right, contentRight))}px of a ${vw}px viewport`;
+    if (why) offenders.push({el, why});
   }
+  // report the innermost offenders (a section is wide because its heading is)
+  const inner = offenders.filter(o => !offenders.some(p => p !== o && o.el.contains(p.el)));
+  inner.slice(0, 5).forEach(({el, why}) => fails.push({kind: 'wide',
+      what: label(el) + (el.className && typeof el.className === 'string' ? '.' + el.className.trim().split(/\s+/).slice(0, 2).join('.') : ''),
+      detail: why + ` "${(el.textContent || '').trim().slice(0, 40)}"`, box: box(el)}));
 
   // ---- tables: text inside its cell (else it is drawn over the next one), numbers on one line,
   // no text cut short with an ellipsis
-  const numRe = /[-+−]?\d+(?:[.,]\d+)*(?:[eE][-+−]?\d+)?%?/g;
+  // a number on its own (not the "-1" of "k-1", nor digits inside a name such as "x2")
+  const numRe = /(?<![\w.])[-+−]?\d+(?:[.,]\d+)*(?:[eE][-+−]?\d+)?%?/g;
   let nOverlap = 0, nNumber = 0, nEllipsis = 0;
   document.querySelectorAll('td, th').forEach(cell => {
     if (!col.contains(cell) || cell.closest('mjx-container') || !visible(cell)) return;

@@ -97,6 +97,8 @@ def _page(body):
 def test_wide_element_fails_at_phone_width(tmp_path):
     _only(_run(tmp_path, _page("<div style='width:700px'>a fixed-width block</div>"), 400), wide=1, overflow=2)
     assert _run(tmp_path, _page("<div style='width:700px'>a fixed-width block</div>"), 1000)["wide"] == 0
+    # text (a long word in a heading) running past the viewport is caught, not only boxes
+    _only(_run(tmp_path, _page("<h1>pfrepro.experiments.immpfor_zhou2017_and_more</h1>"), 400), wide=1, overflow=2)
 
 
 def test_scroll_box_not_allowed_by_name_fails(tmp_path):
