@@ -448,6 +448,19 @@ PAGE_JS = r"""
     else if (out && !sc && visible(el)) why = `${Math.round(Math.max(r.width, contentRight - r.left))}px wide, spans ${Math.round(r.left)}..${Math.round(Math.max(r.right, contentRight))}px of a ${vw}px viewport`;
     if (why) offenders.push({el, why});
   }
+  // the contents panel on the right (visible on a laptop): entries clipped at its edge
+  const toc = document.querySelector('.bd-sidebar-secondary');
+  if (toc && visible(toc) && toc.getBoundingClientRect().width > 0) {
+    const edge = toc.getBoundingClientRect().left + toc.clientLeft + toc.clientWidth;
+    const tw = document.createTreeWalker(toc, NodeFilter.SHOW_TEXT);
+    for (let n = tw.nextNode(); n; n = tw.nextNode()) {
+      if (!n.textContent.trim() || !visible(n.parentElement)) continue;
+      const rg = document.createRange();
+      rg.selectNodeContents(n);
+      const right = Math.max(0, ...[...rg.getClientRects()].map(q => q.right));
+      if (right > edge + tol) offenders.push({el: n.parentElement, why: `cut at the edge of the contents panel (${Math.round(right - edge)}px hidden)`});
+    }
+  }
   // report the innermost offenders (a section is wide because its heading is)
   const inner = offenders.filter(o => !offenders.some(p => p !== o && o.el.contains(p.el)));
   inner.slice(0, 5).forEach(({el, why}) => fails.push({kind: 'wide',

@@ -158,3 +158,11 @@ def test_wide_equation_may_scroll_on_a_phone_only_with_a_cue(tmp_path):
     _only(_run(tmp_path, _page(eq.format(style=CUE)), 400))
     _only(_run(tmp_path, _page(eq.format(style='')), 400), equation=1, wide=1)
     _only(_run(tmp_path, _page(eq.format(style=CUE)), 1000), equation=1)
+
+
+def test_entry_cut_at_the_contents_panel_edge_fails(tmp_path):
+    panel = ("<div class='bd-sidebar-secondary' style='position:fixed;right:0;top:0;width:150px;overflow:hidden'>"
+             "<a href='#top' id='top' style='white-space:nowrap'>EvolutionSamplingParticleFilter</a></div>")
+    _only(_run(tmp_path, _page(panel)), wide=1)
+    wrapped = panel.replace("white-space:nowrap", "overflow-wrap:anywhere")
+    _only(_run(tmp_path, _page(wrapped)))
