@@ -79,8 +79,8 @@ SCROLL_ALLOWED = ("div.math > mjx-container", "div.cell_output > div.output",
 #: (pfrepro.plotting, checked by tests/test_bookinfo_plotting.py); on screen that text is
 #: MIN_FONT_PT * BOOK_DPI / 72 * (displayed width / natural width) CSS px, which must be >= MIN_TEXT_PX
 BOOK_DPI = 150
-MIN_FONT_PT = 7.5
-MIN_TEXT_PX = 7.5
+MIN_FONT_PT = 8.0
+MIN_TEXT_PX = 8.0
 #: a numpydoc "(type)" slot longer than this holds a description, not a type
 MAX_TYPE_CHARS = 60
 LOCAL_SCHEMES = ("file:", "data:", "blob:", "about:", "chrome:", "chrome-extension:", "devtools:")
