@@ -23,6 +23,7 @@ papers, cli  the paper registry and the ``pfrepro`` command line
 export       tidy frames, CSV files and the book's download links
 plotting     the book's figure style and palette
 bookinfo     what a build of the book contains and what built it
+prose        the chapters' glue helpers and generated sentences in number agreement
 validation   input checks at the public API boundary
 """
 from . import claims, filters, metrics, models, montecarlo, noise, published, rng

@@ -66,6 +66,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from .. import prose as _prose
 from ..bounds import pcrb_linear_dynamics
 from ..choices import FIXED, READING, SWEEP, FreeChoice, over
 from ..claims import ClaimsRegistry, ordering_holds
@@ -841,10 +842,7 @@ def ranking_compact(r: BenchResult) -> pd.DataFrame:
                          "tie / note": rk["tie"]}, index=rk.index)
 
 
-def plural(n: int, one: str, many: str | None = None) -> str:
-    """``"1 claim"``, ``"2 claims"``: the count with the right form of the noun."""
-    many = many if many is not None else one + "s"
-    return f"{n} {one if n == 1 else many}"
+plural = _prose.plural  # "1 claim", "2 claims" (the book's one implementation, pfrepro.prose)
 
 
 def paper_table(results: dict, vt: pd.DataFrame | None = None) -> pd.DataFrame:
