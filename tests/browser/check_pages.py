@@ -496,7 +496,8 @@ PAGE_JS = r"""
         if (tops.size > 1 && nNumber++ < 5)
           fails.push({kind: 'number', what: label(cell), detail: `number ${JSON.stringify(m[0])} broken over ${tops.size} lines`, box: box(cell)});
       }
-      if (n.textContent.includes('…') && !n.parentElement.closest('code, .math') && nEllipsis++ < 5)
+      // typed "…", or pandas' "..." at the end of a cell cut to display.max_colwidth
+      if (/(…|\.\.\.)\s*$/.test(n.textContent) && !n.parentElement.closest('code, .math') && nEllipsis++ < 5)
         fails.push({kind: 'ellipsis', what: label(cell), detail: 'text cut with "…": ' + JSON.stringify(n.textContent.trim().slice(-60)), box: box(cell)});
     }
     if (over && nOverlap++ < 5)
