@@ -639,8 +639,12 @@ def pages_under(root: Path) -> list[Path]:
 
 
 def check(root: Path, pages: list[Path], chromium: str, width: int, height: int,
-          shots: Path | None, verbose: bool) -> dict:
-    browser = Browser(chromium, width, height)
+          shots: Path | None, verbose: bool, browser: Browser | None = None) -> dict:
+    """Check ``pages`` at one viewport; ``browser``: an open :class:`Browser` to reuse (kept open)."""
+    own = browser is None
+    if own:
+        browser = Browser(chromium, width, height)
+    browser.width, browser.height = width, height
     print(f"browser: {browser.version} ({chromium}), window {width}x{height}, offline")
     results = {}
     try:
@@ -690,7 +694,8 @@ def check(root: Path, pages: list[Path], chromium: str, width: int, height: int,
                     if n.startswith("scrolled"):
                         print(f"       note      {n}")
     finally:
-        browser.close()
+        if own:
+            browser.close()
     return results
 
 

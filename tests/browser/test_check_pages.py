@@ -39,12 +39,26 @@ BROKEN = (HEAD + "<main style='width:600px'><p>leak $\\dot x$ here</p>"
           "<script>console.error('boom')</script></main></body></html>")
 
 
+_BROWSER = []
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _one_browser():
+    """One headless Chromium for the whole file (a page per test, a fresh tab per page)."""
+    b = check_pages.Browser(CHROMIUM, 1000, 700)
+    _BROWSER.append(b)
+    yield
+    _BROWSER.clear()
+    b.close()
+
+
 def _run(tmp_path, html, width=1000, name="index.html"):
     page = tmp_path / name
     page.parent.mkdir(parents=True, exist_ok=True)
     page.write_text(html, encoding="utf-8")
     (tmp_path / "index.html").touch()
-    res = check_pages.check(tmp_path, [page], CHROMIUM, width, 700, None, False)
+    res = check_pages.check(tmp_path, [page], CHROMIUM, width, 700, None, False,
+                            browser=_BROWSER[0] if _BROWSER else None)
     return {k: sum(f["kind"] == k for f in res[name]["fails"]) for k in check_pages.KINDS}
 
 
