@@ -32,3 +32,11 @@ def test_glue_helpers_return_nothing(monkeypatch):
     assert prose.glue_md("b", "*x*") is None
     assert seen[0] == ("a", 0.5, False) and type(seen[0][1]) is float
     assert seen[1][0] == "b" and seen[1][2] is False
+
+
+def test_tables_show_missing_values_as_a_dash_and_whole_cells():
+    import pandas as pd
+
+    html = prose._frame_html(pd.DataFrame({"a": [1.0, np.nan], "reason": ["x" * 80, "y"]}))
+    assert "NaN" not in html and "nan" not in html and prose.MISSING in html
+    assert "x" * 80 in html and "..." not in html

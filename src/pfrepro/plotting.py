@@ -108,8 +108,15 @@ def method_color(name: str, default: str | None = None) -> str:
 
 
 def use_book_style() -> dict:
-    """Apply :data:`BOOK_STYLE` to matplotlib's rcParams; returns the settings applied."""
+    """Apply :data:`BOOK_STYLE` to matplotlib's rcParams; returns the settings applied.
+
+    Also shows the notebook's tables the book's way (:func:`pfrepro.prose.use_book_tables`:
+    missing values as "—", no cell cut with "...").
+    """
+    from .prose import use_book_tables
+
     mpl.rcParams.update(BOOK_STYLE)
+    use_book_tables()
     return dict(BOOK_STYLE)
 
 

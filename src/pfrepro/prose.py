@@ -16,7 +16,42 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
-__all__ = ["glue_value", "glue_md", "glue_figure", "plural", "count_is", "verdict_sentence", "VERDICT_ORDER"]
+__all__ = ["glue_value", "glue_md", "glue_figure", "plural", "count_is", "verdict_sentence", "VERDICT_ORDER",
+           "MISSING", "use_book_tables"]
+
+#: how a table shows a missing value (NaN): a dash with its reason on hover, never "NaN"
+MISSING = "—"
+_MISSING_HTML = '<span class="pf-missing" title="no value: not computed, not published or not applicable">—</span>'
+
+
+def _frame_html(df) -> str:
+    """A DataFrame as the book shows it: whole cells (no "..." cut) and missing values as a dash."""
+    import pandas as pd
+
+    with pd.option_context("display.max_colwidth", None):
+        return df.to_html(na_rep=MISSING, border=0)
+
+
+def use_book_tables() -> None:
+    """Show every DataFrame of the running notebook the book's way.
+
+    Missing values (NaN) appear as "—" instead of "NaN" (a chapter says why next to its
+    table), and no cell is cut to ``display.max_colwidth`` with "..."; Styler tables get the
+    same dash. Called by :func:`pfrepro.plotting.use_book_style`, which every chapter runs
+    first; outside IPython it only sets the pandas options.
+    """
+    import pandas as pd
+
+    pd.set_option("styler.format.na_rep", MISSING)
+    pd.set_option("display.max_colwidth", None)
+    try:
+        from IPython import get_ipython
+    except ImportError:  # pragma: no cover - IPython is a dependency of the book
+        return
+    ip = get_ipython()
+    if ip is not None:
+        ip.display_formatter.formatters["text/html"].for_type(pd.DataFrame, _frame_html)
+
 
 #: the verdict scale, in the order sentences list it
 VERDICT_ORDER = ("reproduced", "qualitatively reproduced", "not reproduced", "inconclusive", "not checkable")
