@@ -182,7 +182,7 @@ def labelled_table_html(table, *, classes: str = "pf-claims pf-text") -> str:
 
 
 def cpu_model() -> str:
-    """CPU model name (``/proc/cpuinfo`` on Linux, else :func:`platform.processor`)."""
+    """CPU model name (``/proc/cpuinfo`` on Linux, else ``platform.processor()``)."""
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
             if line.lower().startswith("model name"):

@@ -16,6 +16,7 @@ __all__ = ["BOOK_DPI", "BOOK_STYLE", "use_book_style", "log_ylim_from", "COLUMN_
 #: resolution of every figure in the book (the inline backend renders at ``figure.dpi``)
 BOOK_DPI = 150
 
+#: the matplotlib rcParams every figure of the book is drawn with
 BOOK_STYLE = {
     "figure.dpi": BOOK_DPI,
     "savefig.dpi": BOOK_DPI,
@@ -82,8 +83,8 @@ _ALIASES = (("liu–west", "Liu-West"), ("liu west", "Liu-West"), ("exact", "gri
             ("cmspf", "CMS-PF"), ("sir", "PF"), ("bootstrap", "PF"), ("immpfor", "IMMPFOR"))
 
 
-#: colours for series that are not methods (initial guesses, parameter values, readings): Paul
-#: Tol's "bright" scheme, distinct from each other and readable by colour-blind readers
+#: colours for series that are not methods (initial guesses, parameter values, readings), from
+#: Paul Tol's "bright" scheme, distinct from each other and readable by colour-blind readers
 SERIES_COLORS = ("#4477aa", "#ee6677", "#228833", "#ccbb44", "#66ccee", "#aa3377", "#bbbbbb")
 
 

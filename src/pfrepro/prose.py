@@ -19,7 +19,7 @@ import numpy as np
 __all__ = ["glue_value", "glue_md", "glue_figure", "plural", "count_is", "verdict_sentence", "VERDICT_ORDER",
            "MISSING", "use_book_tables"]
 
-#: how a table shows a missing value (NaN): a dash with its reason on hover, never "NaN"
+#: how a table shows a missing value (NaN), a dash with its meaning on hover, never "NaN"
 MISSING = "—"
 _MISSING_HTML = '<span class="pf-missing" title="no value: not computed, not published or not applicable">—</span>'
 
