@@ -76,3 +76,127 @@ def test_anchored_claims_escapes_and_anchors():
     assert "x &lt; y" in out and "1.235" in out and "–" in out
     with pytest.raises(ValueError, match="id_col"):
         bookinfo.anchored_claims(t, "pap", id_col="nope")
+
+
+# ---- figure text readable at the column width ----------------------------------------------
+import ast  # noqa: E402
+import re  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+_SIZE_WORDS = {"xx-small": 0.579, "x-small": 0.694, "small": 0.833, "medium": 1.0, "large": 1.2,
+               "x-large": 1.44, "xx-large": 1.728}
+
+
+def _figure_scopes():
+    """(where, AST) of every figure-making scope: functions of pfrepro.figures, chapter code cells."""
+    for path in sorted((ROOT / "src/pfrepro/figures").glob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.FunctionDef):
+                yield f"{path.name}:{node.name}", node
+    for path in sorted((ROOT / "book").glob("*.md")):
+        text = path.read_text(encoding="utf-8")
+        for i, m in enumerate(re.finditer(r"```\{code-cell\}[^\n]*\n(.*?)```", text, re.S)):
+            src = re.sub(r"^---\n.*?\n---\n", "", m.group(1), flags=re.S)
+            src = "\n".join(line for line in src.splitlines() if not line.startswith((":", "%", "!")))
+            try:
+                yield f"{path.name}:cell {i} (line {text[:m.start()].count(chr(10)) + 1})", ast.parse(src)
+            except SyntaxError:
+                continue
+
+
+def _num(node):
+    try:
+        return float(ast.literal_eval(node))
+    except (ValueError, TypeError, SyntaxError):
+        return None
+
+
+def _sizes(scope):
+    """Literal figure widths (inches) and text sizes (points) set in a scope."""
+    widths, fonts = [], []
+    base = plotting.BOOK_STYLE["font.size"]
+    for node in ast.walk(scope):
+        if not isinstance(node, ast.Call):
+            continue
+        for kw in node.keywords:
+            if kw.arg == "figsize" and isinstance(kw.value, ast.Tuple) and kw.value.elts:
+                w = _num(kw.value.elts[0])
+                if w is not None:
+                    widths.append(w)
+            elif kw.arg in ("fontsize", "labelsize", "size", "title_fontsize"):
+                if isinstance(kw.value, ast.Constant) and isinstance(kw.value.value, str):
+                    if kw.value.value in _SIZE_WORDS:
+                        fonts.append(base * _SIZE_WORDS[kw.value.value])
+                else:
+                    v = _num(kw.value)
+                    if v is not None and kw.arg != "size" or (v is not None and v < 40):
+                        fonts.append(v)
+    return widths, fonts
+
+
+def test_book_style_text_is_at_least_the_minimum():
+    sizes = {k: v for k, v in plotting.BOOK_STYLE.items() if k.endswith(("size", "fontsize"))}
+    assert min(sizes.values()) >= plotting.MIN_FONT_PT, sizes
+
+
+def test_rendered_text_size_rule():
+    # a 12 in figure at 150 dpi is 1800 px, shown in a 757 px column: 8 pt text is 7.0 px
+    assert plotting.rendered_text_px(8, 12) == pytest.approx(8 * 757 / (72 * 12))
+    # a figure narrower than the column is shown at its natural size
+    assert plotting.rendered_text_px(8, 4) == pytest.approx(8 * 150 / 72)
+    w = plotting.max_figure_width()
+    assert plotting.rendered_text_px(plotting.MIN_FONT_PT, w) == pytest.approx(plotting.MIN_TEXT_PX)
+
+
+def test_every_figure_text_is_readable_at_the_column_width():
+    """No figure of the package or of a chapter sets text below MIN_FONT_PT, or is so wide that
+    the smallest text it uses is shown below MIN_TEXT_PX in the text column (the browser check
+    measures the same on the built pages from each image's natural and displayed width)."""
+    bad = []
+    scopes = list(_figure_scopes())
+    assert len(scopes) > 50
+    for where, scope in scopes:
+        widths, fonts = _sizes(scope)
+        small = min(fonts + [plotting.MIN_FONT_PT])
+        if fonts and small < plotting.MIN_FONT_PT:
+            bad.append(f"{where}: text {small:g} pt < {plotting.MIN_FONT_PT:g} pt")
+        for w in widths:
+            px = plotting.rendered_text_px(min(small, plotting.MIN_FONT_PT), w)
+            if px < plotting.MIN_TEXT_PX - 1e-9:
+                bad.append(f"{where}: figure {w:g} in wide shows {min(small, plotting.MIN_FONT_PT):g} pt text "
+                           f"at {px:.1f} px < {plotting.MIN_TEXT_PX:g} px")
+    assert not bad, "\n".join(bad)
+
+
+def test_browser_check_uses_the_same_limits():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("check_pages", ROOT / "tests/browser/check_pages.py")
+    cp = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(cp)
+    assert (cp.BOOK_DPI, cp.MIN_FONT_PT, cp.MIN_TEXT_PX) == (plotting.BOOK_DPI, plotting.MIN_FONT_PT,
+                                                           plotting.MIN_TEXT_PX)
+
+
+def test_method_colours():
+    assert plotting.method_color("PF (500)") == plotting.method_color("PF, published") == plotting.METHOD_COLORS["PF"]
+    assert plotting.method_color("IMMPFOR (mean lik.)") == plotting.METHOD_COLORS["IMMPFOR"]
+    assert plotting.method_color("DEKF") != plotting.method_color("DPF")
+    assert plotting.method_color("exact posterior mean") == plotting.REFERENCE_COLOR
+    with pytest.raises(KeyError):
+        plotting.method_color("guess 0.2")
+    # one colour per method: no two methods of different families share a colour
+    fam = {k: v for k, v in plotting.METHOD_COLORS.items() if not k.startswith("IMM-")}
+    assert len(set(fam.values())) == len(fam)
+
+
+def test_figure_modules_take_method_colours_from_the_palette():
+    """The figure modules name no colour of matplotlib's default cycle ("C0".."C9") for a
+    method: method colours come from pfrepro.plotting (one colour per method across the book)."""
+    hits = []
+    for path in sorted((ROOT / "src/pfrepro/figures").glob("*.py")):
+        for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            if re.search(r"[\"']C\d[\"']|[\"']C\d[-:.o]", line):
+                hits.append(f"{path.name}:{i}: {line.strip()[:90]}")
+    assert not hits, "\n".join(hits)

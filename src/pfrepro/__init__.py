@@ -2,14 +2,29 @@
 
 Subpackages and modules
 -----------------------
-models      state-space models (UNGM family, CWPA, bearings-only tracking, stochastic
-            volatility) and the model contract (which model capabilities each filter uses)
-filters     KF, EKF, UKF, bootstrap PF + resampling, grid (point-mass) filter
-metrics     the papers' error measures with Monte Carlo standard errors
-montecarlo  batched Monte Carlo runner with per-filter random streams and timings
-published   the papers' published tables as data
-claims      claims registry and the verdict rule behind the scorecard
-rng         per-run random streams (RunStreams): run i independent of the batch
+models       state-space models (UNGM family, CWPA, bearings-only tracking, stochastic volatility,
+             models with a static parameter, re-entry, jump-Markov tracking) and the model contract
+filters      Kalman family, particle filters and resampling, grid filters, the papers' filters
+             (GPFF, CMS-PF, ESPF, dual PF, IMM-PF) and today's methods (APF, RPF, PFPF, SMC²...)
+noise        Gaussian and Gaussian-mixture measurement noise
+flow         particle-flow algebra of the GPFF
+chaos        chaotic carrier sequences of the CMS-PF
+bounds       posterior Cramér–Rao bounds
+metrics      the papers' error measures with Monte Carlo standard errors
+montecarlo   batched Monte Carlo runner with per-filter random streams and timings
+rng          per-run random streams (RunStreams): run i independent of the batch
+cost         deterministic cost counts and measured time for cost claims
+published    the papers' published tables as data
+claims       claims registry and the verdict rule behind the scorecard
+choices      free choices a paper leaves open, and the verdict under each reading
+experiments  one module per paper: model, filters, settings, seeds
+figures      the papers' figures and tables as functions
+papers, cli  the paper registry and the ``pfrepro`` command line
+export       tidy frames, CSV files and the book's download links
+plotting     the book's figure style and palette
+bookinfo     what a build of the book contains and what built it
+prose        the chapters' glue helpers and generated sentences in number agreement
+validation   input checks at the public API boundary
 """
 from . import claims, filters, metrics, models, montecarlo, noise, published, rng
 

@@ -21,7 +21,7 @@ from importlib import metadata
 from pathlib import Path
 
 __all__ = ["book_root", "toc_files", "papers_in_book", "claim_anchor", "claim_anchor_html",
-           "claim_href", "anchored_claims", "build_info", "cpu_model"]
+           "claim_href", "anchored_claims", "labelled_table_html", "nowrap_numbers", "build_info", "cpu_model"]
 
 
 def book_root(start: Path | None = None) -> Path:
@@ -137,11 +137,52 @@ def anchored_claims(table, paper: str, id_col: str | None = None, *, float_forma
     for col in t.columns:
         t[col] = [cell(v) for v in t[col]]
     t[id_col] = [claim_anchor_html(paper, i) for i in ids]
-    return HTML(t.to_html(index=False, escape=False, classes=classes, border=0))
+    return HTML(labelled_table_html(t, classes=classes))
+
+
+# a number as a reader reads it: sign, digits, decimals, exponent, percent (kept on one line)
+_NUMBER = re.compile(r"(?<![\w.&#])[-+−]?\d+(?:[.,]\d+)*(?:[eE][-+−]?\d+)?%?(?!\w)")
+
+
+def nowrap_numbers(text: str) -> str:
+    """Escaped HTML text with every number in ``<span class="pf-num">`` (never broken inside) and a
+    no-break space after "±", so "0.0038 ± 0.0011" may wrap before the "±" but nowhere else."""
+    text = _NUMBER.sub(lambda m: f'<span class="pf-num">{m.group(0)}</span>', text)
+    return text.replace("± ", "±&nbsp;")
+
+
+def labelled_table_html(table, *, classes: str = "pf-claims pf-text") -> str:
+    """A DataFrame of HTML cells as a ``<table>`` whose cells carry their column name.
+
+    Every ``<td>`` gets ``data-label="<column>"``, so below the phone breakpoint the stylesheet
+    (``book/_static/pfrepro.css``) shows each row as a stacked card of "column: value" lines
+    instead of columns too narrow to read; numbers in plain cells are wrapped by
+    :func:`nowrap_numbers` (cells that already hold HTML tags are left as they are), and claim
+    ids (column ``id`` or ``claim_id``) may wrap after an underscore only.
+    """
+    cols = [str(c) for c in table.columns]
+    head = "".join(f'<th scope="col">{html.escape(c)}</th>' for c in cols)
+
+    def breakable_id(v: str) -> str:
+        # claim ids ("t2_x_PF(500)") may wrap after an underscore, never inside "PF(500)"
+        return re.sub(r">([^<]*)<", lambda m: ">" + m.group(1).replace("_", "_<wbr>") + "<", f">{v}<")[1:-1]
+
+    rows = []
+    for rec in table.itertuples(index=False):
+        cells = []
+        for c, v in zip(cols, rec):
+            v = str(v)
+            body = v if "<" in v else nowrap_numbers(v)
+            if c in ("id", "claim_id"):
+                body = breakable_id(body)
+            cells.append(f'<td data-label="{html.escape(c)}" class="pf-col-{re.sub(r"[^a-z0-9]+", "-", c.lower())}">{body}</td>')
+        rows.append("<tr>" + "".join(cells) + "</tr>")
+    return (f'<table class="{html.escape(classes)}"><thead><tr>{head}</tr></thead>'
+            f'<tbody>{"".join(rows)}</tbody></table>')
 
 
 def cpu_model() -> str:
-    """CPU model name (``/proc/cpuinfo`` on Linux, else :func:`platform.processor`)."""
+    """CPU model name (``/proc/cpuinfo`` on Linux, else ``platform.processor()``)."""
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
             if line.lower().startswith("model name"):

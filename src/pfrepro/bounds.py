@@ -58,20 +58,27 @@ def pcrb_linear_dynamics(model, T: int, runs: int, rng: np.random.Generator, ini
 
     Parameters
     ----------
-    model : a :class:`~pfrepro.models.StateSpaceModel` with a matrix attribute ``F``
+    model : StateSpaceModel
+        A :class:`~pfrepro.models.StateSpaceModel` with a matrix attribute ``F``
         (``f(x) = F x``), Gaussian measurement noise, ``jacobian_h`` and ``Q``.
-    T : horizon; the bound is returned for k = 1..T.
-    runs : number of simulated truth trajectories for the Monte Carlo estimate of
+    T : int
+        Horizon; the bound is returned for k = 1..T.
+    runs : int
+        Number of simulated truth trajectories for the Monte Carlo estimate of
         E[H_kᵀ R⁻¹ H_k] (all advanced together; vectorised over runs).
-    rng : generator for the truth trajectories (use ``montecarlo.truth_rng``).
-    init : ``"prior"`` (x_0 ~ N(m0, P0), J_0 = P0⁻¹), ``"prior_info"`` (J_0 = P0⁻¹, truths
+    rng : numpy.random.Generator
+        Generator for the truth trajectories (use ``montecarlo.truth_rng``).
+    init : {"prior", "prior_info", "fixed"}
+        ``"prior"`` (x_0 ~ N(m0, P0), J_0 = P0⁻¹), ``"prior_info"`` (J_0 = P0⁻¹, truths
         from the model's own truth start) or ``"fixed"`` (x_0 = x0 known, J_0⁻¹ = 0).
-    return_cov : return the full J_k⁻¹ ``(T, dim_x, dim_x)`` instead of its diagonal.
+    return_cov : bool
+        Return the full J_k⁻¹ ``(T, dim_x, dim_x)`` instead of its diagonal.
 
     Returns
     -------
-    ndarray ``(T, dim_x)``: the diagonal of J_k⁻¹ (the bound on each component's MSE) at
-    k = 1..T; or ``(T, dim_x, dim_x)`` with ``return_cov=True``.
+    ndarray
+        ``(T, dim_x)``: the diagonal of J_k⁻¹ (the bound on each component's MSE) at
+        k = 1..T; or ``(T, dim_x, dim_x)`` with ``return_cov=True``.
     """
     T = check_positive_int(T, "T")
     runs = check_positive_int(runs, "runs")

@@ -75,14 +75,21 @@ def logistic_sequence(n: int, x0=0.3, u: float = 4.0, burn_in: int = DEFAULT_BUR
 
     Parameters
     ----------
-    n : number of recorded values (after the burn-in).
-    x0 : initial value(s) in (0, 1); an array gives independent chains.
-    u : control parameter; the paper's range is (3.56, 4.0]. The map is onto
+    n : int
+        Number of recorded values (after the burn-in).
+    x0 : float or ndarray
+        Initial value(s) in (0, 1); an array gives independent chains.
+    u : float
+        Control parameter; the paper's range is (3.56, 4.0]. The map is onto
         (0, 1) only for u = 4 (for u < 4 the values stay below u / 4), and the
         range contains periodic windows (e.g. near u = 3.83), so u = 4 is the default.
-    burn_in : iterations T0 discarded before recording (sec 3.3).
+    burn_in : int
+        Iterations T0 discarded before recording (sec 3.3).
 
-    Returns ``(n, *shape(x0))`` values in (0, 1).
+    Returns
+    -------
+    ndarray
+        ``(n, *shape(x0))`` values in (0, 1).
     """
     n = check_positive_int(n, "n")
     burn_in = _check_burn_in(burn_in)
@@ -148,11 +155,17 @@ class ChaosCarrier:
 
     Parameters
     ----------
-    kind : ``"randn"`` (CMS1), ``"logistic"`` (eq 1, CMS2) or ``"chebyshev"`` (eq 6, CMS3).
-    u : logistic control parameter (eq 1).
-    burn_in : T0 of sec 3.3.
-    init : one of :data:`CARRIER_INITS` (default ``"chain"``, described next).
+    kind : {"randn", "logistic", "chebyshev"}
+        ``"randn"`` (CMS1), ``"logistic"`` (eq 1, CMS2) or ``"chebyshev"`` (eq 6, CMS3).
+    u : float
+        Logistic control parameter (eq 1).
+    burn_in : int
+        T0 of sec 3.3.
+    init : str
+        One of :data:`CARRIER_INITS` (default ``"chain"``, described in the notes).
 
+    Notes
+    -----
     :meth:`generate` returns ``(T, *shape)`` values: one chain per entry of
     ``shape`` (runs x map slots x state components), its initial value drawn
     from ``rng`` (uniform on the open interval, away from the excluded points),
@@ -175,6 +188,7 @@ class ChaosCarrier:
 
     @property
     def support(self) -> tuple[float, float]:
+        """The interval the carrier's values lie in, by ``kind``; (-inf, inf), (0, 1) or (-1, 1)."""
         return {"randn": (-np.inf, np.inf), "logistic": (0.0, 1.0), "chebyshev": (-1.0, 1.0)}[self.kind]
 
     def generate(self, T: int, shape, rng: np.random.Generator) -> np.ndarray:

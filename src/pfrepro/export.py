@@ -140,6 +140,7 @@ class DownloadLink:
 
     @property
     def markdown(self) -> str:
+        """The MyST line of download links (one ``{download}`` role per format)."""
         links = " · ".join(f"{{download}}`{label} <{rel}>`" for label, rel in zip(self.labels, self.rel))
         return f"Download: {links}"
 

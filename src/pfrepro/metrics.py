@@ -61,6 +61,7 @@ class McSummary:
     n: int
 
     def interval(self, z: float = 1.96) -> tuple[float, float]:
+        """Normal-approximation interval mean ± z·SE (z = 1.96: 95 %)."""
         return self.mean - z * self.se, self.mean + z * self.se
 
 

@@ -457,21 +457,28 @@ def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, execu
 
     Parameters
     ----------
-    filters : mapping name -> filter object (anything with ``filter(y, rng)``).
-    executor : None (serial: one batched call per filter) or any
+    filters : dict
+        Mapping name -> filter object (anything with ``filter(y, rng)``).
+    executor : concurrent.futures.Executor or None
+        None (serial: one batched call per filter) or any
         ``concurrent.futures.Executor`` -- a ``ProcessPoolExecutor``, or a dask.distributed
         ``Client.get_executor()``. The runs are cut into ``chunks`` contiguous chunks (default
         two per worker), the truth and every (filter, chunk) become tasks, and the results are
         concatenated in run order: bit-identical to the serial call. Models and filters must
         be picklable.
-    progress : None (auto: a ``tqdm`` bar only when stderr is a terminal and ``CI`` is unset),
+    progress : bool or None
+        None (auto: a ``tqdm`` bar only when stderr is a terminal and ``CI`` is unset),
         True or False.
-    time_per_run : also measure each filter's wall time on a single run
+    time_per_run : bool
+        Also measure each filter's wall time on a single run
         (median of ``timing_repeats``, interleaved across the filters: :func:`time_filters`),
         the figure the papers' timing tables report. Always serial, in this process, after
         every parallel task has finished (never while the pool is working).
-    sim : reuse an existing simulation instead of simulating (``T``/``runs`` must match).
+    sim : Simulation, optional
+        Reuse an existing simulation instead of simulating (``T``/``runs`` must match).
 
+    Notes
+    -----
     ``batch_seconds[name]`` is the wall time of the filter's batched call (serial), or the sum
     of its chunks' wall times in the workers (with an executor).
     """

@@ -61,10 +61,12 @@ class Paper:
 
     @property
     def tables(self) -> tuple[str, ...]:
+        """Names of the tables the paper's figures module reproduces (its ``TABLES``)."""
         return tuple(self.figures_module.TABLES)
 
     @property
     def figures(self) -> tuple[str, ...]:
+        """Names of the figures the paper's figures module reproduces (its ``FIGURES``)."""
         return tuple(self.figures_module.FIGURES)
 
     def reproduce(self, runs=None, seed=None, executor=None, steps=None) -> "Reproduction":
@@ -149,9 +151,16 @@ def cell_claims(paper: str, table: pd.DataFrame, claim_id, text, source: str, *,
 
 @contextlib.contextmanager
 def override_seeds(seeds: dict, base: int | None):
-    """Temporarily set the entries of an experiment module's ``SEEDS`` dict to ``base, base + 1, ...``
-    (in the dict's order); ``base=None`` leaves them unchanged. For experiment functions that
-    read their seed from the module's table of fixed seeds."""
+    """Temporarily set the entries of an experiment module's ``SEEDS`` dict to ``base, base + 1, ...``.
+
+    The entries are set in the dict's order; ``base=None`` leaves them unchanged. For experiment functions that
+    read their seed from the module's table of fixed seeds.
+
+    Yields
+    ------
+    dict
+        ``seeds``, overridden until the ``with`` block ends (then restored).
+    """
     if base is None:
         yield seeds
         return

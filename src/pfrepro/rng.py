@@ -34,8 +34,11 @@ class RunStreams:
 
     Parameters
     ----------
-    generators : sequence of ``numpy.random.Generator``, one per run, in run order.
+    generators : sequence of numpy.random.Generator
+        One generator per run, in run order.
 
+    Notes
+    -----
     Use :meth:`from_entropy` to build the streams of runs ``start .. start + runs - 1``
     of an experiment.
     """
@@ -146,7 +149,7 @@ class RunStreams:
         size : tuple of int
             ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
         dtype : {float64, float32}, optional
-            Output dtype.
+            Output dtype (an integer type).
 
         Returns
         -------
@@ -286,8 +289,8 @@ class RunStreams:
             Draws from [low, high); ``high=None`` means [0, low). Shared by every run.
         size : tuple of int
             ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
-        dtype : integer dtype, optional
-            Output dtype.
+        dtype : numpy dtype, optional
+            Output dtype (an integer type).
 
         Returns
         -------

@@ -5,6 +5,7 @@ Run after the book build (``.ci/run`` does, as its own phase)::
 
     python tests/browser/check_pages.py                # _build/html, all pages
     python tests/browser/check_pages.py --screenshots /tmp/shots book/20_gpff.html
+    python tests/browser/check_pages.py --widths 400 book/99_scorecard.html
 
 Per page it fails on
 
@@ -23,6 +24,21 @@ Per page it fails on
 ``overflow``  the text column (or the page) scrolls horizontally;
 ``link``      a link to a page of the book, or to an anchor in one (``page.html#id``), whose
               target does not exist (e.g. a scorecard row whose claim has no anchor).
+``wide``      an element wider than the viewport (or sticking out of it) that is not inside a
+              box allowed to scroll (:data:`SCROLL_ALLOWED`: equations, cell outputs, code), or
+              a box that scrolls sideways but is not allowed to, or shows no visible cue
+              (scrollbar or edge shadow) that it scrolls;
+``overlap``   text in a table cell running out of its cell (drawn over the next one);
+``number``    a number in a table broken over two lines ("0.00 38");
+``figtext``   a figure whose smallest text (:data:`MIN_FONT_PT` at :data:`BOOK_DPI`) is shown
+              smaller than :data:`MIN_TEXT_PX`; on a phone a link to the full-size image
+              (tap to enlarge) is accepted instead;
+``rst``       (API pages) raw reStructuredText in the text (``double back-quotes``, ``:class:``
+              roles), or a numpydoc "(type)" slot holding a description;
+``ellipsis``  table text cut with "…" (typed, or by ``text-overflow: ellipsis``).
+
+Every page is read at each width of :data:`WIDTHS` (a laptop, 1366 px, and a phone, 400 px;
+below :data:`PHONE_MAX` wide equations may scroll in a visibly cued box of their own).
 
 Driver: the Chrome DevTools Protocol spoken directly over ``--remote-debugging-pipe``
 (JSON messages on file descriptors 3/4), standard library only. No websocket client, no
@@ -47,7 +63,26 @@ from html.parser import HTMLParser
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
-KINDS = ("console", "network", "math", "tex", "image", "table", "equation", "overflow", "link")
+KINDS = ("console", "network", "math", "tex", "image", "table", "equation", "overflow", "link",
+         "wide", "overlap", "number", "figtext", "rst", "ellipsis")
+
+#: viewports every page is read at: a laptop and a phone (CSS px)
+WIDTHS = (1366, 400)
+#: below this viewport width the page is read as on a phone: wide equations may scroll in their
+#: own (visibly cued) box, figures too small to read may instead link to their full-size image
+PHONE_MAX = 800
+#: boxes allowed to scroll sideways (each must show a visible cue: a shadow background attached
+#: "local" or a visible scrollbar); anything else wider than the viewport fails ``wide``
+SCROLL_ALLOWED = ("div.math > mjx-container", "span.math", "div.cell_output > div.output",
+                  "div.pst-scrollable-table-container", "div.highlight pre")
+#: figure text: the book's figures are rendered at BOOK_DPI with no text under MIN_FONT_PT
+#: (pfrepro.plotting, checked by tests/test_bookinfo_plotting.py); on screen that text is
+#: MIN_FONT_PT * BOOK_DPI / 72 * (displayed width / natural width) CSS px, which must be >= MIN_TEXT_PX
+BOOK_DPI = 150
+MIN_FONT_PT = 8.0
+MIN_TEXT_PX = 8.0
+#: a numpydoc "(type)" slot longer than this holds a description, not a type
+MAX_TYPE_CHARS = 60
 LOCAL_SCHEMES = ("file:", "data:", "blob:", "about:", "chrome:", "chrome-extension:", "devtools:")
 
 
@@ -243,6 +278,7 @@ class Browser:
 # first typeset and for every image to settle, then measures. Returns a JSON-able report.
 PAGE_JS = r"""
 (async () => {
+  const OPT = window.__pfopt || {phone: false, api: false, scrollAllowed: [], minFontPt: 0, dpi: 72, minTextPx: 0, maxTypeChars: 1e9};
   const sleep = ms => new Promise(r => setTimeout(r, ms));
   const t0 = performance.now();
   // MathJax 3 is loaded with `defer`/`async`: wait for its startup promise, if the page has one
@@ -271,6 +307,24 @@ PAGE_JS = r"""
   };
   const box = el => { const r = el.getBoundingClientRect();
     return {x: r.left + scrollX, y: r.top + scrollY, width: r.width, height: r.height}; };
+  // the nearest ancestor (or el itself) that scrolls sideways
+  const scrollerOf = el => {
+    for (let a = el; a && a !== document.body; a = a.parentElement) {
+      const ox = getComputedStyle(a).overflowX;
+      if ((ox === 'auto' || ox === 'scroll') && a.scrollWidth > a.clientWidth + tol) return a;
+    }
+    return null;
+  };
+  // does a scrolling box show the reader that it scrolls? a visible scrollbar, or a shadow cue
+  // (background layers attached to the scrolled content, see book/_static/pfrepro.css)
+  const cued = el => {
+    const st = getComputedStyle(el);
+    return el.offsetHeight - el.clientHeight > 2 ||
+           (/gradient/.test(st.backgroundImage) && /local/.test(st.backgroundAttachment));
+  };
+  const allowedScroller = el => OPT.scrollAllowed.some(sel => el.matches(sel));
+  const visible = el => { const st = getComputedStyle(el);
+    return st.visibility !== 'hidden' && st.display !== 'none' && parseFloat(st.opacity || '1') > 0; };
 
   // the text column
   const col = document.querySelector('article.bd-article') || document.querySelector('main') || document.body;
@@ -345,14 +399,18 @@ PAGE_JS = r"""
     nEq++;
     const dr = d.getBoundingClientRect(), mr = m.getBoundingClientRect();
     const why = [];
-    if (mr.width > dr.width + tol || mr.left < dr.left - tol || mr.right > dr.right + tol)
+    const eqScroller = scrollerOf(m);
+    const eqScrollOk = OPT.phone && eqScroller && (eqScroller === d || d.contains(eqScroller)) && cued(eqScroller);
+    if (!eqScrollOk && (mr.width > dr.width + tol || mr.left < dr.left - tol || mr.right > dr.right + tol))
       why.push(`content ${Math.round(mr.width)}px, box ${Math.round(dr.width)}px`);
     if (dr.right > colRight + tol) why.push(`box ends ${Math.round(dr.right - colRight)}px past the column`);
     // MathJax or the theme may give the equation a horizontal scroll box of its own: then the
-    // box fits but the reader has to scroll to see the equation's end
+    // box fits but the reader has to scroll to see the equation's end. On a laptop that fails;
+    // on a phone it is allowed if the box shows that it scrolls (cue)
     for (const el of [d, ...d.querySelectorAll('mjx-container')]) {
       if (el.scrollWidth > el.clientWidth + tol && el.clientWidth > 0) {
-        why.push(`scrolls sideways: ${el.scrollWidth}px of content in ${el.clientWidth}px`);
+        if (!(OPT.phone && cued(el)))
+          why.push(`scrolls sideways: ${el.scrollWidth}px of content in ${el.clientWidth}px` + (OPT.phone ? ' with no visible cue' : ''));
         break;
       }
     }
@@ -367,6 +425,130 @@ PAGE_JS = r"""
                                 detail: why.join('; '), box: box(d)});
   });
   notes.push(`${nEq} display equations, ${mathEls.length} math spans, column ${Math.round(colWidth)}px`);
+
+  // ---- wide: nothing wider than the viewport, except inside an allowed, visibly cued scroll box
+  const vw = de.clientWidth;
+  const offenders = [];
+  for (const el of document.body.querySelectorAll('*')) {
+    if (offenders.length > 400) break;
+    if (el.closest('.bd-sidebar-primary, .bd-sidebar-secondary, dialog, script, style, head, svg, mjx-assistive-mml')) continue;
+    const r = el.getBoundingClientRect();
+    if (r.width === 0 || r.height === 0) continue;
+    const sc = el.parentElement && scrollerOf(el.parentElement);
+    const st = getComputedStyle(el);
+    const ox = st.overflowX;
+    // an element that scrolls sideways itself (not by name, or with no cue)
+    const scrolls = (ox === 'auto' || ox === 'scroll') && el.scrollWidth > el.clientWidth + tol && el.clientWidth > 0;
+    // its box, or the text it holds (a long word in a heading), past the viewport's edges
+    const contentRight = ox === 'visible' ? r.left + el.scrollWidth : r.right;
+    const out = Math.max(r.right, contentRight) > vw + tol || r.left < -tol;
+    let why = null;
+    if (scrolls && !allowedScroller(el)) why = `scrolls sideways (${el.scrollWidth}px in ${el.clientWidth}px) but is not a box allowed to scroll`;
+    else if (scrolls && !cued(el)) why = `scrolls sideways (${el.scrollWidth}px in ${el.clientWidth}px) with no visible cue`;
+    else if (out && !sc && visible(el)) why = `${Math.round(Math.max(r.width, contentRight - r.left))}px wide, spans ${Math.round(r.left)}..${Math.round(Math.max(r.right, contentRight))}px of a ${vw}px viewport`;
+    if (why) offenders.push({el, why});
+  }
+  // the contents panel on the right (visible on a laptop): entries clipped at its edge
+  const toc = document.querySelector('.bd-sidebar-secondary');
+  if (toc && visible(toc) && toc.getBoundingClientRect().width > 0) {
+    const edge = toc.getBoundingClientRect().left + toc.clientLeft + toc.clientWidth;
+    const tw = document.createTreeWalker(toc, NodeFilter.SHOW_TEXT);
+    for (let n = tw.nextNode(); n; n = tw.nextNode()) {
+      if (!n.textContent.trim() || !visible(n.parentElement)) continue;
+      const rg = document.createRange();
+      rg.selectNodeContents(n);
+      const right = Math.max(0, ...[...rg.getClientRects()].map(q => q.right));
+      if (right > edge + tol) offenders.push({el: n.parentElement, why: `cut at the edge of the contents panel (${Math.round(right - edge)}px hidden)`});
+    }
+  }
+  // report the innermost offenders (a section is wide because its heading is)
+  const inner = offenders.filter(o => !offenders.some(p => p !== o && o.el.contains(p.el)));
+  inner.slice(0, 5).forEach(({el, why}) => fails.push({kind: 'wide',
+      what: label(el) + (el.className && typeof el.className === 'string' ? '.' + el.className.trim().split(/\s+/).slice(0, 2).join('.') : ''),
+      detail: why + ` "${(el.textContent || '').trim().slice(0, 40)}"`, box: box(el)}));
+
+  // ---- tables: text inside its cell (else it is drawn over the next one), numbers on one line,
+  // no text cut short with an ellipsis
+  // a number on its own (not the "-1" of "k-1", nor digits inside a name such as "x2")
+  const numRe = /(?<![\w.])[-+−]?\d+(?:[.,]\d+)*(?:[eE][-+−]?\d+)?%?/g;
+  let nOverlap = 0, nNumber = 0, nEllipsis = 0;
+  document.querySelectorAll('td, th').forEach(cell => {
+    if (!col.contains(cell) || cell.closest('mjx-container') || !visible(cell)) return;
+    const cr = cell.getBoundingClientRect();
+    if (cr.width === 0) return;
+    const st = getComputedStyle(cell);
+    const w = document.createTreeWalker(cell, NodeFilter.SHOW_TEXT);
+    let over = null;
+    for (let n = w.nextNode(); n; n = w.nextNode()) {
+      if (!n.textContent.trim() || n.parentElement.closest('mjx-container, .math')) continue;
+      const rg = document.createRange();
+      rg.selectNodeContents(n);
+      for (const q of rg.getClientRects()) {
+        if (q.width > 0 && (q.right > cr.right + tol || q.left < cr.left - tol)) { over = q; break; }
+      }
+      if (over) break;
+      // numbers broken across lines
+      for (const m of n.textContent.matchAll(numRe)) {
+        if (m[0].length < 2) continue;
+        const r2 = document.createRange();
+        r2.setStart(n, m.index); r2.setEnd(n, m.index + m[0].length);
+        const tops = new Set([...r2.getClientRects()].filter(q => q.width > 0).map(q => Math.round(q.top)));
+        if (tops.size > 1 && nNumber++ < 5)
+          fails.push({kind: 'number', what: label(cell), detail: `number ${JSON.stringify(m[0])} broken over ${tops.size} lines`, box: box(cell)});
+      }
+      // typed "…", or pandas' "..." at the end of a cell cut to display.max_colwidth
+      if (/(…|\.\.\.)\s*$/.test(n.textContent) && !n.parentElement.closest('code, .math') && nEllipsis++ < 5)
+        fails.push({kind: 'ellipsis', what: label(cell), detail: 'text cut with "…": ' + JSON.stringify(n.textContent.trim().slice(-60)), box: box(cell)});
+    }
+    if (over && nOverlap++ < 5)
+      fails.push({kind: 'overlap', what: label(cell) + ' ' + cell.textContent.trim().slice(0, 30),
+                  detail: `text runs ${Math.round(Math.max(over.right - cr.right, cr.left - over.left))}px out of its cell` + (st.overflow !== 'visible' ? ' (and is clipped)' : ' over the next one'), box: box(cell)});
+  });
+  // CSS ellipsis (text-overflow) on table cells cuts text too
+  document.querySelectorAll('td, th').forEach(cell => {
+    if (!col.contains(cell)) return;
+    const st = getComputedStyle(cell);
+    if (st.textOverflow === 'ellipsis' && cell.scrollWidth > cell.clientWidth + tol && nEllipsis++ < 5)
+      fails.push({kind: 'ellipsis', what: label(cell), detail: 'text cut by text-overflow: ellipsis', box: box(cell)});
+  });
+
+  // ---- figure text: the smallest figure text, as displayed, is at least minTextPx
+  let nSmall = 0;
+  imgs.forEach(i => {
+    if (!col.contains(i) || !i.naturalWidth) return;
+    const r = i.getBoundingClientRect();
+    if (r.width < 2) return;
+    const px = OPT.minFontPt * OPT.dpi / 72 * (r.width / i.naturalWidth);
+    if (px + 1e-6 >= OPT.minTextPx) return;
+    // on a phone a figure may instead open full size when tapped (a link to the image itself)
+    const a = i.closest('a[href]');
+    const src = decodeURI(i.src.split('#')[0]);
+    if (OPT.phone && a && decodeURI(a.href.split('#')[0]) === src) return;
+    if (nSmall++ < 5)
+      fails.push({kind: 'figtext', what: label(i) + ' ' + (i.getAttribute('src') || '').split('/').pop().slice(0, 40),
+                  detail: `figure text ${px.toFixed(1)}px on screen < ${OPT.minTextPx}px (shown ${Math.round(r.width)}px of ${i.naturalWidth}px)` + (OPT.phone ? ', and no tap-to-enlarge link' : ''), box: box(i)});
+  });
+
+  // ---- raw reStructuredText in the API reference (roles and literals the docstrings failed to render)
+  if (OPT.api) {
+    const rstRe = /``[^`]+``|:(?:class|meth|func|attr|mod|data|math|obj|exc|ref):`|`[^`\s][^`]*`_/;
+    const w2 = document.createTreeWalker(col, NodeFilter.SHOW_TEXT);
+    let nRst = 0;
+    for (let n = w2.nextNode(); n; n = w2.nextNode()) {
+      if (!n.parentElement || n.parentElement.closest('script, style, pre, .highlight, mjx-container')) continue;
+      const m = n.textContent.match(rstRe);
+      if (m && nRst++ < 5)
+        fails.push({kind: 'rst', what: label(n.parentElement), detail: 'raw reST: ' + JSON.stringify(m[0].slice(0, 60)), box: box(n.parentElement)});
+    }
+    // a parameter description rendered in the italic "(type)" slot: too long for a type
+    document.querySelectorAll('dl.field-list dd em, dl.field-list dd span.classifier').forEach(em => {
+      const t = em.textContent.trim();
+      const li = em.closest('li, p');
+      const prev = em.previousSibling && em.previousSibling.textContent || '';
+      if (/\($/.test(prev.trim()) && t.length > OPT.maxTypeChars && nRst++ < 10)
+        fails.push({kind: 'rst', what: label(em), detail: `"(type)" slot holds ${t.length} characters: ` + JSON.stringify(t.slice(0, 60)), box: box(li || em)});
+    });
+  }
   return {mathjax, fails, notes, column: Math.round(colWidth), title: document.title};
 })()
 """
@@ -446,14 +628,23 @@ def broken_links(root: Path, page: Path, _cache: dict = {}) -> list[dict]:
     return out
 
 
+def is_api_page(rel: str) -> bool:
+    """Pages of the API reference (generated from docstrings): checked for raw reST too."""
+    return "/api/" in f"/{rel}"
+
+
 def pages_under(root: Path) -> list[Path]:
     skip = {"_static", "_sources", "_images", "_downloads"}
     return sorted(p for p in root.rglob("*.html") if not skip & set(p.relative_to(root).parts[:-1]))
 
 
 def check(root: Path, pages: list[Path], chromium: str, width: int, height: int,
-          shots: Path | None, verbose: bool) -> dict:
-    browser = Browser(chromium, width, height)
+          shots: Path | None, verbose: bool, browser: Browser | None = None) -> dict:
+    """Check ``pages`` at one viewport; ``browser``: an open :class:`Browser` to reuse (kept open)."""
+    own = browser is None
+    if own:
+        browser = Browser(chromium, width, height)
+    browser.width, browser.height = width, height
     print(f"browser: {browser.version} ({chromium}), window {width}x{height}, offline")
     results = {}
     try:
@@ -469,13 +660,17 @@ def check(root: Path, pages: list[Path], chromium: str, width: int, height: int,
                 continue
             try:
                 target, session = browser.open(page.resolve().as_uri())
+                opt = {"phone": width < PHONE_MAX, "api": is_api_page(rel),
+                       "scrollAllowed": list(SCROLL_ALLOWED), "minFontPt": MIN_FONT_PT,
+                       "dpi": BOOK_DPI, "minTextPx": MIN_TEXT_PX, "maxTypeChars": MAX_TYPE_CHARS}
+                browser.evaluate(session, f"window.__pfopt = {json.dumps(opt)}; true")
                 report = browser.evaluate(session, PAGE_JS, timeout=90)
                 browser.pump(0.3)  # late console messages
                 fails = console_failures(browser.events) + report["fails"] + broken_links(root, page)
                 if report["mathjax"] not in ("done", "none"):
                     fails.append({"kind": "math", "what": "MathJax", "detail": report["mathjax"]})
                 if shots is not None:
-                    stem = rel.replace("/", "_").removesuffix(".html")
+                    stem = rel.replace("/", "_").removesuffix(".html") + f"_{width}"
                     browser.screenshot(session, shots / f"{stem}.png")
                     for i, f in enumerate(x for x in fails if x.get("box")):
                         b = f["box"]
@@ -499,7 +694,8 @@ def check(root: Path, pages: list[Path], chromium: str, width: int, height: int,
                     if n.startswith("scrolled"):
                         print(f"       note      {n}")
     finally:
-        browser.close()
+        if own:
+            browser.close()
     return results
 
 
@@ -508,7 +704,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("pages", nargs="*", help="pages relative to --root (default: every page)")
     ap.add_argument("--root", default="_build/html", type=Path, help="built HTML (default _build/html)")
     ap.add_argument("--chromium", help="browser executable (default: $CHROMIUM or chromium)")
-    ap.add_argument("--width", type=int, default=1280)
+    ap.add_argument("--widths", default=",".join(map(str, WIDTHS)),
+                    help=f"comma-separated viewport widths in CSS px (default {','.join(map(str, WIDTHS))})")
     ap.add_argument("--height", type=int, default=900)
     ap.add_argument("--screenshots", type=Path, help="save a full-page PNG per page (and a clip per failure) here")
     ap.add_argument("--json", type=Path, help="write the per-page results here")
@@ -527,10 +724,14 @@ def main(argv: list[str] | None = None) -> int:
     if args.screenshots:
         args.screenshots.mkdir(parents=True, exist_ok=True)
     t0 = time.monotonic()
-    results = check(root, pages, chromium, args.width, args.height, args.screenshots, args.verbose)
+    results = {}
+    for width in (int(w) for w in args.widths.split(",") if w.strip()):
+        print(f"\n=== viewport {width} px ({'phone' if width < PHONE_MAX else 'laptop'}) ===")
+        for rel, r in check(root, pages, chromium, width, args.height, args.screenshots, args.verbose).items():
+            results[f"{rel} @{width}"] = r
     totals = {k: sum(f["kind"] == k for r in results.values() for f in r["fails"]) for k in KINDS}
     bad = [p for p, r in results.items() if r["fails"]]
-    print(f"\n{len(results)} pages, {len(bad)} failing, {time.monotonic() - t0:.0f}s; failures by kind: "
+    print(f"\n{len(results)} page views, {len(bad)} failing, {time.monotonic() - t0:.0f}s; failures by kind: "
           + ", ".join(f"{k} {n}" for k, n in totals.items()))
     if args.json:
         args.json.write_text(json.dumps({"totals": totals, "pages": results}, indent=1))

@@ -205,27 +205,32 @@ def pf(m, N: int, resampling: str | None = None) -> BootstrapParticleFilter:
 
 
 def espf(m, N: int, mcmc_scale: float | None = None, sbx_eta: float | None = None) -> EvolutionSamplingParticleFilter:
+    """The ESPF on model ``m`` with ``N`` particles and the chapter's MCMC scale and SBX index (``ASSUMPTIONS``) unless given."""
     return EvolutionSamplingParticleFilter(
         m, N, mcmc_scale=ASSUMPTIONS["espf_mcmc_scale"] if mcmc_scale is None else mcmc_scale,
         sbx_eta=ASSUMPTIONS["espf_sbx_eta"] if sbx_eta is None else sbx_eta)
 
 
 def ekf(m) -> ExtendedKalmanFilter:
+    """The EKF on model ``m``, started at the chapter's prior (``ASSUMPTIONS``: ``ekf_m0``, ``ekf_P0``)."""
     return ExtendedKalmanFilter(m, m0=[ASSUMPTIONS["ekf_m0"]], P0=ASSUMPTIONS["ekf_P0"])
 
 
 def ukf(m, kappa: float | None = None) -> UnscentedKalmanFilter:
+    """The UKF (alpha = 1, beta = 2, kappa from ``ASSUMPTIONS`` unless given) on model ``m``, started as the EKF."""
     return UnscentedKalmanFilter(m, alpha=1.0, beta=2.0, kappa=ASSUMPTIONS["ukf_kappa"] if kappa is None else kappa,
                                  m0=[ASSUMPTIONS["ekf_m0"]], P0=ASSUMPTIONS["ekf_P0"])
 
 
 def grid(m) -> GridFilter:
+    """The grid (point-mass) reference filter on model ``m``; the grid is widened with the process noise."""
     lo, hi, n = ASSUMPTIONS["grid"]
     q = float(np.sqrt(m.Q[0, 0]))
     return GridFilter(m, bounds=(lo * max(1.0, q / 2), hi * max(1.0, q / 2)), n_grid=n)
 
 
 def summarise(values) -> dict:
+    """Mean, standard error and variance of per-run ``values`` (:func:`pfrepro.metrics.mc_summary`) as a dict."""
     s = mc_summary(values)
     return {"mean": s.mean, "se": s.se, "var": s.std**2}
 

@@ -254,6 +254,7 @@ def simulate(sc=None, runs: int | None = None, seed: int = SEEDS["main"], start:
 
 
 def immpf(sc=None, N=None, **over) -> IMMParticleFilter:
+    """The IMMPF on scenario ``sc`` (default ``SCENARIO``) with ``N`` particles per mode; ``over`` replaces any setting."""
     sc = sc or SCENARIO
     kw = dict(model_likelihood=sc["model_likelihood"], n_th=sc["n_th"])
     kw.update(over)
@@ -261,6 +262,7 @@ def immpf(sc=None, N=None, **over) -> IMMParticleFilter:
 
 
 def immpfor(sc=None, N=None, **over) -> IMMPFOR:
+    """The IMMPFOR (optimal resampling, distance ``d``) on scenario ``sc``; ``over`` replaces any setting."""
     sc = sc or SCENARIO
     kw = dict(model_likelihood=sc["model_likelihood"], n_th=sc["n_th"], d=sc["d"])
     kw.update(over)
@@ -268,11 +270,13 @@ def immpfor(sc=None, N=None, **over) -> IMMPFOR:
 
 
 def imm_ekf(sc=None) -> IMMKalman:
+    """The IMM with one EKF per mode on scenario ``sc``."""
     fs = filter_system(sc)
     return IMMKalman(fs, [ExtendedKalmanFilter(m) for m in fs.models], name="IMM-EKF")
 
 
 def imm_ukf(sc=None) -> IMMKalman:
+    """The IMM with one UKF per mode (alpha = 1, beta = 2, kappa = 0) on scenario ``sc``."""
     fs = filter_system(sc)
     # kappa = 3 - n (Julier's rule) would be negative for n = 6; alpha = 1, beta = 2, kappa = 0
     return IMMKalman(fs, [UnscentedKalmanFilter(m, alpha=1.0, beta=2.0, kappa=0.0) for m in fs.models],
@@ -310,6 +314,7 @@ class Run:
 
     @property
     def x_true(self):
+        """The true states x_1..x_T, ``(runs, T, dim_x)`` (the estimates' time axis)."""
         return self.sim.x[:, 1:]
 
     def head(self, n: int) -> "Run":

@@ -66,6 +66,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from .. import prose as _prose
 from ..bounds import pcrb_linear_dynamics
 from ..choices import FIXED, READING, SWEEP, FreeChoice, over
 from ..claims import ClaimsRegistry, ordering_holds
@@ -233,7 +234,7 @@ class Benchmark:
 
     @property
     def seed(self) -> int:
-        # the centred BOT reading runs on the offset reading's truths and filter streams (paired readings)
+        """The benchmark's seed (the centred BOT reading shares the offset reading's truths and filter streams)."""
         return SEEDS["bot" if self.key == "bot_centred" else self.key]
 
 
@@ -428,12 +429,15 @@ class BenchResult:
 
     @property
     def ref(self) -> str:
+        """Name of the benchmark's reference filter."""
         return self.bench.reference.name
 
     def finite(self, name) -> bool:
+        """Whether every error of filter ``name`` is finite (no run diverged)."""
         return bool(np.all(np.isfinite(self.err[name])))
 
     def diverged(self, name) -> int:
+        """Number of non-finite errors of filter ``name`` (diverged runs and steps)."""
         return int((~np.isfinite(self.err[name])).sum())
 
 
@@ -930,10 +934,7 @@ def ranking_compact(r: BenchResult) -> pd.DataFrame:
                          "tie / note": rk["tie"]}, index=rk.index)
 
 
-def plural(n: int, one: str, many: str | None = None) -> str:
-    """``"1 claim"``, ``"2 claims"``: the count with the right form of the noun."""
-    many = many if many is not None else one + "s"
-    return f"{n} {one if n == 1 else many}"
+plural = _prose.plural  # "1 claim", "2 claims" (the book's one implementation, pfrepro.prose)
 
 
 def paper_table(results: dict, vt: pd.DataFrame | None = None) -> pd.DataFrame:

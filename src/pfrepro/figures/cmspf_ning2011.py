@@ -12,6 +12,7 @@ import pandas as pd
 
 from .. import published
 from ..experiments import cmspf_ning2011 as E
+from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
 
 __all__ = ["printed", "styled", "divisor_check", "table1_per_run_long", "table1_strip", "sensitivity_fig",
@@ -94,17 +95,17 @@ def table1_strip(per_run: pd.DataFrame, grid_rmse=None):
             for s_, (src, vals) in enumerate((("paper", pub.loc[[str(i) for i in range(1, 21)], f"N={N} {f}"].to_numpy(float)),
                                               ("ours", per_run[(N, f)].to_numpy()))):
                 x0 = j * 5 + h * 2 + s_
-                col = f"C{h}"
+                col = method_color(f)
                 ax.plot(x0 + rng.uniform(-0.25, 0.25, vals.size), vals, "o" if src == "ours" else "x", ms=3.5,
                         color=col, mfc="none" if src == "paper" else col, alpha=0.8)
                 ax.plot([x0 - 0.35, x0 + 0.35], [vals.mean()] * 2, color="k", lw=1.5)
             ticks.append(j * 5 + h * 2 + 0.5); labels.append(f"{f}\nN={N}")
     if grid_rmse is not None:
         ax.axhline(np.mean(grid_rmse), color="grey", lw=1, ls=":")
-    ax.set_xticks(ticks, labels, fontsize=7)
+    ax.set_xticks(ticks, labels, fontsize=8)
     ax.set_ylabel("per-run RMSE")
     from matplotlib.lines import Line2D
-    ax.legend([Line2D([], [], marker="x", ls="", color="C0"), Line2D([], [], marker="o", ls="", color="C0"),
+    ax.legend([Line2D([], [], marker="x", ls="", color="0.3"), Line2D([], [], marker="o", ls="", color="0.3"),
                Line2D([], [], color="k"), Line2D([], [], color="grey", ls=":")],
               ["paper (rows 1–20)", "ours (20 runs)", "mean", "exact posterior mean"], fontsize=8, ncol=2)
     ax.set_title("Table 1, sigma_v = 1: 20 runs each, paper (x) and ours (o)")
@@ -127,12 +128,12 @@ def sensitivity_fig(sens: pd.DataFrame, sens_ref: dict):
     for ax, par in zip(axs.flat, pars):
         s = sens[sens.parameter == par]
         x = np.arange(len(s))
-        ax.errorbar(x, s["RMSE"], 2 * s["se"], marker="o", capsize=3, color="C1", label="CMS-PF (±2 se)")
+        ax.errorbar(x, s["RMSE"], 2 * s["se"], marker="o", capsize=3, color=method_color("CMS-PF"), label="CMS-PF (±2 se)")
         ch = s["chosen"].to_numpy(bool)
         ax.plot(x[ch], s["RMSE"].to_numpy()[ch], "r*", ms=12, label="chosen value")
         ax.set_xticks(x, [f"{v:.3g}" if not isinstance(v, str) else v for v in s["value"]],
                       rotation=45 if len(s) > 6 else 0)
-        ax.axhline(sens_ref["PF"]["mean"], color="C0", ls="--", label="PF")
+        ax.axhline(sens_ref["PF"]["mean"], color=method_color("PF"), ls="--", label="PF")
         ax.axhline(sens_ref["Grid (exact)"]["mean"], color="k", lw=1, label="exact posterior mean")
         ax.set_xlabel(SENS_LABELS.get(par, par))
     for ax in axs[:, 0]:
@@ -222,11 +223,11 @@ def table1_plot(per_run: pd.DataFrame, grid_rmse):
     m1, se1 = per_run.mean().unstack(), (per_run.std(ddof=1) / np.sqrt(len(per_run))).unstack()
     fig, ax = new_figure(figsize=(7, 4))
     Ns = np.array(E.TABLE1_N)
-    ax.errorbar(Ns, m1["PF"], 2 * se1["PF"], marker="o", capsize=3, label="PF (ours)")
-    ax.errorbar(Ns * 1.04, m1["CMS-PF"], 2 * se1["CMS-PF"], marker="s", capsize=3, label="CMS-PF (ours)")
-    ax.plot(Ns, m1["PF (2N)"], "^-", label="PF with 2N particles (ours)")
-    ax.plot(Ns, s["PF paper"].astype(float), "o--", color="C0", alpha=0.6, label="PF (paper)")
-    ax.plot(Ns, s["CMS-PF paper"].astype(float), "s--", color="C1", alpha=0.6, label="CMS-PF (paper)")
+    ax.errorbar(Ns, m1["PF"], 2 * se1["PF"], marker="o", capsize=3, color=method_color("PF"), label="PF (ours)")
+    ax.errorbar(Ns * 1.04, m1["CMS-PF"], 2 * se1["CMS-PF"], marker="s", capsize=3, color=method_color("CMS-PF"), label="CMS-PF (ours)")
+    ax.plot(Ns, m1["PF (2N)"], "^-", color=method_color("PF"), mfc="none", label="PF with 2N particles (ours)")
+    ax.plot(Ns, s["PF paper"].astype(float), "o--", color=method_color("PF"), alpha=0.6, label="PF (paper)")
+    ax.plot(Ns, s["CMS-PF paper"].astype(float), "s--", color=method_color("CMS-PF"), alpha=0.6, label="CMS-PF (paper)")
     ax.axhline(np.mean(grid_rmse), color="k", lw=1, label="exact posterior mean (grid)")
     ax.set_xscale("log"); ax.set_xlabel("number of particles N"); ax.set_ylabel(f"mean RMSE over {len(per_run)} runs")
     ax.set_title("Table 1, sigma_v = 1 (bars: ±2 se)"); ax.legend(fontsize=8)
@@ -239,8 +240,8 @@ def fig2(f2):
     k = np.arange(1, f2.sim.T + 1)
     fig, ax = new_figure(figsize=(8, 4))
     ax.plot(k, f2.x_true[0, :, 0], "k.-", label="true state")
-    ax.plot(k, f2.results["EKF"].x[0, :, 0], "o-", mfc="none", label=f"EKF (RMSE {f2.rmse('EKF')[0]:.2f})")
-    ax.plot(k, f2.results["CMS-PF"].x[0, :, 0], "*-", label=f"CMS-PF, N = 200 (RMSE {f2.rmse('CMS-PF')[0]:.2f})")
+    ax.plot(k, f2.results["EKF"].x[0, :, 0], "o-", mfc="none", color=method_color("EKF"), label=f"EKF (RMSE {f2.rmse('EKF')[0]:.2f})")
+    ax.plot(k, f2.results["CMS-PF"].x[0, :, 0], "*-", color=method_color("CMS-PF"), label=f"CMS-PF, N = 200 (RMSE {f2.rmse('CMS-PF')[0]:.2f})")
     ax.plot(k, f2.results["Grid (exact)"].x[0, :, 0], "--", color="grey",
             label=f"exact posterior mean (RMSE {f2.rmse('Grid (exact)')[0]:.2f})")
     ax.set_xlabel("time step k"); ax.set_ylabel("state x_k"); ax.set_title("Fig. 2: one run, sigma_v^2 = 1")
@@ -253,38 +254,38 @@ def fig3(f3: pd.DataFrame, f3_grid: dict):
     """Fig. 3: RMSE (±2 se) and relative time per run of CMS-PF and PF against N (``E.fig3()``)."""
     fig, ax = new_figure(figsize=(8, 4))
     idx = np.arange(1, len(f3) + 1)
-    ax.errorbar(idx, f3["CMS-PF RMSE"], 2 * f3["CMS-PF se"], marker="s", capsize=3, label="CMS-PF RMSE")
-    ax.errorbar(idx, f3["PF RMSE"], 2 * f3["PF se"], marker="o", capsize=3, label="PF RMSE")
+    ax.errorbar(idx, f3["CMS-PF RMSE"], 2 * f3["CMS-PF se"], marker="s", capsize=3, color=method_color("CMS-PF"), label="CMS-PF RMSE")
+    ax.errorbar(idx, f3["PF RMSE"], 2 * f3["PF se"], marker="o", capsize=3, color=method_color("PF"), label="PF RMSE")
     ax.axhline(f3_grid["mean"], color="k", lw=1, label="exact posterior mean RMSE")
     ax.set_xticks(idx, [str(n) for n in f3.index], rotation=45)
     ax.set_xlabel("number of particles N"); ax.set_ylabel("mean RMSE")
     ax2 = ax.twinx()
-    ax2.plot(idx, f3["CMS-PF time [s]"] / f3["PF time [s]"].iloc[0], "s--", color="C2",
+    ax2.plot(idx, f3["CMS-PF time [s]"] / f3["PF time [s]"].iloc[0], "s--", color=method_color("CMS-PF"), mfc="none",
              label=f"CMS-PF time / PF(N={f3.index[0]}) time")
-    ax2.plot(idx, f3["PF time [s]"] / f3["PF time [s]"].iloc[0], "o--", color="C3",
+    ax2.plot(idx, f3["PF time [s]"] / f3["PF time [s]"].iloc[0], "o--", color=method_color("PF"), mfc="none",
              label=f"PF time / PF(N={f3.index[0]}) time")
     ax2.set_ylabel("time per run, relative")
     h1, l1 = ax.get_legend_handles_labels(); h2, l2 = ax2.get_legend_handles_labels()
-    ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="center right"); ax.set_title("Fig. 3, sigma_v = 10 (bars ±2 se)")
+    ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="center right"); ax.set_title("Fig. 3, sigma_v = 10 (bars ±2 se)")
     fig.tight_layout()
     return fig
 
 
 def fig_one_step(d: dict, title: str):
     """Figs. 4-5: one step with and without mapping (``d`` = ``E.one_step(carrier)``)."""
-    fig, axs = new_figure(2, 3, figsize=(11, 6))
+    fig, axs = new_figure(2, 3, figsize=(10.5, 6))
     N = d["N"]
     ax = axs[0, 0]; ax.plot(d["x_prev"], np.zeros(N), "o", mfc="none", label="particles at k-1")
     ax.plot(d["x_map"], np.full(N, 0.1), "*", ms=4, label="map particles")
-    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(a) before prediction, map"); ax.legend(fontsize=7)
+    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(a) before prediction, map"); ax.legend(fontsize=8)
     ax = axs[0, 1]; ax.plot(d["x_pred"], np.zeros(N), "o", mfc="none", label="predicted")
     ax.plot(d["x_map"], np.full(N, 0.1), "*", ms=4, label="map")
     ax.axvline(d["x_true"], color="k", lw=1, label="true state")
-    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(b) predicted and map particles"); ax.legend(fontsize=7)
+    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(b) predicted and map particles"); ax.legend(fontsize=8)
     ax = axs[0, 2]; ax.plot(d["x_pred"], np.zeros(N), "o", mfc="none", label="without mapping")
     ax.plot(d["x_sel"], np.full(N, 0.1), "*", ms=4, label="with mapping (kept)")
     ax.axvline(d["x_true"], color="k", lw=1, label="true state")
-    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(c) particle sets"); ax.legend(fontsize=7)
+    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(c) particle sets"); ax.legend(fontsize=8)
     axs[1, 0].stem(d["x_pred"], d["w_plain"], markerfmt="o"); axs[1, 0].set_title("(d) weights without mapping")
     lw = np.r_[d["ll_pred"], d["ll_map"]]; wc = np.exp(lw - lw.max()); wc /= wc.sum()
     axs[1, 1].stem(np.r_[d["x_pred"], d["x_map"]], wc, markerfmt="."); axs[1, 1].set_title("(e) predicted + map (likelihood)")
@@ -299,7 +300,7 @@ def fig_one_step(d: dict, title: str):
 def fig6(f6_base: dict, f6_maps: dict, sens: pd.DataFrame | None = None, sens_ref: dict | None = None):
     """Fig. 6: map particles for several adjustment factors alpha; with ``sens`` (``E.sensitivity()``)
     a second panel shows CMS-PF's RMSE against alpha beside the PF and the exact posterior mean."""
-    fig, axs = new_figure(1, 2 if sens is not None else 1, figsize=(11, 4) if sens is not None else (6, 4))
+    fig, axs = new_figure(1, 2 if sens is not None else 1, figsize=(10.5, 4) if sens is not None else (6, 4))
     ax0 = axs[0] if sens is not None else axs
     for i, (a, x2) in enumerate(f6_maps.items()):
         ax0.plot(x2, np.full(x2.size, i), "|", ms=10, label=f"alpha = {a}")
@@ -309,8 +310,8 @@ def fig6(f6_base: dict, f6_maps: dict, sens: pd.DataFrame | None = None, sens_re
     ax0.set_xlabel("x"); ax0.set_title(f"Fig. 6: map particles for several alpha (N = {f6_base['N']})")
     if sens is not None:
         se_eta = sens[sens.parameter == "eta"]
-        axs[1].errorbar(se_eta["value"], se_eta["RMSE"], 2 * se_eta["se"], marker="o", capsize=3, label="CMS-PF")
-        axs[1].axhline(sens_ref["PF"]["mean"], color="C3", ls="--", label="PF")
+        axs[1].errorbar(se_eta["value"], se_eta["RMSE"], 2 * se_eta["se"], marker="o", capsize=3, color=method_color("CMS-PF"), label="CMS-PF")
+        axs[1].axhline(sens_ref["PF"]["mean"], color=method_color("PF"), ls="--", label="PF")
         axs[1].axhline(sens_ref["Grid (exact)"]["mean"], color="k", lw=1, label="exact posterior mean")
         axs[1].axvspan(0.2, 0.8, color="grey", alpha=0.15, label="paper's range [0.2, 0.8]")
         axs[1].set_xscale("log")

@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 
 from ..experiments import dpf_hou2008 as E
+from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
 
 __all__ = ["pm", "rmse_table", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "legend_below", "reproduce", "TABLES",
@@ -101,19 +102,19 @@ def fig4(r51, run: int = 0):
     kk = np.arange(1, r51.sim.x.shape[1])
     fig, axs = new_figure(2, 1, figsize=(6.5, 4.6), sharex=True)
     axs[0].plot(kk, r51.sim.x[run, 1:, 0], "k-", lw=1, label="truth")
-    axs[0].plot(kk, r51.results["DPF"].x[run, :, 0], "C0-", lw=0.9, label="DPF")
-    axs[0].plot(kk, r51.results["DEKF"].x[run, :, 0], "C3--", lw=0.9, label="DEKF")
+    axs[0].plot(kk, r51.results["DPF"].x[run, :, 0], "-", color=method_color("DPF"), lw=0.9, label="DPF")
+    axs[0].plot(kk, r51.results["DEKF"].x[run, :, 0], "--", color=method_color("DEKF"), lw=0.9, label="DEKF")
     axs[0].set_ylabel("x_k")
     ex = r51.results["exact"].diagnostics
     qx = E.theta_interval(r51, "exact")
     axs[1].fill_between(kk, qx[0, run], qx[2, run], color="0.85", label="exact 95 %")
     axs[1].plot(kk, ex["theta"][run], "k-", lw=1, label="exact posterior mean")
-    axs[1].plot(kk, r51.results["DPF"].diagnostics["theta"][run], "C0-", lw=0.9, label="DPF")
-    axs[1].plot(kk, r51.results["DEKF"].diagnostics["theta"][run], "C3--", lw=0.9, label="DEKF")
-    axs[1].plot(kk, r51.results["Liu-West"].diagnostics["theta"][run], "C2:", lw=1.2, label="Liu–West")
+    axs[1].plot(kk, r51.results["DPF"].diagnostics["theta"][run], "-", color=method_color("DPF"), lw=0.9, label="DPF")
+    axs[1].plot(kk, r51.results["DEKF"].diagnostics["theta"][run], "--", color=method_color("DEKF"), lw=0.9, label="DEKF")
+    axs[1].plot(kk, r51.results["Liu-West"].diagnostics["theta"][run], ":", color=method_color("Liu-West"), lw=1.2, label="Liu–West")
     axs[1].axhline(E.S51["theta_true"], color="k", lw=0.5, ls=":")
     axs[1].set_ylim(0, 1); axs[1].set_ylabel("θ estimate"); axs[1].set_xlabel("k")
-    legend_below(fig, axs, ncol=3, fontsize=7)
+    legend_below(fig, axs, ncol=3, fontsize=8)
     return fig
 
 
@@ -126,7 +127,7 @@ def fig5(f5: dict, run: int = 0):
     kk = np.arange(1, next(iter(f5.values())).sim.x.shape[1])
     fig, axs = new_figure(2, 2, figsize=(7, 5), sharey=True, sharex=True)
     for col, name in enumerate(("DEKF", "DPF")):
-        for c, (g0, rr) in zip(("C0", "C1", "C2"), f5.items()):
+        for c, (g0, rr) in zip(SERIES_COLORS, f5.items()):
             # top: quantiles over the Monte Carlo runs of the estimate θ̂_k (ref [18]'s reading)
             qr = np.quantile(rr.results[name].diagnostics["theta"], (0.025, 0.5, 0.975), axis=0)
             # bottom: one run, the filter's own posterior quantiles
@@ -142,7 +143,7 @@ def fig5(f5: dict, run: int = 0):
         axs[1, col].set_title(f"({'cd'[col]}) {name}: own posterior quantiles, run {run + 1}", fontsize=8)
         axs[1, col].set_xlabel("k")
     axs[0, 0].set_ylabel("θ"); axs[1, 0].set_ylabel("θ")
-    legend_below(fig, axs, ncol=3, fontsize=7)
+    legend_below(fig, axs, ncol=3, fontsize=8)
     return fig
 
 
@@ -163,13 +164,14 @@ def figs_7_9(r52, crb_ft=None, rm: dict | None = None):
     tt = np.arange(1, T + 1)
     fig, axs = new_figure(1, 3, figsize=(7.5, 2.6))
     for j, (ax, lab) in enumerate(zip(axs, lab52)):
-        for n, c, ls in (("DEKF", "C3", (0, (4, 1.5))), ("DPF", "C0", "-"), ("Liu-West", "C2", ":")):
+        for n, c, ls in (("DEKF", method_color("DEKF"), (0, (4, 1.5))), ("DPF", method_color("DPF"), "-"),
+                          ("Liu-West", method_color("Liu-West"), ":")):
             ax.plot(tt, rm[n][j], color=c, ls=ls, label=n.replace("-", "–"))
         if j == 2:
             ax.plot(tt, np.asarray(crb_ft)[:T], color="k", lw=0.7, label="CRB sd of θ")
             ax.set_ylim(1e-7, 1e-2)
         ax.set_yscale("log"); ax.set_xlabel("t (s)"); ax.set_title(f"({'abc'[j]}) RMSE of {lab}", fontsize=8)
-    legend_below(fig, axs, ncol=4, fontsize=7)
+    legend_below(fig, axs, ncol=4, fontsize=8)
     return fig
 
 
@@ -184,7 +186,7 @@ def fig6(tr_ft, tr_lit_m):
     axs[0].set_xlabel("t (s)"); axs[0].set_ylabel("altitude (10³ ft)")
     axs[1].plot(t, tr_ft[:, 1] / 1e3); axs[1].plot(t, tr_lit_m[:, 1] / FT / 1e3, "--")
     axs[1].set_xlabel("t (s)"); axs[1].set_ylabel("speed (10³ ft/s)")
-    legend_below(fig, axs, ncol=2, fontsize=7)
+    legend_below(fig, axs, ncol=2, fontsize=8)
     return fig
 
 
@@ -206,10 +208,10 @@ def fig2(outside_over_time=None, cases=((0.5, 1 / 12), (0.12, 0.01))):
         nu = mu * (1 - mu) / var - 1
         a, b = mu * nu, (1 - mu) * nu
         inside = (u > 0) & (u < 1)
-        ax.plot(u[inside], beta_dist.pdf(u[inside], a, b), color="C0", label="Beta")
+        ax.plot(u[inside], beta_dist.pdf(u[inside], a, b), color=SERIES_COLORS[0], label="Beta")
         g = norm.pdf(u, mu, np.sqrt(var))
-        ax.plot(u, g, color="C1", ls="--", label="Gaussian, same mean and variance")
-        ax.fill_between(u, 0, g, where=~inside, color="C1", alpha=0.35, lw=0)
+        ax.plot(u, g, color=SERIES_COLORS[1], ls="--", label="Gaussian, same mean and variance")
+        ax.fill_between(u, 0, g, where=~inside, color=SERIES_COLORS[1], alpha=0.35, lw=0)
         out = norm.cdf(0, mu, np.sqrt(var)) + norm.sf(1, mu, np.sqrt(var))
         ax.axvline(0, color="0.5", lw=0.6); ax.axvline(1, color="0.5", lw=0.6)
         ax.set_title(f"({'abcd'[i]}) μ = {mu:g}, σ = {np.sqrt(var):.3g}\n{100 * out:.1f} % of the Gaussian outside", fontsize=8)
@@ -218,10 +220,10 @@ def fig2(outside_over_time=None, cases=((0.5, 1 / 12), (0.12, 0.01))):
     if outside_over_time is not None:
         ax = axs[-1]
         k = np.arange(1, len(outside_over_time) + 1)
-        ax.plot(k, 100 * np.asarray(outside_over_time), color="C1", ls="--")
+        ax.plot(k, 100 * np.asarray(outside_over_time), color=SERIES_COLORS[1], ls="--")
         ax.set_xlabel("k"); ax.set_ylabel("% of draws outside")
         ax.set_title(f"({'abcd'[n - 1]}) DPF with a Gaussian law\n(sec 5.1, mean over runs)", fontsize=8)
-    legend_below(fig, axs, ncol=2, fontsize=7)
+    legend_below(fig, axs, ncol=2, fontsize=8)
     return fig
 
 

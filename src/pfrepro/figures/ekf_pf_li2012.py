@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..experiments import ekf_pf_li2012 as E
+from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
 
 __all__ = ["one_run_panel", "per_time_panel", "figs_1_3", "figs_2_4", "fig1", "fig2", "fig3", "fig4",
@@ -26,10 +27,10 @@ def one_run_panel(ax, res, which: int, fig_no: int, run: int = 0) -> None:
     """Figs. 1/3 on ``ax``: truth, EKF, PF and exact posterior mean of one run of model ``which``."""
     k = np.arange(1, res.sim.T + 1)
     ax.plot(k, res.x_true[run, :, 0], "k-", lw=2, label="truth")
-    ax.plot(k, res.results["EKF"].x[run, :, 0], "C3--o", ms=3, label="EKF")
-    ax.plot(k, res.results["PF"].x[run, :, 0], "C0-s", ms=3, label=f"PF (N = {E.N_PARTICLES})")
+    ax.plot(k, res.results["EKF"].x[run, :, 0], "--o", color=method_color("EKF"), ms=3, label="EKF")
+    ax.plot(k, res.results["PF"].x[run, :, 0], "-s", color=method_color("PF"), ms=3, label=f"PF (N = {E.N_PARTICLES})")
     if "Exact" in res.results:
-        ax.plot(k, res.results["Exact"].x[run, :, 0], "C2:", lw=2, label="exact posterior mean")
+        ax.plot(k, res.results["Exact"].x[run, :, 0], ":", color=REFERENCE_COLOR, lw=2, label="exact posterior mean")
     ax.set_ylabel("state $x_k$")
     ax.set_title(f"Fig. {fig_no}: {E.MODEL_LABELS[which]}, one run")
     ax.legend(fontsize=8, ncol=4, loc="upper left")
@@ -39,10 +40,10 @@ def per_time_panel(ax, res, which: int, fig_no: int) -> None:
     """Figs. 2/4 on ``ax``: RMSE over the runs at each time step (:func:`~pfrepro.experiments.ekf_pf_li2012.per_time_rmse`)."""
     names = [n for n in ("EKF", "PF", "Exact") if n in res.results]
     pt = E.per_time_rmse(res, names)
-    ax.plot(pt.index, pt["EKF"], "C3--o", ms=3, label="EKF")
-    ax.plot(pt.index, pt["PF"], "C0-s", ms=3, label="PF")
+    ax.plot(pt.index, pt["EKF"], "--o", color=method_color("EKF"), ms=3, label="EKF")
+    ax.plot(pt.index, pt["PF"], "-s", color=method_color("PF"), ms=3, label="PF")
     if "Exact" in pt:
-        ax.plot(pt.index, pt["Exact"], "C2:", lw=2, label="exact posterior mean")
+        ax.plot(pt.index, pt["Exact"], ":", color=REFERENCE_COLOR, lw=2, label="exact posterior mean")
     ax.set_xlabel("time step k (s)")
     ax.set_ylabel(f"RMSE over {res.sim.runs} runs")
     ax.set_title(f"Fig. {fig_no}: {E.MODEL_LABELS[which]}")
@@ -61,7 +62,7 @@ def figs_1_3(figs: dict, run: int = 0):
 
 def figs_2_4(figs: dict):
     """Figs. 2 and 4 side by side: per-time RMSE over the figure runs of each model."""
-    fig, axes = new_figure(1, 2, figsize=(11, 4))
+    fig, axes = new_figure(1, 2, figsize=(10.5, 4))
     for ax, w, fno in zip(axes, (1, 2), (2, 4)):
         per_time_panel(ax, figs[w], w, fno)
     fig.tight_layout()
@@ -125,7 +126,7 @@ def table1_plot(t1):
         x = np.arange(len(sub))
         ax.errorbar(x - 0.1, sub["ours"], 2 * sub["se"], fmt="o", capsize=4, label="ours (±2 se)")
         ax.plot(x + 0.1, sub["published"], "r*", ms=12, label="published (Table 1)")
-        ax.axhline(sub["exact"].iloc[0], color="C2", ls=":", lw=2, label="exact posterior mean")
+        ax.axhline(sub["exact"].iloc[0], color=REFERENCE_COLOR, ls=":", lw=2, label="exact posterior mean")
         ax.set_xticks(x, sub["filter"])
         ax.set_xlim(-0.6, len(sub) - 0.4)
         ax.set_ylabel("mean per-run RMSE")
@@ -141,11 +142,12 @@ def ess_plot(deg: dict, n_particles: int = E.N_PARTICLES):
     """The degeneracy of sequential importance sampling (sec 1.3.2): ESS / N over time, median and
     10-90 % band over the runs, for SIS (no resampling) and the PF (ESS of the weights before each
     resampling), one panel per model. ``deg`` maps model -> :func:`~pfrepro.experiments.ekf_pf_li2012.degeneracy`."""
-    fig, axes = new_figure(1, len(deg), figsize=(11, 3.8), sharey=True)
+    fig, axes = new_figure(1, len(deg), figsize=(10.5, 3.8), sharey=True)
     axes = np.atleast_1d(axes)
     for ax, (w, d) in zip(axes, deg.items()):
         t = d["ess_over_time"]
-        for n, c, lab in (("PF", "C0", "PF, resampling every step"), ("SIS", "C3", "SIS, no resampling")):
+        for n, c, lab in (("PF", method_color("PF"), "PF, resampling every step"),
+                           ("SIS", method_color("SIS"), "SIS, no resampling")):
             ax.plot(t.index, t[(n, "median")], color=c, lw=2, label=f"{lab} (median)")
             ax.fill_between(t.index, t[(n, "q10")], t[(n, "q90")], color=c, alpha=0.2, lw=0,
                             label="10-90 % of runs")
@@ -155,7 +157,7 @@ def ess_plot(deg: dict, n_particles: int = E.N_PARTICLES):
         ax.set_xlabel("time step k")
         ax.set_title(f"{E.MODEL_LABELS[w]}, N = {n_particles}")
     axes[0].set_ylabel("effective sample size / N")
-    axes[-1].legend(fontsize=7, loc="center right")
+    axes[-1].legend(fontsize=8, loc="center right")
     fig.tight_layout()
     return fig
 
@@ -165,23 +167,23 @@ def sweep_plot(sens):
     (±2 se) and the exact posterior's under every swept value, with the published cells, one panel
     per model. ``sens`` is :func:`~pfrepro.experiments.ekf_pf_li2012.sensitivity`'s frame."""
     pub = E.published_table1()
-    fig, axes = new_figure(1, 2, figsize=(11, 3.8))
+    fig, axes = new_figure(1, 2, figsize=(10.5, 3.8))
     for ax, w in zip(axes, (1, 2)):
         col = E.MODEL_LABELS[w]
         sub = sens[(sens["model"] == col) & sens["setting"].isin(["P0", "resampling"])].reset_index(drop=True)
         x = np.arange(len(sub))
         labels = [f"P0={v:g}" if st == "P0" else str(v) for st, v in zip(sub["setting"], sub["value"])]
-        for name, c, dx in (("EKF", "C3", -0.12), ("PF", "C0", 0.12)):
+        for name, c, dx in (("EKF", method_color("EKF"), -0.12), ("PF", method_color("PF"), 0.12)):
             ax.errorbar(x + dx, sub[name], 2 * sub[f"{name}_se"], fmt="o", color=c, capsize=3, label=f"{name} (±2 se)")
             ax.axhline(float(pub.loc[name, col]), color=c, ls="--", lw=1, label=f"{name}, published")
         ex = sub["exact"].to_numpy(float)
-        ax.plot(x[np.isfinite(ex)], ex[np.isfinite(ex)], "s", color="C2", ms=5, label="exact posterior")
-        ax.set_xticks(x, labels, rotation=45, fontsize=7)
+        ax.plot(x[np.isfinite(ex)], ex[np.isfinite(ex)], "s", color=REFERENCE_COLOR, ms=5, label="exact posterior")
+        ax.set_xticks(x, labels, rotation=45, fontsize=8)
         ax.set_ylabel("mean per-run RMSE")
         ax.set_title(col)
         if w == 1:
             ax.set_yscale("log")
-        ax.legend(fontsize=6, ncol=2)
+        ax.legend(fontsize=8, ncol=2)
     fig.tight_layout()
     return fig
 

@@ -11,6 +11,7 @@ import pandas as pd
 
 from ..experiments import immpfor_zhou2017 as E
 from ..models.tracking import IDX_POS, IDX_VEL
+from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
 
 __all__ = ["d_sweep_figure", "table1_frame", "fig1", "shade_turns", "rmse_plot", "fig2", "fig3", "fig4", "fig5", "reproduce",
@@ -82,9 +83,9 @@ def fig1(main, run: int = 0):
     fig, ax = new_figure(figsize=(6, 4))
     xt = main.sim.x[run]
     ax.plot(xt[:, 0] / 1000, xt[:, 3] / 1000, "k-", lw=1.5, label="truth")
-    for n, st in (("IMMPF", "C0--"), ("IMMPFOR", "C1:")):
+    for n, st in (("IMMPF", "--"), ("IMMPFOR", ":")):
         xe = main.results[n].x[run]
-        ax.plot(xe[:, 0] / 1000, xe[:, 3] / 1000, st, lw=1, label=n)
+        ax.plot(xe[:, 0] / 1000, xe[:, 3] / 1000, st, color=method_color(n), lw=1, label=n)
     for k0 in (S["left_turn"][0], S["right_turn"][0]):
         ax.plot(xt[k0, 0] / 1000, xt[k0, 3] / 1000, "ko", ms=3)
     ax.set_xlabel("Rx [km]"); ax.set_ylabel("Ry [km]"); ax.legend(fontsize=8); ax.set_aspect("equal")
@@ -98,16 +99,17 @@ def shade_turns(ax):
         ax.axvspan(a, b, color="0.9", lw=0)
 
 
-def rmse_plot(run_, names, idx_pos, idx_vel, title_pos, title_vel, styles=("C0-", "C1:", "C2--", "C3-.")):
+def rmse_plot(run_, names, idx_pos, idx_vel, title_pos, title_vel, styles=("-", ":", "--", "-.")):
     """Two panels of RMSE over the runs against time (components ``idx_pos``, ``idx_vel``); turns shaded."""
     kk = np.arange(1, E.SCENARIO["duration"] + 1)
     fig, axs = new_figure(1, 2, figsize=(9, 3.3))
     for ax, idx, lab in ((axs[0], idx_pos, title_pos), (axs[1], idx_vel, title_vel)):
         shade_turns(ax)
-        for n, st in zip(names, styles):
-            ax.plot(kk, E.rmse_curves(run_.x_true, run_.results[n].x, idx), st, lw=1, label=n)
+        for i, (n, st) in enumerate(zip(names, styles)):
+            ax.plot(kk, E.rmse_curves(run_.x_true, run_.results[n].x, idx), st, lw=1, label=n,
+                    color=method_color(n, SERIES_COLORS[i % len(SERIES_COLORS)]))
         ax.set_xlabel("time [s]"); ax.set_ylabel(lab)
-    axs[0].legend(fontsize=7); fig.tight_layout()
+    axs[0].legend(fontsize=8); fig.tight_layout()
     return fig
 
 
@@ -144,9 +146,9 @@ def d_sweep_figure(sweep: pd.DataFrame, ablation: pd.DataFrame | None = None):
     """
     fig, ax = new_figure(figsize=(6, 3.4))
     ax.axhline(0.0, color="0.5", lw=0.8)
-    series = [(sweep, "C1", "o-", "IMMPFOR (eq 23: parents of all modes)")]
+    series = [(sweep, method_color("IMMPFOR"), "o-", "IMMPFOR (eq 23: parents of all modes)")]
     if ablation is not None:
-        series.append((ablation, "C2", "s--", "ablation: own parent only"))
+        series.append((ablation, SERIES_COLORS[2], "s--", "ablation: own parent only"))
     for df, col, st, lab in series:
         d = np.asarray(df.index, float)
         ax.errorbar(d, df["diff"], yerr=df["se"], fmt=st, color=col, ms=4, lw=1, capsize=3, label=lab)

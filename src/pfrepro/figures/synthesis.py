@@ -8,20 +8,25 @@ import numpy as np
 from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
 from ..experiments import synthesis as S
+from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
 
 __all__ = ["frontier_figure", "STYLE"]
 
-#: marker and colour per method family (baselines grey/black, the papers' methods in colour)
+#: marker and colour per method family (baselines grey/black, the papers' methods in their colour
+#: of the book's palette, :data:`pfrepro.plotting.METHOD_COLORS`)
 STYLE = {
     "PF": ("o", "black"), "PF multinomial": ("v", "0.45"), "PF stratified": ("^", "0.45"),
     "PF residual": ("<", "0.45"), "EKF": ("x", "0.35"), "UKF": ("+", "0.35"), "Liu-West": ("o", "black"),
-    "GPFF eq43 unif.": ("s", "C0"), "GPFF eq43 exp.": ("D", "C0"), "GPFF eq41 unif.": ("s", "C9"),
-    "GPFF eq41 exp.": ("D", "C9"), "CMS-PF": ("*", "C3"), "ESPF": ("P", "C1"), "DPF": ("*", "C2"),
-    "IMMPF": ("o", "black"), "IMM-EKF": ("x", "0.35"), "IMM-UKF": ("+", "0.35"), "IMMPFOR": ("*", "C4"),
-    # today's methods (issue 22): hollow coloured markers (baselines of the chapter, not papers' methods)
-    "APF": ("h", "C5"), "RPF": ("d", "C6"), "EKF-prop. PF": ("p", "C7"), "PFPF-EDH": ("X", "C8"),
-    "PFPF-LEDH": ("X", "C4"), "SMC²": ("H", "C5"), "JMPF": ("h", "C6"),
+    "GPFF eq43 unif.": ("s", method_color("GPFF")), "GPFF eq43 exp.": ("D", method_color("GPFF")),
+    "GPFF eq41 unif.": ("s", "#0e7c8a"), "GPFF eq41 exp.": ("D", "#0e7c8a"),  # the GPFF's cyan, darker
+    "CMS-PF": ("*", method_color("CMS-PF")), "ESPF": ("P", method_color("ESPF")), "DPF": ("*", method_color("DPF")),
+    "IMMPF": ("o", "black"), "IMM-EKF": ("x", "0.35"), "IMM-UKF": ("+", "0.35"), "IMMPFOR": ("*", method_color("IMMPFOR")),
+    # today's methods (issue 22)
+    "APF": ("h", method_color("APF")), "RPF": ("d", method_color("RPF")),
+    "EKF-prop. PF": ("p", method_color("EKF-prop. PF")), "PFPF-EDH": ("X", method_color("PFPF-EDH")),
+    "PFPF-LEDH": ("X", method_color("PFPF-LEDH")), "SMC²": ("H", method_color("SMC²")),
+    "JMPF": ("h", method_color("JMPF")),
 }
 
 
@@ -57,7 +62,7 @@ def frontier_figure(results: dict, axis: str = "count"):
         base = fr.loc[S.efficient_frontier(r, axis)]
         ax.plot(base[col], base["MSE / opt."], "-", color="black", lw=0.9, zorder=1)
         for name, row in fr.iterrows():
-            mk, c = STYLE.get(row["family"], ("o", "C4"))
+            mk, c = STYLE.get(row["family"], ("o", SERIES_COLORS[5]))
             h = ax.errorbar(row[col], row["MSE / opt."], yerr=row["SE"], fmt=mk, color=c, ms=5, capsize=2,
                             lw=0.8, mfc="none" if row["paper"] == "" and mk not in "x+" else c)
             label = row["family"] if row["family"] not in ("PF",) else "bootstrap PF (systematic)"
@@ -70,11 +75,11 @@ def frontier_figure(results: dict, axis: str = "count"):
         ax.set_title(f"{key}: {r.bench.title}", fontsize=8.5)
         ax.set_xlabel("model evaluations / step" if axis == "count" else "ms / step (one run)", fontsize=8)
         ax.set_ylabel("MSE / reference", fontsize=8)
-        ax.tick_params(labelsize=7.5)
+        ax.tick_params(labelsize=8)
     for ax in axes.ravel()[n:]:
         ax.axis("off")
     ncol_leg = 5
-    fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=ncol_leg, fontsize=7,
+    fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=ncol_leg, fontsize=8,
                frameon=False, bbox_to_anchor=(0.5, 0.0))
     # room below the panels for the legend's rows (about 0.17 in each) and the x labels
     legend_rows = int(np.ceil(len(handles) / ncol_leg))

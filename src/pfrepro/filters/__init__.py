@@ -1,34 +1,55 @@
-"""Filters: Kalman family, bootstrap particle filter with resampling schemes, grid filter."""
+"""Filters: the Kalman family, particle filters and their resampling schemes, grid filters,
+the papers' filters (GPFF, CMS-PF, ESPF, dual PF, IMM-PF) and today's methods.
+
+``__all__`` lists every public class of the filter modules (a test checks it), and the API
+reference's summary table is generated from it.
+"""
+from .auxiliary import AuxiliaryParticleFilter
 from .base import Filter, FilterDivergenceError, FilterDivergenceWarning, FilterResult, GaussianFilter
-from .cmspf import CMSParticleFilter, OracleCMSParticleFilter
+from .cmspf import CMSParticleFilter, CMSStep, OracleCMSParticleFilter
+from .dual_ekf import DualExtendedKalmanFilter
+from .dual_pf import DualParticleFilter
+from .ekf_variants import PreviousEstimateJacobianEKF
 from .espf import EvolutionSamplingParticleFilter
+from .gaussian_proposal import GaussianProposalParticleFilter
 from .gpff import GaussianParticleFlowFilter
 from .grid import GridFilter
-from .imm import IMMKalman, IMMParticleFilter, IMMPFOR  # noqa: F401  (interacting multiple model filters)
+from .imm import IMMPFOR, IMMKalman, IMMParticleFilter
+from .jump_markov_pf import JumpMarkovParticleFilter
 from .kalman import ExtendedKalmanFilter, KalmanFilter, kalman_update
-from .particle import BootstrapParticleFilter, normalize_log_weights
+from .liu_west import LiuWestFilter
+from .particle import BootstrapParticleFilter, WeightCollapseWarning, normalize_log_weights
+from .pfpf import ParticleFlowParticleFilter
+from .regularized import RegularizedParticleFilter
 from .resampling import (RESAMPLING_SCHEMES, effective_sample_size, multinomial_resample,
                          offspring_counts, resample, residual_resample, stratified_resample,
                          systematic_resample)
 from .sigma_points import ScaledSigmaPoints, unscented_transform
+from .smc2 import SMC2
+from .theta_grid import ThetaGridReference
 from .ukf import UnscentedKalmanFilter
 
-__all__ = ["Filter", "FilterResult", "GaussianFilter", "FilterDivergenceError", "FilterDivergenceWarning", "KalmanFilter",
-           "ExtendedKalmanFilter", "kalman_update", "UnscentedKalmanFilter", "ScaledSigmaPoints",
-           "unscented_transform", "BootstrapParticleFilter", "normalize_log_weights", "GridFilter", "GaussianParticleFlowFilter",
-           "resample", "multinomial_resample", "stratified_resample", "systematic_resample",
-           "residual_resample", "offspring_counts", "effective_sample_size", "RESAMPLING_SCHEMES",
-           "CMSParticleFilter", "OracleCMSParticleFilter", "EvolutionSamplingParticleFilter",
-           "AuxiliaryParticleFilter",
-           "RegularizedParticleFilter",
-           "GaussianProposalParticleFilter",
-           "ParticleFlowParticleFilter",
-           "JumpMarkovParticleFilter",
-           "SMC2"]
-from .dual_pf import DualParticleFilter; from .dual_ekf import DualExtendedKalmanFilter; from .liu_west import LiuWestFilter; from .theta_grid import ThetaGridReference  # noqa: E402,E702,F401
-from .auxiliary import AuxiliaryParticleFilter  # noqa: E402
-from .regularized import RegularizedParticleFilter  # noqa: E402
-from .gaussian_proposal import GaussianProposalParticleFilter  # noqa: E402
-from .pfpf import ParticleFlowParticleFilter  # noqa: E402
-from .jump_markov_pf import JumpMarkovParticleFilter  # noqa: E402
-from .smc2 import SMC2  # noqa: E402
+__all__ = [
+    # the filter interface and its result
+    "Filter", "FilterResult", "GaussianFilter", "FilterDivergenceError", "FilterDivergenceWarning",
+    "WeightCollapseWarning",
+    # Kalman family
+    "KalmanFilter", "ExtendedKalmanFilter", "kalman_update", "PreviousEstimateJacobianEKF",
+    "UnscentedKalmanFilter", "ScaledSigmaPoints", "unscented_transform",
+    # particle filters and resampling
+    "BootstrapParticleFilter", "normalize_log_weights", "resample", "multinomial_resample",
+    "stratified_resample", "systematic_resample", "residual_resample", "offspring_counts",
+    "effective_sample_size", "RESAMPLING_SCHEMES",
+    # grid (point-mass) filter
+    "GridFilter",
+    # the papers' filters
+    "GaussianParticleFlowFilter", "CMSParticleFilter", "OracleCMSParticleFilter", "CMSStep",
+    "EvolutionSamplingParticleFilter",
+    # state and static parameter (dual PF chapter)
+    "DualParticleFilter", "DualExtendedKalmanFilter", "LiuWestFilter", "ThetaGridReference",
+    # interacting multiple models (IMM-PF chapter)
+    "IMMKalman", "IMMParticleFilter", "IMMPFOR",
+    # today's methods
+    "AuxiliaryParticleFilter", "RegularizedParticleFilter", "GaussianProposalParticleFilter",
+    "ParticleFlowParticleFilter", "JumpMarkovParticleFilter", "SMC2",
+]

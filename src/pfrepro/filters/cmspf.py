@@ -80,16 +80,30 @@ def map_particles(x_pred, lw_pred, logw_prev, r, eta: float, n_big: int, centre=
 
     Parameters
     ----------
-    x_pred : (runs, N, d) predicted particles x1.
-    lw_pred : (runs, N) their log-weights w_{k-1} p(z_k | x1) (unnormalised is fine).
-    logw_prev : (runs, N) log w_{k-1} of the predicted particles.
-    r : (runs, M, d) carrier values (one per map particle and component).
-    eta : adjustment factor (> 0).
-    n_big : number of big/small particles (1 <= n_big <= N // 2 unless N == 1).
-    centre : None (sec 2.3 note 1: x_hat_k and the big particles) or a
+    x_pred : ndarray
+        ``(runs, N, d)`` predicted particles x1.
+    lw_pred : ndarray
+        ``(runs, N)`` their log-weights w_{k-1} p(z_k | x1) (unnormalised is fine).
+    logw_prev : ndarray
+        ``(runs, N)`` log w_{k-1} of the predicted particles.
+    r : ndarray
+        ``(runs, M, d)`` carrier values (one per map particle and component).
+    eta : float
+        Adjustment factor (> 0).
+    n_big : int
+        Number of big/small particles (1 <= n_big <= N // 2 unless N == 1).
+    centre : ndarray or None
+        None (sec 2.3 note 1: x_hat_k and the big particles) or a
         ``(runs, d)`` array -- the oracle reading of Step 2.2 (the true x_k).
 
-    Returns ``(x2 (runs, M, d), logw_prev_map (runs, M), centre_index (M,))``.
+    Returns
+    -------
+    x2 : ndarray
+        ``(runs, M, d)`` mapped particles.
+    logw_prev_map : ndarray
+        ``(runs, M)`` log w_{k-1} carried to the mapped particles.
+    centre_index : ndarray
+        ``(M,)`` index of the big particle each mapped particle is centred on.
     """
     runs, N, d = x_pred.shape
     M = r.shape[1]

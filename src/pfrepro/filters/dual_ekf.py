@@ -21,11 +21,16 @@ K^θ = P^θ⁻ Cᵀ (C P^θ⁻ Cᵀ + S)⁻¹, θ̂_k = θ⁻ + K^θ ν, P^θ_k 
 
 Parameters
 ----------
-model : a :class:`~pfrepro.models.parameterized.ParameterizedModel`.
-theta0, P_theta0 : initial parameter estimate and its variance.
-q0, anneal, q_min : parameter noise Q^θ_k = max(q0 · anneal^k, q_min).
-clip_to_bounds : keep θ̂ inside the model's prior range (default False: the plain DEKF).
-on_divergence : "warn" (default): a run whose estimates become non-finite is NaN from that step on,
+model : ParameterizedModel
+    A :class:`~pfrepro.models.parameterized.ParameterizedModel`.
+theta0, P_theta0 : float
+    Initial parameter estimate and its variance.
+q0, anneal, q_min : float
+    Parameter noise Q^θ_k = max(q0 · anneal^k, q_min).
+clip_to_bounds : bool
+    Keep θ̂ inside the model's prior range (default False, the plain DEKF).
+on_divergence : {"warn", "drop", "raise"}
+    "warn" (default): a run whose estimates become non-finite is NaN from that step on,
     its step in ``diagnostics["diverged_at"]``, one ``FilterDivergenceWarning`` with the count; "drop": the
     same, silent; "raise": ``FilterDivergenceError`` (as the EKF, UKF and IMM filters).
 """

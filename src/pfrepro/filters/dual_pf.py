@@ -39,16 +39,24 @@ shrinking ν with the mean μ kept (capping α and β separately would move μ).
 
 Parameters
 ----------
-model : a :class:`~pfrepro.models.parameterized.ParameterizedModel` with scalar θ.
-n_x, n_theta : particle numbers of the state and parameter filters (≥ 1).
-weight : "predictive", "plugin" or "literal" (above).
-cap : upper limit on α and β (None: no cap, only the zero-variance guard).
-theta0 : θ̂_0, the estimate the state filter uses at k = 1 (default: the prior mean).
-roughening : None or Gordon et al.'s (1993) roughening constant K: after resampling, the
+model : ParameterizedModel
+    A :class:`~pfrepro.models.parameterized.ParameterizedModel` with scalar θ.
+n_x, n_theta : int
+    Particle numbers of the state and parameter filters (≥ 1).
+weight : {"predictive", "plugin", "literal"}
+    The parameter weight (above).
+cap : float or None
+    Upper limit on α and β (None means no cap, only the zero-variance guard).
+theta0 : float, optional
+    θ̂_0, the estimate the state filter uses at k = 1 (default the prior mean).
+roughening : float or None
+    None or Gordon et al.'s (1993) roughening constant K. After resampling, the
     state particles get N(0, (K E_j n_x^{-1/d})²) jitter per component j (E_j = range of
     the particles) — needed when the model has no process noise.
-resampling : resampling scheme of the state filter (every step, as in step 2e).
-theta_law : "beta" (the paper, default) or "gaussian": the comparison of sec 3.2 / Fig. 2.
+resampling : str
+    Resampling scheme of the state filter (every step, as in step 2e).
+theta_law : {"beta", "gaussian"}
+    "beta" (the paper, default) or "gaussian", the comparison of sec 3.2 / Fig. 2.
     With "gaussian", step 3(a) draws θ^i ~ N(μ_θ, σ_θ²) with the mean and variance of the
     same fitted Beta(α_{k-1}, β_{k-1}) (same sufficient statistics, same guards and cap; at
     k = 1 the uniform prior's moments), and a draw outside [r_l, r_u] gets weight zero
@@ -123,14 +131,20 @@ def beta_moment_fit(mu, var, cap=None, nu_min: float = 2.0):
 
     Parameters
     ----------
-    mu, var : arrays of means in (0, 1) and variances ≥ 0 (on the unit interval).
-    cap : None or the upper limit on max(α, β); ν is reduced with μ kept.
-    nu_min : concentration used when σ² ≥ μ(1 − μ) (eq 7 gives α, β ≤ 0) or ν < nu_min.
+    mu, var : ndarray
+        Means in (0, 1) and variances ≥ 0 (on the unit interval).
+    cap : float or None
+        None or the upper limit on max(α, β); ν is reduced with μ kept.
+    nu_min : float
+        Concentration used when σ² ≥ μ(1 − μ) (eq 7 gives α, β ≤ 0) or ν < nu_min.
 
     Returns
     -------
-    alpha, beta, status : arrays; status 0 = eq (7) as is, 1 = too wide (ν floored at
-    ``nu_min``), 2 = zero variance (ν set to the cap, or ``NU_HARD_MAX``), 3 = capped.
+    alpha, beta : ndarray
+        The Beta parameters.
+    status : ndarray
+        0 = eq (7) as is, 1 = too wide (ν floored at ``nu_min``), 2 = zero variance
+        (ν set to the cap, or ``NU_HARD_MAX``), 3 = capped.
     """
     mu = np.clip(np.asarray(mu, dtype=float), _MU_EPS, 1.0 - _MU_EPS)
     var = np.asarray(var, dtype=float)

@@ -85,6 +85,10 @@ class GaussianParticleFlowFilter(Filter):
         Ratio of consecutive steps of the exponential schedule.
     integrator : str
         "euler" (the paper), "midpoint", "rk4", or "exact" (linear models only).
+    alpha, beta, kappa : float
+        Scaled-UT parameters (not given in the paper; default alpha = 1, beta = 2,
+        kappa = 0, as our UKF; exact for linear h and, with beta = 2, exact for the mean
+        and variance of x^2/20 under a Gaussian).
     field : str
         "eq43" (default): h(x) replaced by its statistical linearisation
         y_hat + Pxy^T P^{-1} (x - mean) about the prior (the first-order expansion
@@ -112,10 +116,6 @@ class GaussianParticleFlowFilter(Filter):
     max_shift : float
         The largest move of the cloud's mean in one flow update, in prior standard
         deviations per component (default 1000; the chapter's configurations reach ~11).
-    alpha, beta, kappa : float
-        Scaled-UT parameters (not given in the paper; default alpha = 1, beta = 2,
-        kappa = 0, as our UKF; exact for linear h and, with beta = 2, exact for the mean
-        and variance of x^2/20 under a Gaussian).
     m0, P0 : array_like, optional
         Override the model's initial distribution N(m0, P0).
     return_cov : bool

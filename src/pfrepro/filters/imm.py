@@ -255,13 +255,21 @@ class IMMParticleFilter(Filter):
 
     Parameters
     ----------
-    system : :class:`~pfrepro.models.jump_markov.JumpMarkovSystem` (mode models, Pi, initial probabilities).
-    n_particles : N >= 1 per mode (r N in all).
-    model_likelihood : ``"gaussian"`` or ``"mean"`` (step 5).
-    n_th : resampling threshold as a fraction of N (N_th = n_th N), in [0, 1]; 0 never resamples
+    system : JumpMarkovSystem
+        The mode models, Pi and initial probabilities
+        (:class:`~pfrepro.models.jump_markov.JumpMarkovSystem`).
+    n_particles : int
+        N >= 1 per mode (r N in all).
+    model_likelihood : {"gaussian", "mean"}
+        The reading of the model likelihood (step 5).
+    n_th : float
+        Resampling threshold as a fraction of N (N_th = n_th N), in [0, 1]; 0 never resamples
         in step 8 (the interaction of the next step still draws a fresh set).
-    m0, P0 : override the initial distribution N(m0, P0) shared by every mode.
+    m0, P0 : ndarray, optional
+        Override the initial distribution N(m0, P0) shared by every mode.
 
+    Notes
+    -----
     With r = 1 (Pi = [[1]]) and ``n_th = 0`` this is the bootstrap PF with systematic
     resampling at every step (same random numbers and arithmetic, up to the last bits of the
     likelihood; ``tests/test_imm.py``).
@@ -674,12 +682,17 @@ class IMMKalman(Filter):
 
     Parameters
     ----------
-    system : :class:`~pfrepro.models.jump_markov.JumpMarkovSystem`.
-    mode_filters : list of r :class:`~pfrepro.filters.GaussianFilter` instances (KF, EKF, UKF),
+    system : JumpMarkovSystem
+        The jump-Markov system (:class:`~pfrepro.models.jump_markov.JumpMarkovSystem`).
+    mode_filters : list of GaussianFilter
+        r :class:`~pfrepro.filters.GaussianFilter` instances (KF, EKF, UKF),
         filter j built on ``system.models[j]``; their ``predict(x, P, k)`` / ``update(x, P, y)``
         are used (their own m0/P0 are ignored: the IMM starts every mode at m0, P0).
-    name : e.g. "IMM-EKF".
+    name : str
+        A label, e.g. "IMM-EKF".
 
+    Notes
+    -----
     Diagnostics: ``mode_probs`` (runs, T, r), ``model_estimates`` (runs, T, r, n),
     ``log_model_likelihood`` (runs, T, r).
     """

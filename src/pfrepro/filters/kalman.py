@@ -16,6 +16,7 @@ __all__ = ["KalmanFilter", "ExtendedKalmanFilter", "kalman_update", "symmetrize"
 
 
 def symmetrize(P):
+    """(P + Pᵀ) / 2 over the last two axes: removes round-off asymmetry from a covariance."""
     return 0.5 * (P + np.swapaxes(P, -1, -2))
 
 

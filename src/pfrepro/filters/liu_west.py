@@ -14,10 +14,14 @@ p(z_k | x_k) / p(z_k | μ_j). Two likelihood evaluations per particle per step.
 
 Parameters
 ----------
-model : a :class:`~pfrepro.models.parameterized.ParameterizedModel` with scalar θ.
-n_particles : N ≥ 1.
-delta : discount factor δ in (1/3, 1] (default 0.99).
-theta_prior : "uniform" (θ_0 ~ U[r_l, r_u], default) — the prior the DPF uses too.
+model : ParameterizedModel
+    A :class:`~pfrepro.models.parameterized.ParameterizedModel` with scalar θ.
+n_particles : int
+    N ≥ 1.
+delta : float
+    Discount factor δ in (1/3, 1] (default 0.99).
+theta_prior : {"uniform"}
+    θ_0 ~ U[r_l, r_u] (default) — the prior the DPF uses too.
 """
 from __future__ import annotations
 

@@ -66,7 +66,7 @@ class RegularizedParticleFilter(Filter):
     ess_threshold : float or None
         None (resample and jitter every step) or a fraction in [0, 1].
     bandwidth_scale : float
-        Multiplies the optimal bandwidth :func:`optimal_bandwidth` (default 1; >= 0).
+        Multiplies the optimal bandwidth :func:`~pfrepro.filters.regularized.optimal_bandwidth` (default 1; >= 0).
     m0, P0 : array_like, optional
         Override the model's initial distribution N(m0, P0).
 

@@ -91,6 +91,7 @@ class ScaledSigmaPoints:
 
     @property
     def num_points(self) -> int:
+        """Number of sigma points, 2n + 1."""
         return 2 * self.n + 1
 
     def sigma_points(self, x, P, on_error="raise"):

@@ -64,10 +64,13 @@ class ThetaGridReference(Filter):
 
     Parameters
     ----------
-    model : a scalar :class:`~pfrepro.models.parameterized.ParameterizedModel` (dim_x = dim_y = 1)
+    model : ParameterizedModel
+        A scalar :class:`~pfrepro.models.parameterized.ParameterizedModel` (dim_x = dim_y = 1)
         with Gaussian process noise (Q > 0).
-    n_theta : number of θ grid nodes on [r_l, r_u] (endpoints included).
-    x_bounds, n_grid : the x grid; mass pushed outside is lost (reported).
+    n_theta : int
+        Number of θ grid nodes on [r_l, r_u] (endpoints included).
+    x_bounds, n_grid : tuple of float, int
+        The x grid; mass pushed outside is lost (reported).
     """
 
     name = "exact θ posterior (grid)"

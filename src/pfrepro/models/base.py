@@ -148,12 +148,17 @@ class StateSpaceModel:
 
     Parameters
     ----------
-    Q : (dim_x, dim_x) process-noise covariance.
-    measurement_noise : a ``GaussianNoise``/``GaussianMixtureNoise`` or a
+    Q : ndarray
+        ``(dim_x, dim_x)`` process-noise covariance.
+    measurement_noise : GaussianNoise, GaussianMixtureNoise or ndarray
+        A ``GaussianNoise``/``GaussianMixtureNoise`` or a
         covariance matrix (read as zero-mean Gaussian).
-    x0 : true initial state.
-    m0, P0 : the filters' initial distribution N(m0, P0).
-    truth_init : ``"fixed"`` (every run starts at ``x0``) or ``"prior"``
+    x0 : ndarray
+        True initial state.
+    m0, P0 : ndarray
+        The filters' initial distribution N(m0, P0).
+    truth_init : {"fixed", "prior"}
+        ``"fixed"`` (every run starts at ``x0``) or ``"prior"``
         (each run draws x_0 ~ N(m0, P0)).
     """
 

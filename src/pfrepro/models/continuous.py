@@ -91,9 +91,12 @@ class ContinuousParameterizedModel(ParameterizedModel):
 
     Parameters
     ----------
-    dt : sampling interval.
-    n_substeps : RK4 steps per sampling interval.
-    Other parameters as :class:`~pfrepro.models.parameterized.ParameterizedModel`.
+    dt : float
+        Sampling interval.
+    n_substeps : int
+        RK4 steps per sampling interval.
+    **kwargs
+        Other parameters as :class:`~pfrepro.models.parameterized.ParameterizedModel`.
     """
 
     def __init__(self, *args, dt: float = 1.0, n_substeps: int = 64, **kwargs):
@@ -104,12 +107,15 @@ class ContinuousParameterizedModel(ParameterizedModel):
         self.n_substeps = check_positive_int(n_substeps, "n_substeps")
 
     def a(self, x, t, theta):
+        """The drift a(x, t, θ) of dx/dt = a(x, t, θ), batched over leading axes."""
         raise NotImplementedError
 
     def a_x(self, x, t, theta):
+        """The drift's Jacobian ∂a/∂x, ``(..., dim_x, dim_x)``."""
         raise NotImplementedError
 
     def a_theta(self, x, t, theta):
+        """The drift's Jacobian ∂a/∂θ, ``(..., dim_x, dim_theta)``."""
         raise NotImplementedError
 
     def f(self, x, k, theta):

@@ -21,7 +21,7 @@ Simulation draws the mode sequence from the chain (one uniform per run and step,
 runs axis first, so run i is the same in any batch) or follows a fixed mode
 timeline (a *scheduled manoeuvre*, as tracking scenarios are usually written:
 "constant velocity until 90 s, then a 3 deg/s turn for 20 s, ..."), see
-:meth:`JumpMarkovSystem.simulate`.
+:meth:`~pfrepro.models.JumpMarkovSystem.simulate`.
 """
 from __future__ import annotations
 
@@ -131,13 +131,18 @@ class JumpMarkovSystem:
 
     Parameters
     ----------
-    models : sequence of :class:`~pfrepro.models.StateSpaceModel`, one per mode, all with the
+    models : sequence of StateSpaceModel
+        One :class:`~pfrepro.models.StateSpaceModel` per mode, all with the
         same ``dim_x`` and ``dim_y``; the measurement model (``h``, ``jacobian_h``,
         ``residual_y``, measurement noise) and ``x0``, ``m0``, ``P0`` are taken from ``models[0]``.
-    transition_matrix : (r, r), row = from, column = to, rows sum to 1.
-    initial_probs : (r,) initial mode probabilities (default uniform, as Zhou et al. sec 3).
-    names : optional mode names for tables and plots.
-    schedule : optional fixed mode timeline ``(T + 1,)`` used by :meth:`simulate` when it is
+    transition_matrix : ndarray
+        ``(r, r)``, row = from, column = to, rows sum to 1.
+    initial_probs : ndarray, optional
+        ``(r,)`` initial mode probabilities (default uniform, as Zhou et al. sec 3).
+    names : sequence of str, optional
+        Mode names for tables and plots.
+    schedule : ndarray, optional
+        Fixed mode timeline ``(T + 1,)`` used by :meth:`simulate` when it is
         given none (so a scheduled-manoeuvre truth can be handed to a generic Monte Carlo runner).
     """
 
@@ -179,18 +184,23 @@ class JumpMarkovSystem:
     # the shared measurement model
     @property
     def R(self):
+        """Measurement-noise covariance, shared by every mode (that of ``models[0]``)."""
         return self.models[0].R
 
     def h(self, x):
+        """Measurement function h(x) (shared by every mode)."""
         return self.models[0].h(x)
 
     def jacobian_h(self, x):
+        """Jacobian of h at ``x`` (shared by every mode)."""
         return self.models[0].jacobian_h(x)
 
     def residual_y(self, y, y_pred):
+        """Measurement residual y - y_pred (angles wrapped where the model says so)."""
         return self.models[0].residual_y(y, y_pred)
 
     def log_likelihood(self, y, x):
+        """log p(y | x) of the shared measurement model."""
         return self.models[0].log_likelihood(y, x)
 
     def simulate_modes(self, T: int, runs: int, rng) -> np.ndarray:
@@ -202,7 +212,7 @@ class JumpMarkovSystem:
 
         ``schedule=None`` uses the system's own ``schedule`` if it has one, else draws the
         modes from the chain; a ``(T + 1,)`` integer array
-        (see :func:`schedule_from_segments`) fixes the same mode timeline for every run
+        (see :func:`~pfrepro.models.jump_markov.schedule_from_segments`) fixes the same mode timeline for every run
         (a scheduled manoeuvre; the chain is then not used for the truth).
         Per step: one ``standard_normal((runs, dim_x))`` draw for the process noise (mapped
         through the active mode's square root of Q) and one ``(runs, dim_y)`` for the

@@ -11,7 +11,7 @@ leading axes, e.g. ``x (runs, 1, dim_x)`` (one state estimate per run) against
 call, without a Python loop. The prior support of θ is the box ``bounds`` ([r_l, r_u] of
 Hou & Yin 2008, sec 3.2).
 
-:meth:`ParameterizedModel.at` fixes θ and returns an ordinary
+:meth:`~pfrepro.models.ParameterizedModel.at` fixes θ and returns an ordinary
 :class:`~pfrepro.models.base.StateSpaceModel`, so every existing filter (KF, EKF, PF,
 grid filter) runs on the model with θ known.
 """
@@ -52,13 +52,20 @@ class ParameterizedModel:
 
     Parameters
     ----------
-    dim_x, dim_y, dim_theta : dimensions.
-    Q : process-noise covariance; singular or zero allowed (zero: no noise is drawn).
-    R : measurement-noise covariance (positive definite).
-    x0 : the truth's initial state (``truth_init="fixed"``) — ignored for ``"prior"``.
-    m0, P0 : the filters' initial distribution N(m0, P0) (the truth's too for ``"prior"``).
-    theta_true : the true parameter used by :meth:`simulate`.
-    bounds : (r_l, r_u), the prior support of θ (scalar θ) — required by the Beta filter.
+    dim_x, dim_y, dim_theta : int
+        Dimensions of the state, the measurement and the parameter.
+    Q : ndarray
+        Process-noise covariance; singular or zero allowed (zero: no noise is drawn).
+    R : ndarray
+        Measurement-noise covariance (positive definite).
+    x0 : ndarray
+        The truth's initial state (``truth_init="fixed"``) — ignored for ``"prior"``.
+    m0, P0 : ndarray
+        The filters' initial distribution N(m0, P0) (the truth's too for ``"prior"``).
+    theta_true : float or ndarray
+        The true parameter used by :meth:`simulate`.
+    bounds : tuple of float
+        (r_l, r_u), the prior support of θ (scalar θ) — required by the Beta filter.
     """
 
     name = "parameterised model"
@@ -100,12 +107,15 @@ class ParameterizedModel:
         raise NotImplementedError
 
     def h(self, x):
+        """Measurement function h(x), batched over leading axes."""
         raise NotImplementedError
 
     def jacobian_h(self, x):
+        """Jacobian of h at ``x``, ``(..., dim_y, dim_x)``."""
         raise NotImplementedError
 
     def residual_y(self, y, y_pred):
+        """Measurement residual y - y_pred."""
         return y - y_pred
 
     # -- derived ------------------------------------------------------------------------
@@ -123,6 +133,7 @@ class ParameterizedModel:
         return self.measurement_noise.logpdf(self.residual_y(y, self.h(x)))
 
     def sample_initial(self, rng, shape):
+        """Draws from N(m0, P0) of the given ``shape`` (trailing axis dim_x)."""
         shape = tuple(np.atleast_1d(shape))
         z = rng.standard_normal(shape + (self.dim_x,))
         return self.m0 + z @ np.linalg.cholesky(self.P0).T

@@ -44,12 +44,18 @@ class Reentry(ContinuousParameterizedModel):
 
     Parameters
     ----------
-    reading : "feet" (working reading, default) or "literal" (printed, mixed units, no square).
-    theta_true : true ballistic parameter (10⁻³).
-    bounds : prior range of θ, default (0, 2·10⁻³).
-    P0 : filters' initial covariance of (x1, x2), default diag(10⁶, 4·10⁶).
-    Q : process-noise covariance per sample (default 0).
-    dt, n_substeps : sampling interval and RK4 steps per interval.
+    reading : {"feet", "literal"}
+        "feet" (working reading, default) or "literal" (printed, mixed units, no square).
+    theta_true : float
+        True ballistic parameter (10⁻³).
+    bounds : tuple of float
+        Prior range of θ, default (0, 2·10⁻³).
+    P0 : ndarray
+        Filters' initial covariance of (x1, x2), default diag(10⁶, 4·10⁶).
+    Q : ndarray or float
+        Process-noise covariance per sample (default 0).
+    dt, n_substeps : float, int
+        Sampling interval and RK4 steps per interval.
     """
 
     name = "re-entry (θ)"

@@ -33,11 +33,16 @@ class StochasticVolatility(StateSpaceModel):
 
     Parameters
     ----------
-    phi : AR(1) coefficient of the log-volatility (|phi| < 1 for stationarity; not enforced).
-    sigma : std of the log-volatility innovation (> 0).
-    beta : scale of the returns (> 0).
-    x0 : true initial log-volatility.
-    m0, P0 : the filters' prior; default the stationary N(0, sigma^2 / (1 - phi^2)) when |phi| < 1.
+    phi : float
+        AR(1) coefficient of the log-volatility (abs(phi) < 1 for stationarity; not enforced).
+    sigma : float
+        Standard deviation of the log-volatility innovation (> 0).
+    beta : float
+        Scale of the returns (> 0).
+    x0 : float
+        True initial log-volatility.
+    m0, P0 : float
+        The filters' prior; default the stationary N(0, sigma^2 / (1 - phi^2)) when abs(phi) < 1.
     """
 
     name = "SV"

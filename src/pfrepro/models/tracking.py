@@ -32,7 +32,7 @@ two axes; it is singular (rank 2) by construction, which the package accepts.
 
 Measurement (radar at the origin): range r = sqrt(Rx^2 + Ry^2), Doppler (range rate)
 (Rx Vx + Ry Vy) / r and bearing atan2(Ry, Rx); the bearing innovation is wrapped to
-(-pi, pi] in :meth:`RadarTrackingModel.residual_y`.
+(-pi, pi] in :meth:`~pfrepro.models.RadarTrackingModel.residual_y`.
 """
 from __future__ import annotations
 
@@ -137,11 +137,19 @@ class RadarTrackingModel(StateSpaceModel):
 
     Parameters
     ----------
-    F : (6, 6) transition matrix; Q : (6, 6) process noise (PSD).
-    sigma_r, sigma_rdot, sigma_theta : measurement noise standard deviations of range (m),
-        range rate (m/s) and bearing (rad); R = diag(sigma_r^2, sigma_rdot^2, sigma_theta^2).
-    x0 : true initial state; m0, P0 : the filters' initial distribution.
-    name : a short name (CV, CT, CA, ...).
+    F : ndarray
+        ``(6, 6)`` transition matrix.
+    Q : ndarray
+        ``(6, 6)`` process noise (positive semi-definite).
+    sigma_r, sigma_rdot, sigma_theta : float
+        Measurement noise standard deviations of range (m), range rate (m/s) and bearing (rad);
+        R = diag(sigma_r^2, sigma_rdot^2, sigma_theta^2).
+    x0 : ndarray
+        True initial state.
+    m0, P0 : ndarray
+        The filters' initial distribution.
+    name : str
+        A short name (CV, CT, CA, ...).
     """
 
     def __init__(self, F, Q, sigma_r, sigma_rdot, sigma_theta, x0, m0=None, P0=None, name="tracking"):

@@ -68,6 +68,7 @@ class UNGM(StateSpaceModel):
 
     # -- model functions -----------------------------------------------------------------
     def forcing(self, k: int) -> float:
+        """The forcing term gamma cos(omega (k - time_offset)) of step ``k``."""
         return self.gamma * np.cos(self.omega * (k - self.time_offset))
 
     def f(self, x, k):

@@ -35,6 +35,7 @@ class UNGMTheta(ParameterizedModel):
         super().__init__(1, 1, 1, Q, R, [m0], [m0], P0, [theta_true], bounds, truth_init="prior")
 
     def forcing(self, k):
+        """The forcing term gamma cos(omega k) of step ``k``."""
         return self.gamma * np.cos(self.omega * k)
 
     def f(self, x, k, theta):

@@ -1,0 +1,144 @@
+"""The chapters' prose helpers: glue values, phrases and figures, and counts with their grammar.
+
+Every number in a chapter's prose comes from code through myst-nb's ``glue``; these are the
+one set of helpers every chapter imports (instead of a ``g``/``gl``/``gmd`` of its own):
+
+* :func:`glue_value` -- a number or string for ``{glue:text}`` (numpy scalars as Python
+  numbers, so format specs such as ``:.3f`` apply);
+* :func:`glue_md` -- a data-dependent phrase for ``{glue:md}``;
+* :func:`glue_figure` -- a figure for ``{glue:figure}`` (closed after gluing, so it is shown once);
+* :func:`plural`, :func:`count_is`, :func:`verdict_sentence` -- generated sentences that agree
+  in number ("1 is reproduced", "3 are reproduced").
+"""
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+
+import numpy as np
+
+__all__ = ["glue_value", "glue_md", "glue_figure", "plural", "count_is", "verdict_sentence", "VERDICT_ORDER",
+           "MISSING", "use_book_tables"]
+
+#: how a table shows a missing value (NaN), a dash with its meaning on hover, never "NaN"
+MISSING = "—"
+_MISSING_HTML = '<span class="pf-missing" title="no value: not computed, not published or not applicable">—</span>'
+
+
+def _frame_html(df) -> str:
+    """A DataFrame as the book shows it: whole cells (no "..." cut) and missing values as a dash."""
+    import pandas as pd
+
+    with pd.option_context("display.max_colwidth", None):
+        return df.to_html(na_rep=MISSING, border=0)
+
+
+def use_book_tables() -> None:
+    """Show every DataFrame of the running notebook the book's way.
+
+    Missing values (NaN) appear as "—" instead of "NaN" (a chapter says why next to its
+    table), and no cell is cut to ``display.max_colwidth`` with "..."; Styler tables get the
+    same dash. Called by :func:`pfrepro.plotting.use_book_style`, which every chapter runs
+    first; outside IPython it only sets the pandas options.
+    """
+    import pandas as pd
+
+    pd.set_option("styler.format.na_rep", MISSING)
+    pd.set_option("display.max_colwidth", None)
+    try:
+        from IPython import get_ipython
+    except ImportError:  # pragma: no cover - IPython is a dependency of the book
+        return
+    ip = get_ipython()
+    if ip is not None:
+        ip.display_formatter.formatters["text/html"].for_type(pd.DataFrame, _frame_html)
+
+
+#: the verdict scale, in the order sentences list it
+VERDICT_ORDER = ("reproduced", "qualitatively reproduced", "not reproduced", "inconclusive", "not checkable")
+
+
+def glue_value(name: str, value, display: bool = False) -> None:
+    """Glue ``value`` under ``name`` for ``{glue:text}`` (numpy scalars become Python numbers).
+
+    Parameters
+    ----------
+    name : str
+        The glue key.
+    value : object
+        A number, string or other object myst-nb can glue.
+    display : bool
+        Also show the value where the cell runs (default False).
+
+    Notes
+    -----
+    Returns nothing, so a call that ends a cell adds no output to the page.
+    """
+    from myst_nb import glue
+
+    if isinstance(value, np.generic):
+        value = value.item()
+    glue(name, value, display=display)
+
+
+def glue_md(name: str, text: str) -> None:
+    """Glue a Markdown phrase under ``name`` for ``{glue:md}`` (returns nothing: no cell output)."""
+    from IPython.display import Markdown
+    from myst_nb import glue
+
+    glue(name, Markdown(text), display=False)
+
+
+def glue_figure(name: str, fig) -> None:
+    """Glue a matplotlib figure under ``name`` (for ``{glue:figure}``) and close it."""
+    import matplotlib.pyplot as plt
+    from myst_nb import glue
+
+    glue(name, fig, display=False)
+    plt.close(fig)
+
+
+def plural(n: int, one: str, many: str | None = None) -> str:
+    """``"1 claim"``, ``"2 claims"``: the count with the right form of the noun."""
+    many = many if many is not None else one + "s"
+    return f"{n} {one if n == 1 else many}"
+
+
+def count_is(n: int, predicate: str) -> str:
+    """``"1 is reproduced"``, ``"0 are reproduced"``, ``"3 are reproduced"``."""
+    return f"{n} {'is' if n == 1 else 'are'} {predicate}"
+
+
+def verdict_sentence(verdicts: Iterable[str] | Mapping[str, int], noun: str = "claim",
+                     order: Iterable[str] = VERDICT_ORDER, always: Iterable[str] = VERDICT_ORDER[:4]) -> str:
+    """One sentence counting verdicts, in number agreement.
+
+    Parameters
+    ----------
+    verdicts : iterable of str or mapping
+        The verdict of every claim, or a mapping verdict -> count.
+    noun : str
+        What is counted (singular), e.g. ``"claim"`` or ``"recorded claim"``.
+    order : iterable of str
+        The verdicts to list, in order (any other verdict follows).
+    always : iterable of str
+        Verdicts listed even with no claim ("0 are inconclusive"); the others only when some
+        claim has them.
+
+    Returns
+    -------
+    str
+        E.g. "Of 12 claims, 1 is reproduced, 3 are qualitatively reproduced, 0 are not
+        reproduced and 8 are inconclusive".
+    """
+    if isinstance(verdicts, Mapping):
+        counts = {str(k): int(v) for k, v in verdicts.items()}
+    else:
+        counts = {}
+        for v in verdicts:
+            counts[str(v)] = counts.get(str(v), 0) + 1
+    total = sum(counts.values())
+    order, always = list(order), set(always)
+    parts = [count_is(counts.get(v, 0), v) for v in order if v in always or counts.get(v, 0)]
+    parts += [count_is(n, v) for v, n in counts.items() if v not in order and n]
+    listed = parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " and " + parts[-1]
+    return f"Of {plural(total, noun)}, {listed}"
