@@ -162,8 +162,8 @@ CHOICES = [
                f"reading ({_S['runs_lik']} runs).", "eqs 11-15"),
 ]
 
-#: the other values of the three settings the first round held fixed (models_q, n_th, metric): reading tag ->
-#: (scenario overrides, IMMPF keywords or None (the main run's IMMPF is unchanged), IMMPFOR keywords)
+#: the other values of the three settings the first round held fixed (models_q, n_th, metric), by reading
+#: tag, as (scenario overrides, IMMPF keywords or None when the main run's IMMPF is unchanged, IMMPFOR keywords)
 HELD_READINGS = {
     "models_q=q x4": ({"q_cv": 4 * _S["q_cv"], "q_ct": 4 * _S["q_ct"], "q_ca": 4 * _S["q_ca"]}, {}, {}),
     "n_th=N": ({}, {"n_th": 1.0}, {"n_th": 1.0}),
