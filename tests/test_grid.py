@@ -85,3 +85,38 @@ def test_log_domain_posterior_reads_a_nan_likelihood_as_zero():
     e = np.exp(-1.0)
     np.testing.assert_allclose(post[0], [0.25 / (0.25 + 0.5 * e), 0.0, 0.5 * e / (0.25 + 0.5 * e)], rtol=1e-15)
     assert not coll[0]
+
+
+def test_move_matrix_hand_cases_at_the_grid_edges():
+    """Grid 0, 1, ..., 4 (dx = 1). The mass at g_i goes to f(g_i), split linearly between the
+    two nodes around it; a point mapped beyond the grid is lost, one mapped exactly onto the
+    first or last node stays whole."""
+    from pfrepro.filters import GridFilter
+    from pfrepro.models import StateSpaceModel
+
+    class Shift(StateSpaceModel):
+        def __init__(self, s):
+            self.s = s
+            super().__init__(dim_x=1, dim_y=1, Q=16.0, measurement_noise=1.0, x0=[2.0], m0=[2.0], P0=[[1.0]])
+
+        def f(self, x, k):
+            return x + self.s
+
+        def h(self, x):
+            return x
+
+    def M(s):
+        return GridFilter(Shift(s), bounds=(0.0, 4.0), n_grid=5)._move_matrix(1).toarray()
+
+    half = np.zeros((5, 5))
+    for i in range(4):
+        half[i, i] = half[i + 1, i] = 0.5            # node 4 -> 4.5: off the grid, lost
+    np.testing.assert_array_equal(M(0.5), half)
+    one = np.zeros((5, 5))
+    for i in range(4):
+        one[i + 1, i] = 1.0                           # node 3 -> 4 exactly: kept on the last node
+    np.testing.assert_array_equal(M(1.0), one)
+    down = np.zeros((5, 5))
+    for i in range(1, 5):
+        down[i - 1, i] = 1.0                          # node 1 -> 0 exactly: kept; node 0 -> -1: lost
+    np.testing.assert_array_equal(M(-1.0), down)

@@ -189,3 +189,23 @@ def test_safe_cholesky_exact_factors_per_matrix():
     out = safe_cholesky(np.stack([pd_, bad]), on_error="nan")
     np.testing.assert_array_equal(out[0], np.linalg.cholesky(pd_))
     assert np.all(np.isnan(out[1]))
+
+
+def test_ukf_defaults_and_m0_P0_overrides():
+    """Documented defaults alpha, beta, kappa = 1, 2, 0 (Wm_0 = 0, Wc_0 = 2 for alpha = 1,
+    beta = 2); m0/P0 overrides are the filter's initial distribution."""
+    from pfrepro.models import UNGM
+
+    m = UNGM.zhang2016()
+    u = UnscentedKalmanFilter(m)
+    pts = u.points
+    assert (pts.alpha, pts.beta, pts.kappa) == (1.0, 2.0, 0.0)
+    np.testing.assert_allclose([pts.Wm[0], pts.Wc[0]], [0.0, 2.0])
+    y = m.simulate(4, 1, np.random.default_rng(0)).y
+    over = UnscentedKalmanFilter(m, m0=[3.0], P0=[[0.25]])
+    np.testing.assert_array_equal(over.m0, [3.0])
+    np.testing.assert_array_equal(over.P0, [[0.25]])
+    # the first prediction starts from N(3, 0.25): the same as a model whose prior is that
+    ref = UnscentedKalmanFilter(UNGM.zhang2016(), m0=[3.0], P0=[[0.25]]).filter(y)
+    np.testing.assert_array_equal(over.filter(y).x, ref.x)
+    assert not np.array_equal(u.filter(y).x, ref.x)
