@@ -170,10 +170,13 @@ def test_claims_of_the_last_build_show_printed_digits(paper):
     claims = claims[claims["paper"] == paper]
     t = claims_table(claims)
     n = 0
-    for pub, cell in zip(claims["published"], t["published"]):
+    tables = set(published.load_printed(paper)["table"])
+    for pub, cell, source in zip(claims["published"], t["published"], claims["source"]):
         if pub is None or (isinstance(pub, float) and math.isnan(pub)):
             continue
-        text = published.printed_for(paper, pub)
+        # the claim's source table when the same value is printed two ways in two tables (5.207 / 5.2070)
+        tab = str(source).split(",")[0].strip()
+        text = published.printed_for(paper, pub, tab if tab in tables else None)
         if text is not None:
             assert cell.split(" ± ")[0] == text, (pub, cell, text)
             n += 1
