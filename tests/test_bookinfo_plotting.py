@@ -200,3 +200,29 @@ def test_figure_modules_take_method_colours_from_the_palette():
             if re.search(r"[\"']C\d[\"']|[\"']C\d[-:.o]", line):
                 hits.append(f"{path.name}:{i}: {line.strip()[:90]}")
     assert not hits, "\n".join(hits)
+
+
+#: calls that return nothing (no cell output): the chapters' glue helpers
+GLUE_NAMES = {"g", "gl", "gmd", "gfig", "glue", "glue_value", "glue_md", "glue_figure"}
+
+
+def test_figure_cells_end_with_the_figure():
+    """A chapter cell captioned as a figure (mystnb.figure) must not end with a table: myst-nb
+    would wrap the table in a second figure with the same caption."""
+    bad = []
+    for path in sorted((ROOT / "book").glob("*.md")):
+        text = path.read_text(encoding="utf-8")
+        for m in re.finditer(r"```\{code-cell\}[^\n]*\n(---\n.*?\n---\n)?(.*?)```", text, re.S):
+            if not m.group(1) or "figure:" not in m.group(1):
+                continue
+            src = "\n".join(line for line in m.group(2).splitlines() if not line.startswith((":", "%", "!")))
+            body = ast.parse(src).body
+            last = body[-1] if body else None
+            call = last.value if isinstance(last, ast.Expr) and isinstance(last.value, ast.Call) else None
+            quiet = call is not None and (
+                (isinstance(call.func, ast.Attribute) and call.func.attr in ("show", "tight_layout"))
+                or (isinstance(call.func, ast.Name) and call.func.id in GLUE_NAMES))
+            if isinstance(last, ast.Expr) and not quiet:
+                line = text[:m.start()].count("\n") + 1
+                bad.append(f"{path.name}:{line}: figure cell ends with {ast.unparse(last)[:60]!r}")
+    assert not bad, "\n".join(bad)

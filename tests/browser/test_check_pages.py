@@ -182,3 +182,9 @@ def test_entry_cut_at_the_contents_panel_edge_fails(tmp_path):
     _only(_run(tmp_path, _page(panel)), wide=1)
     wrapped = panel.replace("white-space:nowrap", "overflow-wrap:anywhere")
     _only(_run(tmp_path, _page(wrapped)))
+
+
+def test_captioned_figure_without_an_image_fails(tmp_path):
+    body = "<figure><div><table><tr><td>1</td></tr></table></div><figcaption>Fig. 5: a curve</figcaption></figure>"
+    _only(_run(tmp_path, _page(body)), figure=1)
+    _only(_run(tmp_path, _page(body.replace("<table>", f"<img src='{PNG_1PX}' alt='c'><table>"))))
