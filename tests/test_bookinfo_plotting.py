@@ -141,8 +141,8 @@ def test_book_style_text_is_at_least_the_minimum():
 
 
 def test_rendered_text_size_rule():
-    # a 12 in figure at 150 dpi is 1800 px, shown in a 757 px column: 8 pt text is 7.0 px
-    assert plotting.rendered_text_px(8, 12) == pytest.approx(8 * 757 / (72 * 12))
+    # a 12 in figure at 150 dpi is 1800 px, shown 741 px wide: 8 pt text is 6.9 px
+    assert plotting.rendered_text_px(8, 12) == pytest.approx(8 * 741 / (72 * 12))
     # a figure narrower than the column is shown at its natural size
     assert plotting.rendered_text_px(8, 4) == pytest.approx(8 * 150 / 72)
     w = plotting.max_figure_width()

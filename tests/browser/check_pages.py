@@ -75,7 +75,7 @@ WIDTHS = (1366, 400)
 PHONE_MAX = 800
 #: boxes allowed to scroll sideways (each must show a visible cue: a shadow background attached
 #: "local" or a visible scrollbar); anything else wider than the viewport fails ``wide``
-SCROLL_ALLOWED = ("div.math > mjx-container", "span.math", "div.cell_output > div.output",
+SCROLL_ALLOWED = ("div.math > mjx-container", "span.math", "div.cell_output div.output",
                   "div.pst-scrollable-table-container", "div.highlight pre")
 #: figure text: the book's figures are rendered at BOOK_DPI with no text under MIN_FONT_PT
 #: (pfrepro.plotting, checked by tests/test_bookinfo_plotting.py); on screen that text is
