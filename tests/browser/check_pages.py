@@ -498,10 +498,12 @@ PAGE_JS = r"""
         if (tops.size > 1 && nNumber++ < 5)
           fails.push({kind: 'number', what: label(cell), detail: `number ${JSON.stringify(m[0])} broken over ${tops.size} lines`, box: box(cell)});
       }
-      // typed "…", or pandas' "..." at the end of a cell cut to display.max_colwidth
-      if (/(…|\.\.\.)\s*$/.test(n.textContent) && !n.parentElement.closest('code, .math') && nEllipsis++ < 5)
-        fails.push({kind: 'ellipsis', what: label(cell), detail: 'text cut with "…": ' + JSON.stringify(n.textContent.trim().slice(-60)), box: box(cell)});
     }
+    // typed "…", or pandas' "..." at the end of a cell cut to display.max_colwidth (the cell's
+    // whole text: "2 ... 64" inside a sentence is not a cut)
+    const whole = cell.textContent.trim();
+    if (/(…|\.\.\.)$/.test(whole) && !cell.querySelector('mjx-container') && nEllipsis++ < 5)
+      fails.push({kind: 'ellipsis', what: label(cell), detail: 'text cut with "…": ' + JSON.stringify(whole.slice(-60)), box: box(cell)});
     if (over && nOverlap++ < 5)
       fails.push({kind: 'overlap', what: label(cell) + ' ' + cell.textContent.trim().slice(0, 30),
                   detail: `text runs ${Math.round(Math.max(over.right - cr.right, cr.left - over.left))}px out of its cell` + (st.overflow !== 'visible' ? ' (and is clipped)' : ' over the next one'), box: box(cell)});

@@ -142,6 +142,7 @@ def test_ellipsis_in_a_table_fails(tmp_path):
     _only(_run(tmp_path, _page("<table><tr><td>the reason is cut …</td></tr></table>")), ellipsis=1)
     _only(_run(tmp_path, _page("<table><tr><td>pandas cut this reason at fifty charac...</td></tr></table>")), ellipsis=1)
     _only(_run(tmp_path, _page("<table><tr><td>x_1, …, x_T are kept whole</td></tr></table>")))
+    _only(_run(tmp_path, _page("<table><tr><td>swept (<span>2</span> ... <span>64</span> substeps)</td></tr></table>")))
     body = ("<table><tr><td style='max-width:80px;overflow:hidden;white-space:nowrap;text-overflow:ellipsis'>"
             "a reason far too long for this cell</td></tr></table>")
     assert _run(tmp_path, _page(body))["ellipsis"] == 1
