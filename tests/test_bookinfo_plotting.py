@@ -141,8 +141,8 @@ def test_book_style_text_is_at_least_the_minimum():
 
 
 def test_rendered_text_size_rule():
-    # a 12 in figure at 150 dpi is 1800 px, shown in a 757 px column: 8 pt text is 7.0 px
-    assert plotting.rendered_text_px(8, 12) == pytest.approx(8 * 757 / (72 * 12))
+    # a 12 in figure at 150 dpi is 1800 px, shown 741 px wide: 8 pt text is 6.9 px
+    assert plotting.rendered_text_px(8, 12) == pytest.approx(8 * 741 / (72 * 12))
     # a figure narrower than the column is shown at its natural size
     assert plotting.rendered_text_px(8, 4) == pytest.approx(8 * 150 / 72)
     w = plotting.max_figure_width()
@@ -200,3 +200,29 @@ def test_figure_modules_take_method_colours_from_the_palette():
             if re.search(r"[\"']C\d[\"']|[\"']C\d[-:.o]", line):
                 hits.append(f"{path.name}:{i}: {line.strip()[:90]}")
     assert not hits, "\n".join(hits)
+
+
+#: calls that return nothing (no cell output): the chapters' glue helpers
+GLUE_NAMES = {"g", "gl", "gmd", "gfig", "glue", "glue_value", "glue_md", "glue_figure"}
+
+
+def test_figure_cells_end_with_the_figure():
+    """A chapter cell captioned as a figure (mystnb.figure) must not end with a table: myst-nb
+    would wrap the table in a second figure with the same caption."""
+    bad = []
+    for path in sorted((ROOT / "book").glob("*.md")):
+        text = path.read_text(encoding="utf-8")
+        for m in re.finditer(r"```\{code-cell\}[^\n]*\n(---\n.*?\n---\n)?(.*?)```", text, re.S):
+            if not m.group(1) or "figure:" not in m.group(1):
+                continue
+            src = "\n".join(line for line in m.group(2).splitlines() if not line.startswith((":", "%", "!")))
+            body = ast.parse(src).body
+            last = body[-1] if body else None
+            call = last.value if isinstance(last, ast.Expr) and isinstance(last.value, ast.Call) else None
+            quiet = call is not None and (
+                (isinstance(call.func, ast.Attribute) and call.func.attr in ("show", "tight_layout"))
+                or (isinstance(call.func, ast.Name) and call.func.id in GLUE_NAMES))
+            if isinstance(last, ast.Expr) and not quiet:
+                line = text[:m.start()].count("\n") + 1
+                bad.append(f"{path.name}:{line}: figure cell ends with {ast.unparse(last)[:60]!r}")
+    assert not bad, "\n".join(bad)

@@ -40,3 +40,12 @@ def test_tables_show_missing_values_as_a_dash_and_whole_cells():
     html = prose._frame_html(pd.DataFrame({"a": [1.0, np.nan], "reason": ["x" * 80, "y"]}))
     assert "NaN" not in html and "nan" not in html and prose.MISSING in html
     assert "x" * 80 in html and "..." not in html
+
+
+def test_numbers_are_never_broken_and_styler_nan_is_a_dash():
+    import pandas as pd
+
+    df = pd.DataFrame({"a": [3.2e-14, np.nan]})
+    html = prose._styler_html(df.style.format("{:.2e}"))
+    assert '<span class="pf-num">3.20e-14</span>' in html
+    assert ">nan<" not in html and prose.MISSING in html

@@ -30,9 +30,9 @@ BOOK_STYLE = {
 }
 
 
-#: width in CSS px of the text column a figure is shown in (the book's theme at a 1366 px wide
-#: window; tests/browser/check_pages.py measures it)
-COLUMN_PX = 757
+#: width in CSS px at which a figure in a cell output is shown (the book's theme at a 1366 px wide
+#: window, the 757 px text column less the output's padding; measured by tests/browser/check_pages.py)
+COLUMN_PX = 741
 #: smallest type size (points) any figure of the book may use (ticks, legends, annotations)
 MIN_FONT_PT = 8.0
 #: smallest size (CSS px) that figure text may have on screen at :data:`COLUMN_PX`

@@ -24,20 +24,36 @@ MISSING = "—"
 _MISSING_HTML = '<span class="pf-missing" title="no value: not computed, not published or not applicable">—</span>'
 
 
+def _nowrap_cells(html: str) -> str:
+    """Numbers in plain table cells kept on one line (never "3.20e-" / "14"); "nan" cells a dash."""
+    import re
+
+    from .bookinfo import nowrap_numbers
+
+    html = re.sub(r"(<td[^>]*>)\s*(?:nan|NaN|None|&lt;NA&gt;)\s*(</td>)", lambda m: m.group(1) + MISSING + m.group(2), html)
+    return re.sub(r"(<td[^>]*>)([^<]*)(</td>)", lambda m: m.group(1) + nowrap_numbers(m.group(2)) + m.group(3), html)
+
+
 def _frame_html(df) -> str:
-    """A DataFrame as the book shows it: whole cells (no "..." cut) and missing values as a dash."""
+    """A DataFrame as the book shows it: whole cells (no "..." cut), missing values as a dash,
+    numbers never broken."""
     import pandas as pd
 
     with pd.option_context("display.max_colwidth", None):
-        return df.to_html(na_rep=MISSING, border=0)
+        return _nowrap_cells(df.to_html(na_rep=MISSING, border=0))
+
+
+def _styler_html(styler) -> str:
+    """A pandas Styler as the book shows it: numbers never broken."""
+    return _nowrap_cells(styler.to_html())
 
 
 def use_book_tables() -> None:
     """Show every DataFrame of the running notebook the book's way.
 
     Missing values (NaN) appear as "—" instead of "NaN" (a chapter says why next to its
-    table), and no cell is cut to ``display.max_colwidth`` with "..."; Styler tables get the
-    same dash. Called by :func:`pfrepro.plotting.use_book_style`, which every chapter runs
+    table), no cell is cut to ``display.max_colwidth`` with "...", and numbers are never broken
+    over two lines (``span.pf-num``); Styler tables get the same dash and unbroken numbers. Called by :func:`pfrepro.plotting.use_book_style`, which every chapter runs
     first; outside IPython it only sets the pandas options.
     """
     import pandas as pd
@@ -50,7 +66,11 @@ def use_book_tables() -> None:
         return
     ip = get_ipython()
     if ip is not None:
-        ip.display_formatter.formatters["text/html"].for_type(pd.DataFrame, _frame_html)
+        from pandas.io.formats.style import Styler
+
+        html = ip.display_formatter.formatters["text/html"]
+        html.for_type(pd.DataFrame, _frame_html)
+        html.for_type(Styler, _styler_html)
 
 
 #: the verdict scale, in the order sentences list it

@@ -35,7 +35,9 @@ Per page it fails on
               (tap to enlarge) is accepted instead;
 ``rst``       (API pages) raw reStructuredText in the text (``double back-quotes``, ``:class:``
               roles), or a numpydoc "(type)" slot holding a description;
-``ellipsis``  table text cut with "…" (typed, or by ``text-overflow: ellipsis``).
+``ellipsis``  table text cut with "…" (typed, pandas' "..." or ``text-overflow: ellipsis``);
+``figure``    a numbered figure (with caption) that holds no image, e.g. a table that shared the
+              figure's notebook cell and got its caption.
 
 Every page is read at each width of :data:`WIDTHS` (a laptop, 1366 px, and a phone, 400 px;
 below :data:`PHONE_MAX` wide equations may scroll in a visibly cued box of their own).
@@ -64,7 +66,7 @@ from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
 KINDS = ("console", "network", "math", "tex", "image", "table", "equation", "overflow", "link",
-         "wide", "overlap", "number", "figtext", "rst", "ellipsis")
+         "wide", "overlap", "number", "figtext", "rst", "ellipsis", "figure")
 
 #: viewports every page is read at: a laptop and a phone (CSS px)
 WIDTHS = (1366, 400)
@@ -73,7 +75,7 @@ WIDTHS = (1366, 400)
 PHONE_MAX = 800
 #: boxes allowed to scroll sideways (each must show a visible cue: a shadow background attached
 #: "local" or a visible scrollbar); anything else wider than the viewport fails ``wide``
-SCROLL_ALLOWED = ("div.math > mjx-container", "span.math", "div.cell_output > div.output",
+SCROLL_ALLOWED = ("div.math > mjx-container", "span.math", "div.cell_output div.output",
                   "div.pst-scrollable-table-container", "div.highlight pre")
 #: figure text: the book's figures are rendered at BOOK_DPI with no text under MIN_FONT_PT
 #: (pfrepro.plotting, checked by tests/test_bookinfo_plotting.py); on screen that text is
@@ -496,10 +498,12 @@ PAGE_JS = r"""
         if (tops.size > 1 && nNumber++ < 5)
           fails.push({kind: 'number', what: label(cell), detail: `number ${JSON.stringify(m[0])} broken over ${tops.size} lines`, box: box(cell)});
       }
-      // typed "…", or pandas' "..." at the end of a cell cut to display.max_colwidth
-      if (/(…|\.\.\.)\s*$/.test(n.textContent) && !n.parentElement.closest('code, .math') && nEllipsis++ < 5)
-        fails.push({kind: 'ellipsis', what: label(cell), detail: 'text cut with "…": ' + JSON.stringify(n.textContent.trim().slice(-60)), box: box(cell)});
     }
+    // typed "…", or pandas' "..." at the end of a cell cut to display.max_colwidth (the cell's
+    // whole text: "2 ... 64" inside a sentence is not a cut)
+    const whole = cell.textContent.trim();
+    if (/(…|\.\.\.)$/.test(whole) && !cell.querySelector('mjx-container') && nEllipsis++ < 5)
+      fails.push({kind: 'ellipsis', what: label(cell), detail: 'text cut with "…": ' + JSON.stringify(whole.slice(-60)), box: box(cell)});
     if (over && nOverlap++ < 5)
       fails.push({kind: 'overlap', what: label(cell) + ' ' + cell.textContent.trim().slice(0, 30),
                   detail: `text runs ${Math.round(Math.max(over.right - cr.right, cr.left - over.left))}px out of its cell` + (st.overflow !== 'visible' ? ' (and is clipped)' : ' over the next one'), box: box(cell)});
@@ -527,6 +531,13 @@ PAGE_JS = r"""
     if (nSmall++ < 5)
       fails.push({kind: 'figtext', what: label(i) + ' ' + (i.getAttribute('src') || '').split('/').pop().slice(0, 40),
                   detail: `figure text ${px.toFixed(1)}px on screen < ${OPT.minTextPx}px (shown ${Math.round(r.width)}px of ${i.naturalWidth}px)` + (OPT.phone ? ', and no tap-to-enlarge link' : ''), box: box(i)});
+  });
+
+  // ---- figures: every captioned figure shows an image (a table in a figure cell gets the caption too)
+  col.querySelectorAll('figure').forEach(f => {
+    if (!f.querySelector('img, svg, canvas, video') && f.querySelector('figcaption'))
+      fails.push({kind: 'figure', what: label(f), detail: 'captioned figure without an image: ' +
+                  JSON.stringify(f.querySelector('figcaption').textContent.trim().slice(0, 60)), box: box(f)});
   });
 
   // ---- raw reStructuredText in the API reference (roles and literals the docstrings failed to render)

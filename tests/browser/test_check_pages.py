@@ -142,6 +142,7 @@ def test_ellipsis_in_a_table_fails(tmp_path):
     _only(_run(tmp_path, _page("<table><tr><td>the reason is cut …</td></tr></table>")), ellipsis=1)
     _only(_run(tmp_path, _page("<table><tr><td>pandas cut this reason at fifty charac...</td></tr></table>")), ellipsis=1)
     _only(_run(tmp_path, _page("<table><tr><td>x_1, …, x_T are kept whole</td></tr></table>")))
+    _only(_run(tmp_path, _page("<table><tr><td>swept (<span>2</span> ... <span>64</span> substeps)</td></tr></table>")))
     body = ("<table><tr><td style='max-width:80px;overflow:hidden;white-space:nowrap;text-overflow:ellipsis'>"
             "a reason far too long for this cell</td></tr></table>")
     assert _run(tmp_path, _page(body))["ellipsis"] == 1
@@ -182,3 +183,9 @@ def test_entry_cut_at_the_contents_panel_edge_fails(tmp_path):
     _only(_run(tmp_path, _page(panel)), wide=1)
     wrapped = panel.replace("white-space:nowrap", "overflow-wrap:anywhere")
     _only(_run(tmp_path, _page(wrapped)))
+
+
+def test_captioned_figure_without_an_image_fails(tmp_path):
+    body = "<figure><div><table><tr><td>1</td></tr></table></div><figcaption>Fig. 5: a curve</figcaption></figure>"
+    _only(_run(tmp_path, _page(body)), figure=1)
+    _only(_run(tmp_path, _page(body.replace("<table>", f"<img src='{PNG_1PX}' alt='c'><table>"))))

@@ -273,7 +273,7 @@ def fig3(f3: pd.DataFrame, f3_grid: dict):
 
 def fig_one_step(d: dict, title: str):
     """Figs. 4-5: one step with and without mapping (``d`` = ``E.one_step(carrier)``)."""
-    fig, axs = new_figure(2, 3, figsize=(10.5, 6))
+    fig, axs = new_figure(2, 3, figsize=(10.2, 6))
     N = d["N"]
     ax = axs[0, 0]; ax.plot(d["x_prev"], np.zeros(N), "o", mfc="none", label="particles at k-1")
     ax.plot(d["x_map"], np.full(N, 0.1), "*", ms=4, label="map particles")
@@ -300,7 +300,7 @@ def fig_one_step(d: dict, title: str):
 def fig6(f6_base: dict, f6_maps: dict, sens: pd.DataFrame | None = None, sens_ref: dict | None = None):
     """Fig. 6: map particles for several adjustment factors alpha; with ``sens`` (``E.sensitivity()``)
     a second panel shows CMS-PF's RMSE against alpha beside the PF and the exact posterior mean."""
-    fig, axs = new_figure(1, 2 if sens is not None else 1, figsize=(10.5, 4) if sens is not None else (6, 4))
+    fig, axs = new_figure(1, 2 if sens is not None else 1, figsize=(10.2, 4) if sens is not None else (6, 4))
     ax0 = axs[0] if sens is not None else axs
     for i, (a, x2) in enumerate(f6_maps.items()):
         ax0.plot(x2, np.full(x2.size, i), "|", ms=10, label=f"alpha = {a}")

@@ -62,7 +62,7 @@ def figs_1_3(figs: dict, run: int = 0):
 
 def figs_2_4(figs: dict):
     """Figs. 2 and 4 side by side: per-time RMSE over the figure runs of each model."""
-    fig, axes = new_figure(1, 2, figsize=(10.5, 4))
+    fig, axes = new_figure(1, 2, figsize=(10.2, 4))
     for ax, w, fno in zip(axes, (1, 2), (2, 4)):
         per_time_panel(ax, figs[w], w, fno)
     fig.tight_layout()
@@ -142,7 +142,7 @@ def ess_plot(deg: dict, n_particles: int = E.N_PARTICLES):
     """The degeneracy of sequential importance sampling (sec 1.3.2): ESS / N over time, median and
     10-90 % band over the runs, for SIS (no resampling) and the PF (ESS of the weights before each
     resampling), one panel per model. ``deg`` maps model -> :func:`~pfrepro.experiments.ekf_pf_li2012.degeneracy`."""
-    fig, axes = new_figure(1, len(deg), figsize=(10.5, 3.8), sharey=True)
+    fig, axes = new_figure(1, len(deg), figsize=(10.2, 3.8), sharey=True)
     axes = np.atleast_1d(axes)
     for ax, (w, d) in zip(axes, deg.items()):
         t = d["ess_over_time"]
@@ -167,7 +167,7 @@ def sweep_plot(sens):
     (±2 se) and the exact posterior's under every swept value, with the published cells, one panel
     per model. ``sens`` is :func:`~pfrepro.experiments.ekf_pf_li2012.sensitivity`'s frame."""
     pub = E.published_table1()
-    fig, axes = new_figure(1, 2, figsize=(10.5, 3.8))
+    fig, axes = new_figure(1, 2, figsize=(10.2, 3.8))
     for ax, w in zip(axes, (1, 2)):
         col = E.MODEL_LABELS[w]
         sub = sens[(sens["model"] == col) & sens["setting"].isin(["P0", "resampling"])].reset_index(drop=True)

@@ -27,7 +27,7 @@ COMPONENT_LABELS = {"x": "x", "y": "y", "xdot": "ẋ", "ydot": "ẏ"}  # plain U
 
 def fig1(mc_gaussian, mc_mixture):
     """Fig. 1: per-run MSE (eq 56) of KF and GPFF on CWPA, (a) Gaussian and (b) mixture noise."""
-    fig, axes = new_figure(1, 2, figsize=(10.5, 4))
+    fig, axes = new_figure(1, 2, figsize=(10.2, 4))
     for ax, (label, mc) in zip(axes, (("(a) Gaussian noise", mc_gaussian), ("(b) mixture noise", mc_mixture))):
         for name, mk in (("KF", "o-"), ("GPFF", "s--")):
             v = mc.mse(name)
@@ -54,7 +54,7 @@ def fig2(mc_mixture, run: int = 0):
 
 def fig3(mc_ung):
     """Fig. 3: per-run RMSE of EKF, UKF, PF(100), GPFF(100) and the exact grid filter on UNG."""
-    fig, ax = new_figure(figsize=(10.5, 4.5))
+    fig, ax = new_figure(figsize=(10.2, 4.5))
     for name, mk in (("EKF", "v-"), ("UKF", "^-"), ("PF(100)", "o-"), ("GPFF(100)", "s-"), ("Grid (exact)", "k-")):
         r = mc_ung.rmse(name)
         ax.plot(np.arange(1, len(r) + 1), r, mk, ms=3, lw=0.8, label=name)
@@ -66,7 +66,7 @@ def fig3(mc_ung):
 
 def fig4(mc_bot, names=BOT_FIGURE_FILTERS, dt: float = 0.1):
     """Fig. 4: per-component MSE at each time (eq 61) on BOT, over the runs that did not diverge."""
-    fig, axes = new_figure(2, 2, figsize=(10.5, 7))
+    fig, axes = new_figure(2, 2, figsize=(10.2, 7))
     tt = np.arange(1, mc_bot.sim.T + 1) * dt
     for j, (ax, comp) in enumerate(zip(axes.ravel(), E.COMPONENTS)):
         for name in names:
@@ -82,7 +82,7 @@ def fig4(mc_bot, names=BOT_FIGURE_FILTERS, dt: float = 0.1):
 
 def fig5(mc_bot, names=BOT_FIGURE_FILTERS):
     """Fig. 5: time-averaged MSE of each component in each run on BOT."""
-    fig, axes = new_figure(2, 2, figsize=(10.5, 7))
+    fig, axes = new_figure(2, 2, figsize=(10.2, 7))
     for j, (ax, comp) in enumerate(zip(axes.ravel(), E.COMPONENTS)):
         for name in names:
             v = mse_per_component(mc_bot.x_true, mc_bot.results[name].x)[:, j]
