@@ -120,3 +120,27 @@ def test_move_matrix_hand_cases_at_the_grid_edges():
     for i in range(1, 5):
         down[i - 1, i] = 1.0                          # node 1 -> 0 exactly: kept; node 0 -> -1: lost
     np.testing.assert_array_equal(M(-1.0), down)
+
+
+def test_grid_filter_is_the_kalman_filter_on_a_linear_model_with_a_prior_off_zero():
+    """x_k = 0.9 x_{k-1} + w, y = x + v, prior N(5, 2): the grid filter's mean and variance are
+    the Kalman filter's (to grid accuracy) -- the prior is centred on m0 = 5, not -5 --, its
+    diagnostics: lost mass accumulates (>= the last step's), edge mass per run, no log-domain step."""
+    from pfrepro.filters import GridFilter, KalmanFilter
+    from pfrepro.models import LinearGaussianModel
+
+    m = LinearGaussianModel([[0.9]], [[1.0]], [[1.0]], [[0.5]], x0=[5.0], m0=[5.0], P0=[[2.0]])
+    sim = m.simulate(6, 2, np.random.default_rng(0))
+    g = GridFilter(m, bounds=(-20.0, 30.0), n_grid=2001).filter(sim.y)
+    kf = KalmanFilter(m).filter(sim.y)
+    np.testing.assert_allclose(g.x, kf.x, atol=1e-4)
+    np.testing.assert_allclose(g.P, kf.P, atol=1e-4)
+    d = g.diagnostics
+    assert d["final_edge_mass"].shape == (2,) and np.all(d["final_edge_mass"] < 1e-12)
+    assert d["lost_mass"].shape == (2,) and np.all((d["lost_mass"] >= 0) & (d["lost_mass"] < 1e-9))
+    assert d["log_domain_steps"].dtype == bool and not d["log_domain_steps"].any()
+    # an outlier that needs the log domain in run 1 at step 3 is recorded there
+    y = sim.y.copy()
+    y[1, 2, 0] = 1e4
+    o = GridFilter(m, bounds=(-20.0, 30.0), n_grid=2001).filter(y).diagnostics
+    assert o["log_domain_steps"][1, 2] and o["log_domain_steps"].sum() == 1
