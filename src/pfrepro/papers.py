@@ -151,7 +151,7 @@ def cell_claims(paper: str, table: pd.DataFrame, claim_id, text, source: str, *,
 
 @contextlib.contextmanager
 def override_seeds(seeds: dict, base: int | None):
-    """Temporarily set the entries of an experiment module's ``SEEDS`` dict to ``base, base + 1, ...``.
+    """Temporarily set the entries of an experiment module's ``SEEDS`` dict to ``base``, ``base + 1`` and so on.
 
     The entries are set in the dict's order; ``base=None`` leaves them unchanged. For experiment functions that
     read their seed from the module's table of fixed seeds.
