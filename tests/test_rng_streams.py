@@ -94,6 +94,7 @@ def test_every_draw_is_each_runs_own_generator_draw():
         ("random f32", lambda s: s.random((R, 6), dtype=np.float32), lambda g, i: g.random(6, dtype=np.float32)),
         ("normal", lambda s: s.normal(loc, 2.0, (R, 4)), lambda g, i: g.normal(loc[i], 2.0, 4)),
         ("normal scale", lambda s: s.normal(1.0, scale, (R, 2, 3)), lambda g, i: g.normal(1.0, scale[i], (2, 3))),
+        ("normal per column", lambda s: s.normal(np.arange(4.0), 1.0, (R, 4)), lambda g, i: g.normal(np.arange(4.0), 1.0, 4)),
         ("normal default", lambda s: s.normal(size=(R, 4)), lambda g, i: g.normal(0.0, 1.0, 4)),
         ("uniform", lambda s: s.uniform(loc, loc + 2.0, (R, 4)), lambda g, i: g.uniform(loc[i], loc[i] + 2.0, 4)),
         ("uniform default", lambda s: s.uniform(size=(R, 4)), lambda g, i: g.uniform(0.0, 1.0, 4)),
@@ -151,7 +152,7 @@ def test_from_entropy_start_and_container_protocol():
     for bad in (True, [1, -2], 1.5, [np.True_]):
         with pytest.raises(ValueError, match="entropy must be an int >= 0"):
             RunStreams.from_entropy(bad, 2)
-    with pytest.raises(ValueError, match="at least one generator"):
+    with pytest.raises(ValueError, match=r"^RunStreams needs at least one generator \(one per run\)$"):
         RunStreams([])
     with pytest.raises(TypeError, match="holds numpy.random.Generator objects"):
         RunStreams([np.random.default_rng(0), np.random.RandomState(0)])
@@ -165,14 +166,14 @@ def test_size_checks_name_the_method_and_accept_numpy_ints():
     ref = RunStreams.from_entropy(5, 3)
     np.testing.assert_array_equal(rs.standard_normal(np.array([3, 2])), ref.standard_normal((3, 2)))
     np.testing.assert_array_equal(rs.random([np.int64(3), 2]), ref.random((3, 2)))
-    assert rs.random((3, 0)).shape == (3, 0)
+    assert rs.random((3, 0)).shape == (3, 0) and rs.random([3, 0]).shape == (3, 0)
     with pytest.raises(ValueError, match=r"RunStreams\.random needs size=\(runs, \.\.\.\)"):
         rs.random()
     with pytest.raises(ValueError, match=r"RunStreams\.normal: size must be a tuple of integers >= 0"):
         rs.normal(size=(3, True))
     with pytest.raises(ValueError, match=r"RunStreams\.uniform: size must be a tuple"):
         rs.uniform(size=[[3, 2]])
-    with pytest.raises(ValueError, match=r"RunStreams\.integers: size \(2, 4\) must start with the number of runs \(3\)"):
+    with pytest.raises(ValueError, match=r"^RunStreams\.integers: size \(2, 4\) must start with the number of runs \(3\); every draw of a batched filter has the runs axis first$"):
         rs.integers(4, size=(2, 4))
     with pytest.raises(ValueError, match=r"RunStreams\.choice: size \(\) must start"):
         rs.choice(3, size=())
