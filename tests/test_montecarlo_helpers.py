@@ -161,3 +161,67 @@ def test_run_monte_carlo_checks_sim_shape_and_reuses_it():
     np.testing.assert_array_equal(par.results["KF"].x, fresh.results["KF"].x)
     t = mc.run_monte_carlo(m, {"KF": KalmanFilter(m)}, 4, 2, 5, sim=sim, time_per_run=True, timing_repeats=2)
     assert len(t.timing_repeats["KF"]) == 2 and t.seconds_per_run["KF"] == float(np.median(t.timing_repeats["KF"]))
+
+
+class _Recorder:
+    """A 'filter' that records the seed of every rng it is given."""
+
+    def __init__(self):
+        self.seeds = []
+
+    def filter(self, y, rng=None):
+        self.seeds.append(rng.bit_generator.seed_seq.entropy)
+
+
+def test_timing_repeats_seeds_warmup_and_median():
+    """One untimed warm-up call per filter (seed rng_seed), then repeats interleaved across the
+    filters with seeds rng_seed + r; time_filters is the median of time_filter_repeats."""
+    a, b = _Recorder(), _Recorder()
+    reps = mc.time_filter_repeats({"a": a, "b": b}, np.zeros((1, 2, 1)), rng_seed=10, repeats=3)
+    assert a.seeds == [10, 10, 11, 12] and b.seeds == [10, 10, 11, 12]
+    assert list(reps) == ["a", "b"] and all(len(v) == 3 and min(v) >= 0 for v in reps.values())
+    c = _Recorder()
+    mc.time_filter_repeats({"c": c}, np.zeros((1, 2, 1)), rng_seed=5, repeats=2, warmup=False)
+    assert c.seeds == [5, 6]
+    d = _Recorder()
+    t = mc.time_single_run(d, np.zeros((1, 2, 1)), rng_seed=3, repeats=2)
+    assert d.seeds == [3, 3, 4] and isinstance(t, float) and 0 <= t < 5
+    e = _Recorder()
+    med = mc.time_filters({"e": e}, np.zeros((1, 2, 1)), rng_seed=0, repeats=3)
+    assert list(med) == ["e"] and e.seeds == [0, 0, 1, 2] and 0 <= med["e"] < 5
+
+
+class _Unpicklable:
+    def __init__(self):
+        self.ok = 1
+        self.fn = lambda x: x
+
+    def simulate(self, *a):
+        pass
+
+
+def test_pickling_checks_name_the_object_and_attribute():
+    with pytest.raises(TypeError, match=r"^model cannot be sent to a process pool: it cannot be pickled "
+                                        r"\(attribute fn\): "):
+        mc._check_picklable({"model": _Unpicklable()})
+    ex = concurrent.futures.ProcessPoolExecutor(1)             # no worker starts before a submit
+    try:
+        with pytest.raises(TypeError, match=r"^model cannot be sent to a process pool"):
+            mc._check_mc_inputs(_Unpicklable(), {}, ex)
+    finally:
+        ex.shutdown()
+    with pytest.raises(ValueError, match=r"^max_workers must be >= 1, got 0$"):
+        mc.process_pool(0)
+
+
+def test_run_monte_carlo_argument_names_batch_seconds_and_progress(capsys):
+    from pfrepro.filters import KalmanFilter
+
+    m = LinearGaussianModel([[0.9]], [[1.0]], [[1.0]], [[1.0]], [0.0])
+    with pytest.raises(ValueError, match=r"^T must be >= 1, got 0$"):
+        mc.run_monte_carlo(m, {}, 0, 2, 0)
+    with pytest.raises(ValueError, match=r"^runs must be >= 1, got 0$"):
+        mc.run_monte_carlo(m, {}, 3, 0, 0)
+    r = mc.run_monte_carlo(m, {"KF": KalmanFilter(m)}, 3, 2, 0, progress=True)
+    assert 0 <= r.batch_seconds["KF"] < 30          # a wall time, not a clock reading
+    assert "Monte Carlo" in capsys.readouterr().err

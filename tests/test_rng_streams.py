@@ -147,6 +147,8 @@ def test_from_entropy_start_and_container_protocol():
     for bad_start in (True, 1.0, "1"):
         with pytest.raises(TypeError, match="start must be an integer >= 0"):
             RunStreams.from_entropy(11, 2, start=bad_start)
+    with pytest.raises(ValueError, match=r"^runs must be >= 1, got 0$"):
+        RunStreams.from_entropy(11, 0)
     with pytest.raises(ValueError, match="need runs >= 1 and start >= 0"):
         RunStreams.from_entropy(11, 2, start=-1)
     for bad in (True, [1, -2], 1.5, [np.True_]):
