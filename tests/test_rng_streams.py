@@ -125,6 +125,8 @@ def test_every_draw_is_each_runs_own_generator_draw():
     for bad in (None, 0):
         with pytest.raises(ValueError, match="runs axis first and axis >= 1"):
             RunStreams.from_entropy(ent, R).permuted(x, axis=bad)
+    with pytest.raises(ValueError, match=r"^RunStreams\.permuted needs"):
+        RunStreams.from_entropy(ent, R).permuted(x, axis=0)
     with pytest.raises(ValueError, match="runs axis first"):
         RunStreams.from_entropy(ent, R).permuted(x[:2], axis=1)
 
@@ -179,6 +181,10 @@ def test_size_checks_name_the_method_and_accept_numpy_ints():
         rs.integers(4, size=(2, 4))
     with pytest.raises(ValueError, match=r"RunStreams\.choice: size \(\) must start"):
         rs.choice(3, size=())
+    with pytest.raises(ValueError, match=r"^RunStreams\.standard_normal: size \(2, 4\) must start"):
+        rs.standard_normal((2, 4))
+    a = np.array([10, 20, 30])                 # an array a with p: one probability per element
+    np.testing.assert_array_equal(rs.choice(a, size=(3, 2), p=[0.0, 0.0, 1.0]), np.full((3, 2), 30))
 
 
 def test_check_rng_and_run_stream():
