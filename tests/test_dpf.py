@@ -681,3 +681,26 @@ def test_liu_west_a_domain_is_open_at_one_third():
     with pytest.raises(ValueError, match="delta"):
         liu_west_a(1.0 / 3.0)
     assert liu_west_a(1.0) == 1.0
+
+
+def test_theta_grid_tests_for_collapse_per_run_not_over_all_runs():
+    """The collapse test is per run. A linear θ-model whose step-2 transition sends every
+    x > 3 far off the grid (x -> 1000, for every θ): run 1 saw y_1 = 10 with R = 0.01, so its
+    step-1 posterior is exactly zero below x = 6 (exp(-50 (10 - x)^2) underflows) and its whole
+    mass leaves the grid at step 2 -- the prediction is exactly zero for every θ while the
+    step-2 likelihood (y_2 = 0) is finite, and run 0 (y_1 = 0, mass around 0) is fine. Run 1
+    must be caught as collapsed and, having no mass left at all, stop the filter with the
+    grid filter's error (before this test it went on with a -inf evidence for every θ and
+    failed later inside the cubic interpolation of the θ posterior). With a step-2 transition
+    that keeps the mass, the same data filter without any flag."""
+    class OffGridAtStep2(LinearTheta):
+        def f(self, x, k, theta):
+            fx = super().f(x, k, theta)
+            return np.where(np.asarray(x) > 3.0, 1000.0, fx) if k == 2 else fx
+
+    y = np.array([[0.0, 0.0, 0.5], [10.0, 0.0, 0.5]])[..., None]
+    kw = dict(n_theta=5, x_bounds=(-12.0, 14.0), n_grid=261)
+    with pytest.raises(FloatingPointError, match="left the x grid for every θ at step 2"):
+        ThetaGridReference(OffGridAtStep2(Q=1.0, R=0.01, P0=4.0), **kw).filter(y)
+    ok = ThetaGridReference(LinearTheta(Q=1.0, R=0.01, P0=4.0), **kw).filter(y).diagnostics
+    assert ok["n_collapsed"] == 0 and np.all(np.isfinite(ok["log_evidence"]))

@@ -160,6 +160,10 @@ class ThetaGridReference(Filter):
             if coll.any():
                 post[coll], llmax[coll] = pred[coll], 0.0
                 s[coll] = pred[coll].sum(-1)
+                if not np.all(np.any(s[coll] > 0, axis=-1)):
+                    # no predictive mass left on the x grid for any θ (as in GridFilter)
+                    raise FloatingPointError(f"ThetaGridReference: the predictive density left the x grid for "
+                                             f"every θ at step {k}: widen x_bounds")
                 collapsed[coll, k - 1] = True
             with np.errstate(divide="ignore"):
                 cum += np.log(s) + llmax
