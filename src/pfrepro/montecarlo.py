@@ -430,10 +430,22 @@ def _check_picklable(objects: dict):
         try:
             pickle.dumps(obj)
         except Exception as exc:  # noqa: BLE001 - any pickling failure is reported the same way
-            bad = [k for k, v in getattr(obj, "__dict__", {}).items() if not _pickles(v)]
+            bad = [k for k, v in _attributes(obj).items() if not _pickles(v)]
             where = f" (attribute {', '.join(bad)})" if bad else ""
             raise TypeError(f"{label} cannot be sent to a process pool: it cannot be pickled{where}: "
                             f"{type(exc).__name__}: {exc}") from None
+
+
+def _attributes(obj) -> dict:
+    """The instance attributes pickle would send: ``__dict__`` and the classes' ``__slots__``
+    (an object may have either, both, or neither)."""
+    out = dict(getattr(obj, "__dict__", {}))
+    for cls in type(obj).__mro__:
+        slots = cls.__dict__.get("__slots__", ())
+        for name in (slots,) if isinstance(slots, str) else slots:
+            if name not in ("__dict__", "__weakref__") and hasattr(obj, name):
+                out[name] = getattr(obj, name)
+    return out
 
 
 def _pickles(v) -> bool:
