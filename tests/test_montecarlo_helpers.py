@@ -298,3 +298,39 @@ def test_pickling_check_of_objects_without_a_dict():
     with pytest.raises(TypeError, match=r"\(attribute lam, fn\): "):   # the __dict__ slot is not an attribute
         mc._check_picklable({"model": _SlottedWithDict()})
     assert mc._attributes(_Slotted())["ok"] == 1 and "__weakref__" not in mc._attributes(obj)
+
+
+def _nested(start, size):
+    """A chunk result with dict-valued and FilterResult-valued entries, a setting that is a tuple
+    of scalars, and a count nested one dict down."""
+    runs = np.arange(start, start + size, dtype=float)
+    res = FilterResult(runs[:, None, None] * np.ones((1, 2, 1)), None,
+                       {"per_mode": {"ess": runs[:, None] + 0.5, "n_diverged": size % 2}, "levels": (0.1, 0.9)})
+    return {"res": res, "sub": {"x": runs ** 2, "pair": (runs, [runs + 1])}, "levels": (0.025, 0.975), "name": "a"}
+
+
+def test_chunked_dict_valued_results_equal_the_serial_call():
+    """map_runs cut into chunks (serially or on threads) returns exactly the serial result for
+    results whose diagnostics hold dicts and FilterResults (concatenated per run, counts added),
+    and settings that are tuples of scalars (shared by every chunk, kept once)."""
+    serial = mc.map_runs(_nested, 7)
+    assert serial["res"].diagnostics["per_mode"]["n_diverged"] == 1          # 7 % 2, one chunk
+    for chunks, ex in ((3, None), (7, None), (3, concurrent.futures.ThreadPoolExecutor(2))):
+        try:
+            got = mc.map_runs(_nested, 7, ex, chunks=chunks)
+        finally:
+            if ex is not None:
+                ex.shutdown()
+        np.testing.assert_array_equal(got["res"].x, serial["res"].x)
+        d = got["res"].diagnostics
+        np.testing.assert_array_equal(d["per_mode"]["ess"], serial["res"].diagnostics["per_mode"]["ess"])
+        assert d["levels"] == (0.1, 0.9) and got["levels"] == (0.025, 0.975) and got["name"] == "a"
+        np.testing.assert_array_equal(got["sub"]["x"], np.arange(7.0) ** 2)
+        np.testing.assert_array_equal(got["sub"]["pair"][0], np.arange(7.0))
+        np.testing.assert_array_equal(got["sub"]["pair"][1][0], np.arange(7.0) + 1)
+        # chunks of sizes (3, 3, 1) -> 1 + 1 + 1; (1,) * 7 -> 7: a count is summed over chunks
+        assert d["per_mode"]["n_diverged"] == {3: 3, 7: 7}[chunks]
+    with pytest.raises(ValueError, match=r"chunks disagree on the scalar 'levels'"):
+        mc._concat_dict([{"levels": (0.1, 0.9)}, {"levels": (0.1, 0.8)}])
+    assert not mc._has_runs_axis(np.float64(1.0)) and not mc._has_runs_axis(np.array(2.0))
+    assert mc._has_runs_axis([1.0, np.zeros(2)]) and not mc._has_runs_axis([1.0, "a"])

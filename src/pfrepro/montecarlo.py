@@ -333,14 +333,24 @@ def _concat_dict(parts: list[dict]) -> dict:
         vals = [p[key] for p in parts]
         if key in _SUMMED_KEYS:
             out[key] = type(vals[0])(sum(vals))
-        elif isinstance(vals[0], (np.ndarray, FilterResult, Simulation, dict, tuple, list)) \
-                and np.ndim(vals[0]) != 0:
+        elif _has_runs_axis(vals[0]):
             out[key] = _concat(vals)
         elif all(np.array_equal(v, vals[0]) for v in vals[1:]):
             out[key] = vals[0]
         else:
             raise ValueError(f"chunks disagree on the scalar {key!r}: {vals}; it cannot be combined")
     return out
+
+
+def _has_runs_axis(v) -> bool:
+    """Whether a chunk's dict value is per-run data to concatenate (an array with an axis, a
+    FilterResult, a Simulation, a dict, or a tuple/list holding one), not a setting (a scalar,
+    a string, a tuple of scalars) that every chunk must share."""
+    if isinstance(v, (FilterResult, Simulation, dict)):
+        return True
+    if isinstance(v, np.ndarray):
+        return v.ndim != 0
+    return isinstance(v, (tuple, list)) and any(_has_runs_axis(e) for e in v)
 
 
 def _gather(futures: list, bar) -> list:
