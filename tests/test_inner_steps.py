@@ -1139,6 +1139,22 @@ def test_cms_resampling_draws_from_each_runs_own_stream():
         np.testing.assert_array_equal(one.diagnostics["resampled"][0], rs[i])
 
 
+def test_cms_runs_under_strict_floating_point_errors():
+    """Tails are handled in the log domain and numpy's over/underflow flags are silenced inside
+    the filter: a caller who turned every floating-point warning into an error
+    (np.errstate(all='raise')) gets the same numbers. With a wide prior (P0 = 1e4) the weights
+    of particles ~100 away underflow in exp (this raised FloatingPointError when the filter left
+    'under' out of its errstate)."""
+    f = CMSParticleFilter(IdentityGaussModel(), 6, P0=[[1e4]], n_th=0.0)
+    y = np.full((2, 3, 1), 1.5)
+    loose = f.filter(y, rng=np.random.default_rng(0))
+    with np.errstate(all="raise"):
+        strict = f.filter(y, rng=np.random.default_rng(0))
+    np.testing.assert_array_equal(strict.x, loose.x)
+    np.testing.assert_array_equal(strict.P, loose.P)
+    assert np.all(np.isfinite(strict.x))
+
+
 def test_cms_and_oracle_error_messages_are_exact():
     model = IdentityGaussModel()
     with pytest.raises(ValueError, match=r"^CMSParticleFilter needs n_particles >= 2 \(big and small particles\)$"):
