@@ -154,7 +154,7 @@ class MonteCarloResult:
     # -- exports (pfrepro.export) ----------------------------------------------------------
     def to_frame(self, component_names=None, filters=None):
         """Tidy ``pandas.DataFrame`` of every filter: columns ``filter, run, k, component,
-        estimate, truth, error`` (see :func:`pfrepro.export.monte_carlo_frame`)."""
+        estimate, truth, error, diverged`` (see :func:`pfrepro.export.monte_carlo_frame`)."""
         from .export import monte_carlo_frame
 
         return monte_carlo_frame(self, component_names, filters)
