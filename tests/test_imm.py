@@ -661,3 +661,17 @@ def test_weighted_w1_against_scipy_and_closed_forms():
     np.testing.assert_allclose(ours, ref, rtol=1e-12)
     assert weighted_w1(a, wa, a, wa) == pytest.approx(0.0, abs=1e-15)        # a set against itself
     np.testing.assert_allclose(weighted_w1(a, wa, a + 2.5, wa), 2.5, rtol=1e-12)   # a shift moves it by the shift
+
+
+def test_posterior_w1_zero_against_itself_and_needs_kept_sets():
+    """A filter's set against itself is at distance 0; against another filter's set it is positive; a
+    filter built without kept sets is refused with the builder to use."""
+    from pfrepro.experiments import immpfor_zhou2017 as E
+
+    steps = (3, 6)
+    r_ = E.run(E.posterior_builders(E.PF_BUILDERS, steps=steps), runs=2)
+    np.testing.assert_array_equal(E.posterior_w1(r_, "IMMPF", "IMMPF", steps=steps), 0.0)
+    assert np.all(E.posterior_w1(r_, "IMMPF", "IMMPFOR", steps=steps) > 0)
+    plain = E.run({"IMMPF": ("immpf", {})}, runs=1)
+    with pytest.raises(ValueError, match="posterior_builders"):
+        E.posterior_w1(plain, "IMMPF", "IMMPF", steps=steps)

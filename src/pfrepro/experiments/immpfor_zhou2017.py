@@ -546,9 +546,10 @@ def weighted_w1(a, wa, b, wb):
     return np.sum(np.abs(F) * np.diff(v, axis=-1), axis=-1)
 
 
-def posterior_w1(run_: Run, name: str, ref: str, idx=IDX_POS) -> np.ndarray:
+def posterior_w1(run_: Run, name: str, ref: str, idx=IDX_POS, steps=POST_STEPS) -> np.ndarray:
     """Per run: the distance (m) between ``name``'s particle approximation of the posterior position and
-    the large-N reference ``ref``'s, averaged over the kept steps (:data:`POST_STEPS`).
+    the large-N reference ``ref``'s, averaged over the kept ``steps`` (default :data:`POST_STEPS`, the
+    ``keep_steps`` both filters were built with: :func:`posterior_builders`).
 
     At each kept step the approximation is the mixture over modes of the weighted particle sets
     (weight u_j(k) w_l^j, eqs 20-21's weights) after resampling; the distance is the sum over the
@@ -562,9 +563,9 @@ def posterior_w1(run_: Run, name: str, ref: str, idx=IDX_POS) -> np.ndarray:
             raise ValueError(f"{nm!r} kept no particle sets: build it with posterior_builders")
         x, w = d["particles"], d["particle_weights"]                 # (R, S, r, N, n), (R, S, r, N)
         R_, S_, r, N, _ = x.shape
-        if S_ != len(POST_STEPS):
-            raise ValueError(f"{nm!r} kept {S_} steps, expected {len(POST_STEPS)} (POST_STEPS)")
-        u = d["mode_probs"][:, [k - 1 for k in POST_STEPS]]            # (R, S, r)
+        if S_ != len(steps):
+            raise ValueError(f"{nm!r} kept {S_} steps, expected {len(steps)} (steps={tuple(steps)})")
+        u = d["mode_probs"][:, [k - 1 for k in steps]]                 # (R, S, r)
         wj = (w * u[..., None]).reshape(R_, S_, r * N)
         out.append((x[..., list(idx)].reshape(R_, S_, r * N, len(idx)), wj / wj.sum(-1, keepdims=True)))
     (xa, wa), (xb, wb) = out
