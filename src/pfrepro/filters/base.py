@@ -1,6 +1,6 @@
 """The small interface every filter shares, and what it returns.
 
-:class:`FilterResult` is defined in :mod:`pfrepro.results` (the Monte Carlo runner and the
+:class:`~pfrepro.results.FilterResult` is defined in :mod:`pfrepro.results` (the Monte Carlo runner and the
 filters both import it from there) and re-exported here, so ``from pfrepro.filters.base import
 FilterResult`` keeps working.
 """
