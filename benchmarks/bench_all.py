@@ -171,7 +171,16 @@ def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
                      "batched ns/particle-step": 1e9 * b / P if P else np.nan,
                      "single ns/evaluation": 1e9 * s / per_step if per_step else np.nan,
                      "batched ns/evaluation": 1e9 * b / per_step if per_step else np.nan})
-    df = pd.DataFrame(rows).set_index("filter")
+    return derive(pd.DataFrame(rows).set_index("filter"))
+
+
+def derive(df: pd.DataFrame) -> pd.DataFrame:
+    """The columns computed from the measured times and the counts: ns per evaluation and the
+    time/count ratios against the bootstrap PF."""
+    df = df.copy()
+    per_step = df["count per step"].where(df["count per step"] > 0)
+    df["single ns/evaluation"] = 1e9 * df["single s/step"] / per_step
+    df["batched ns/evaluation"] = 1e9 * df["batched s/step/run"] / per_step
     ref = df.loc[df.index.str.startswith("PF systematic"), "single ns/evaluation"]
     base = float(ref.iloc[0]) if len(ref) else np.nan
     df["time/count vs PF (single)"] = df["single ns/evaluation"] / base
@@ -206,6 +215,24 @@ WHY = {
 }
 
 
+def recount(df: pd.DataFrame, T: int, seed: int = 2026) -> pd.DataFrame:
+    """``df`` (a saved table) with its counts recomputed by today's :func:`pfrepro.cost.count_model_calls`
+    on the same run 0 the measurement counted on, and the derived columns with them; the measured
+    times are kept. (Counts are deterministic: they do not depend on the machine or its load.)"""
+    mk = models()
+    sims = {}
+    out = df.copy()
+    for name, fam, key, N, build in configurations():
+        if name not in out.index:
+            continue
+        if key not in sims:
+            m = mk[key]()
+            sims[key] = (m, m.simulate(T, 1, truth_streams(seed, 1)))
+        m, sim = sims[key]
+        out.loc[name, "count per step"] = count_model_calls(build(m), sim.y[:1])["model_evaluations"] / T
+    return annotate(derive(out.drop(columns=["why"], errors="ignore")))
+
+
 def annotate(df: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     """Add the ``why`` column: :data:`WHY` of the family where either time/count ratio exceeds ``limit``."""
     out = df.copy()
@@ -238,7 +265,19 @@ def main(argv=None):
     ap.add_argument("--out", default=str(RESULTS / "bench_all"), help="path stem of the .md and .csv")
     ap.add_argument("--book", action="store_true",
                     help=f"also save the table and its machine line for the book ({BOOK_CSV.relative_to(ROOT)})")
+    ap.add_argument("--recount", action="store_true",
+                    help="recompute the counts (and the columns derived from them) of the book's saved table, "
+                         "keeping its measured times; no timing is run")
     a = ap.parse_args(argv)
+    if a.recount:
+        meta = json.loads(BOOK_CSV.with_suffix(".json").read_text(encoding="utf-8"))
+        df = recount(pd.read_csv(BOOK_CSV, index_col=0), int(meta["T"]))
+        df.to_csv(BOOK_CSV, float_format="%.6g")
+        meta["recounted"] = (f"counts recomputed {_dt.datetime.now(_dt.timezone.utc):%Y-%m-%d %H:%M} UTC "
+                             "(times from the measurement above)")
+        BOOK_CSV.with_suffix(".json").write_text(json.dumps(meta, indent=1) + "\n", encoding="utf-8")
+        print(df[["count per step", "time/count vs PF (single)", "time/count vs PF (batched)"]].round(2).to_string())
+        return 0
     T, runs, repeats = (20, 20, 2) if a.quick else (a.T, a.runs, a.repeats)
     only = a.only.split(",")
     configs = [c for c in configurations() if any(o in c[0] for o in only) or c[0].startswith("PF systematic")]

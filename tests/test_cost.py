@@ -251,3 +251,26 @@ def test_smc2_count_is_its_hand_count_per_run():
         c = count_model_calls(f, sim.y[i:i + 1], RunStreams.from_entropy(4, 1, start=i))
         zeros_except(c, transitions=c["transitions"], likelihoods=c["likelihoods"])
         assert c["transitions"] == c["likelihoods"] and c["model_evaluations"] == per_run[i]
+
+
+def test_imm_filters_count_through_their_system_and_mode_filters():
+    """The IMM particle filters read their jump-Markov system (``.system``), the IMM Kalman filters
+    their mode filters: both used to count nothing. IMMPF/IMMPFOR: one transition and one
+    measurement evaluation per particle and mode (r N each per step); IMM-EKF: per mode one f, one
+    h and one Jacobian of each per step; IMM-UKF: 2n + 1 = 13 sigma points through f and h per mode."""
+    from pfrepro.experiments import immpfor_zhou2017 as IMM
+
+    sim = IMM.simulate(runs=2)
+    y, N, r = sim.y[:, :T], 7, 3
+    for build in (IMM.immpf, IMM.immpfor):
+        zeros_except(count_model_calls(build(N=N), y), transitions=2 * r * N * T, h=2 * r * N * T)
+    zeros_except(count_model_calls(IMM.imm_ekf(), y), f=2 * r * T, h=2 * r * T, jacobian_f=2 * r * T,
+                 jacobian_h=2 * r * T)
+    n = IMM.filter_system().dim_x
+    zeros_except(count_model_calls(IMM.imm_ukf(), y), f=2 * r * (2 * n + 1) * T, h=2 * r * (2 * n + 1) * T)
+    # the counting copy changes no number
+    f = IMM.immpf(N=N)
+    a = f.filter(y, np.random.default_rng(3)).x
+    from pfrepro.cost import _with_model
+    b = _with_model(f, CountingModel(f.system)).filter(y, np.random.default_rng(3)).x
+    np.testing.assert_array_equal(a, b)

@@ -63,6 +63,30 @@ def test_monte_carlo_frame_and_csv_roundtrip(tmp_path):
     assert len(pd.read_csv(p2)) == 2 * 5 * model.dim_x
 
 
+def test_monte_carlo_frame_flags_every_row_of_a_lost_run(tmp_path):
+    """A run that a filter lost (NaN from step 3 of 4 in run 1 of filter A) is flagged on ALL its
+    rows, the finite early ones included; the other runs and filter B are not; the flagged runs
+    are the ones n_diverged() counts, and the flag survives the CSV."""
+    from pfrepro.models.base import Simulation
+    from pfrepro.montecarlo import MonteCarloResult
+
+    a = np.zeros((3, 4, 2))
+    a[1, 2:, :] = np.nan                                    # run 1 stopped at step 3
+    mc = MonteCarloResult(sim=Simulation(np.zeros((3, 5, 2)), np.zeros((3, 4, 1))),
+                          results={"A": FilterResult(a, None, {}), "B": FilterResult(np.ones((3, 4, 2)), None, {})},
+                          batch_seconds={})
+    df = mc.to_frame()
+    assert list(df.columns) == ["filter", "run", "k", "component", "estimate", "truth", "error", "diverged"]
+    assert df["diverged"].dtype == bool
+    lost = df[df["diverged"]]
+    assert set(lost["filter"]) == {"A"} and set(lost["run"]) == {1} and len(lost) == 4 * 2
+    assert lost["estimate"].notna().sum() == 2 * 2                     # steps 1-2 finite, still flagged
+    per_filter = df.groupby("filter")[["run", "diverged"]].apply(lambda g: g.loc[g["diverged"], "run"].nunique())
+    assert per_filter.to_dict() == mc.n_diverged() == {"A": 1, "B": 0}
+    back = pd.read_csv(mc.to_csv(tmp_path / "mc.csv", filters=["A"]))
+    assert back["diverged"].tolist() == df.loc[df["filter"] == "A", "diverged"].tolist()
+
+
 def test_write_table_index_and_multiindex(tmp_path):
     plain = pd.DataFrame({"a": [1, 2]})
     write_table(plain, tmp_path / "plain.csv")

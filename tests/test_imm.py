@@ -616,3 +616,48 @@ def test_diagonal_metric_step_by_hand():
     np.testing.assert_allclose(new[0, 0, 1], xa + frac * (xs - xa), rtol=1e-10)
     whit = IMMPFOR(sysm, 4).replacement(x, w, u, M, counts, np.zeros((1, 1, 4), dtype=np.intp))[0]
     assert not np.allclose(whit[0, 0, 1], new[0, 0, 1])
+
+
+# -- kept particle sets (the distance to the posterior, book/60_immpf.md) ---------------------------
+@pytest.mark.parametrize("cls", [IMMParticleFilter, IMMPFOR])
+def test_kept_particle_sets_are_the_estimates_sets(cls):
+    """The kept particles and weights are the ones eqs 20-21 average: their mode-weighted mean is the
+    estimate at that step; keeping them changes no number."""
+    sysm = tracking_system()
+    sim = sysm.simulate(12, 3, RunStreams.from_entropy(4, 3))
+    plain = cls(sysm, 40, n_th=0.9).filter(sim.y, RunStreams.from_entropy(5, 3))
+    kept = cls(sysm, 40, n_th=0.9, keep_steps=(2, 7, 12)).filter(sim.y, RunStreams.from_entropy(5, 3))
+    np.testing.assert_array_equal(plain.x, kept.x)
+    x, w = kept.diagnostics["particles"], kept.diagnostics["particle_weights"]
+    assert x.shape == (3, 3, 3, 40, 6) and w.shape == (3, 3, 3, 40)
+    np.testing.assert_allclose(w.sum(-1), 1.0, rtol=1e-12)
+    for i, k in enumerate((2, 7, 12)):
+        u = kept.diagnostics["mode_probs"][:, k - 1]
+        est = np.einsum("ar,ari->ai", u, np.einsum("arn,arni->ari", w[:, i], x[:, i]))
+        np.testing.assert_allclose(est, kept.x[:, k - 1], rtol=1e-12, atol=1e-9)
+    assert "particles" not in plain.diagnostics
+
+
+@pytest.mark.parametrize("bad, err", [((0, 3), ValueError), ((3, 3), ValueError), ((5, 2), ValueError),
+                                      ((13,), ValueError), ("12", TypeError), (2.5, TypeError)])
+def test_keep_steps_checked(bad, err):
+    sysm = tracking_system()
+    sim = sysm.simulate(12, 1, RunStreams.from_entropy(4, 1))
+    with pytest.raises(err, match="keep_steps"):
+        IMMParticleFilter(sysm, 10, keep_steps=bad).filter(sim.y, RunStreams.from_entropy(5, 1))
+
+
+def test_weighted_w1_against_scipy_and_closed_forms():
+    from scipy.stats import wasserstein_distance
+
+    from pfrepro.experiments.immpfor_zhou2017 import weighted_w1
+
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(size=(4, 30)), rng.standard_t(3, size=(4, 70))
+    wa, wb = rng.random((4, 30)), rng.random((4, 70))
+    wa, wb = wa / wa.sum(-1, keepdims=True), wb / wb.sum(-1, keepdims=True)
+    ours = weighted_w1(a, wa, b, wb)
+    ref = [wasserstein_distance(a[i], b[i], wa[i], wb[i]) for i in range(4)]
+    np.testing.assert_allclose(ours, ref, rtol=1e-12)
+    assert weighted_w1(a, wa, a, wa) == pytest.approx(0.0, abs=1e-15)        # a set against itself
+    np.testing.assert_allclose(weighted_w1(a, wa, a + 2.5, wa), 2.5, rtol=1e-12)   # a shift moves it by the shift

@@ -30,6 +30,7 @@ from pfrepro.chaos import ChaosCarrier
 from pfrepro.filters.cmspf import OracleCMSParticleFilter, map_particles, select_top_likelihood
 from pfrepro.filters.espf import EvolutionSamplingParticleFilter
 from pfrepro.filters.gpff import GaussianParticleFlowFilter, particle_moments
+from pfrepro.filters.particle import WeightCollapseWarning
 from pfrepro.models import UNGM, LinearGaussianModel
 
 
@@ -1093,6 +1094,86 @@ def test_cms_step3_uses_the_requested_resampling_scheme():
                                r=np.full((2, runs, 4, 2), 100.0)).x[:, 1]
     np.testing.assert_allclose(est["systematic"], np.broadcast_to([2.0, 0.5], (runs, 2)), rtol=1e-12)
     assert np.sum(np.any(np.abs(est["multinomial"] - [2.0, 0.5]) > 1e-9, axis=1)) >= 5
+
+
+class LostMeasurementModel(IdentityGaussModel):
+    """IdentityGaussModel, except that a measurement z > 100 has likelihood 0 at every x (log -inf):
+    every candidate's weight underflows at that step of that run."""
+
+    def log_likelihood(self, y, x):
+        return np.where(y[:, None, 0] > 100, -np.inf, super().log_likelihood(y, x))
+
+
+def test_cms_weight_collapse_on_the_map_path_is_recorded():
+    """Run 0 gets z_1 = 1e3 (likelihood 0 everywhere), run 1 z_1 = 1.5; z_2 = 1.5 for both. With the
+    map on (the default path), run 0's step 1 collapses: diagnostics['collapsed'] is True at (0, 0)
+    only, n_collapsed = 1, one WeightCollapseWarning naming 1 of 4 run-steps, and the collapsed
+    run's weights are reset to uniform (its step-1 estimate is the plain mean of the kept
+    particles, so its ess is N)."""
+    f = CMSParticleFilter(LostMeasurementModel(), 6, eta=0.5, n_th=0.0)
+    y = np.array([[[1e3], [1.5]], [[1.5], [1.5]]])
+    with pytest.warns(WeightCollapseWarning, match="weight collapse in 1 of 4 run-steps"):
+        res = f.filter(y, rng=np.random.default_rng(3), r=np.full((2, 2, 6, 1), 100.0))
+    d = res.diagnostics
+    np.testing.assert_array_equal(d["collapsed"], [[True, False], [False, False]])
+    assert d["collapsed"].dtype == bool and d["n_collapsed"] == 1 and type(d["n_collapsed"]) is int
+    assert d["ess"][0, 0] == 6 and d["ess"][1, 0] < 6
+    assert np.all(np.isfinite(res.x))
+
+
+def test_cms_resampling_draws_from_each_runs_own_stream():
+    """Step 3 resamples only the runs below the threshold, each from its own stream: with per-run
+    streams, run i of a batch of 3 is bit-identical to run i filtered alone (stream i), although
+    the runs resample at different steps."""
+    from pfrepro.rng import RunStreams
+
+    m = UNGM.ning2011(1.0)
+    sim = m.simulate(8, 3, np.random.default_rng(11))
+    f = CMSParticleFilter(m, 20, n_th=0.9)          # the kept N have near-flat weights: ess 11-20 here
+    batch = f.filter(sim.y, rng=RunStreams.from_entropy(9, 3))
+    rs = batch.diagnostics["resampled"]
+    assert rs.any() and not np.all(rs == rs[:1])                    # resampling differs between runs
+    for i in range(3):
+        one = f.filter(sim.y[i:i + 1], rng=RunStreams.from_entropy(9, 1, start=i))
+        np.testing.assert_array_equal(one.x[0], batch.x[i])
+        np.testing.assert_array_equal(one.diagnostics["resampled"][0], rs[i])
+
+
+def test_cms_runs_under_strict_floating_point_errors():
+    """Tails are handled in the log domain and numpy's over/underflow flags are silenced inside
+    the filter: a caller who turned every floating-point warning into an error
+    (np.errstate(all='raise')) gets the same numbers. With a wide prior (P0 = 1e4) the weights
+    of particles ~100 away underflow in exp (this raised FloatingPointError when the filter left
+    'under' out of its errstate)."""
+    f = CMSParticleFilter(IdentityGaussModel(), 6, P0=[[1e4]], n_th=0.0)
+    y = np.full((2, 3, 1), 1.5)
+    loose = f.filter(y, rng=np.random.default_rng(0))
+    with np.errstate(all="raise"):
+        strict = f.filter(y, rng=np.random.default_rng(0))
+    np.testing.assert_array_equal(strict.x, loose.x)
+    np.testing.assert_array_equal(strict.P, loose.P)
+    assert np.all(np.isfinite(strict.x))
+
+
+def test_cms_and_oracle_error_messages_are_exact():
+    model = IdentityGaussModel()
+    with pytest.raises(ValueError, match=r"^CMSParticleFilter needs n_particles >= 2 \(big and small particles\)$"):
+        CMSParticleFilter(model, 1)
+    f = CMSParticleFilter(model, 4)
+    y = np.ones((2, 3, 1))
+    bad = np.zeros((3, 2, 4, 1))
+    bad[1, 0, 2, 0] = np.nan
+    with pytest.raises(ValueError, match=r"^precomputed carrier r contains NaN or inf$"):
+        f.filter(y, rng=np.random.default_rng(0), r=bad)
+    with pytest.raises(ValueError, match=r"^precomputed carrier r must have shape \(T, runs, N, dim_x\) = "
+                                         r"\(3, 2, 4, 1\), got \(3, 2, 5, 1\)$"):
+        f.filter(y, rng=np.random.default_rng(0), r=np.zeros((3, 2, 5, 1)))
+    o = OracleCMSParticleFilter(model, 4)
+    with pytest.raises(ValueError, match=r"^x_true must have shape \(runs, T \+ 1, dim_x\) = \(2, 4, 1\), "
+                                         r"got \(2, 3, 1\)$"):
+        o.filter(y, rng=np.random.default_rng(0), x_true=np.zeros((2, 3, 1)))
+    with pytest.raises(ValueError, match=r"^x_true contains NaN or inf$"):
+        o.filter(y, rng=np.random.default_rng(0), x_true=np.full((2, 4, 1), np.inf))
 
 
 # ------------------------------------------------------------------------------ shared base (filters/base.py)

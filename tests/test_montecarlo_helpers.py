@@ -225,3 +225,112 @@ def test_run_monte_carlo_argument_names_batch_seconds_and_progress(capsys):
     r = mc.run_monte_carlo(m, {"KF": KalmanFilter(m)}, 3, 2, 0, progress=True)
     assert 0 <= r.batch_seconds["KF"] < 30          # a wall time, not a clock reading
     assert "Monte Carlo" in capsys.readouterr().err
+
+
+def test_progress_bar_counts_tasks_names_the_filter_and_leaves_no_line(capsys):
+    """The bar's total is the number of tasks: serial, 1 simulation + 2 filters = 3; with an
+    executor and 2 chunks, 2 simulation chunks + 2 filters x 2 chunks = 6. Its postfix names the
+    filter being run, and it is cleared when done (leave=False: nothing is left in a notebook's
+    or terminal's output, the last character written is a carriage return)."""
+    from pfrepro.filters import KalmanFilter
+
+    m = LinearGaussianModel([[0.9]], [[1.0]], [[1.0]], [[1.0]], [0.0])
+    filters = {"KF": KalmanFilter(m), "K2": KalmanFilter(m)}
+    mc.run_monte_carlo(m, filters, 3, 2, 0, progress=True)
+    err = capsys.readouterr().err
+    assert "Monte Carlo:   0%" in err and "| 0/3 [" in err
+    assert "chunk/s, KF]" in err and "chunk/s, K2]" in err
+    assert err.endswith("\r") and "\n" not in err
+    with concurrent.futures.ThreadPoolExecutor(2) as ex:
+        par = mc.run_monte_carlo(m, filters, 3, 4, 0, progress=True, executor=ex, chunks=2)
+    err = capsys.readouterr().err
+    assert "| 0/6 [" in err and "chunk/s, KF]" in err and "chunk/s, K2]" in err
+    assert err.endswith("\r") and "\n" not in err
+    # batch_seconds with an executor: the sum of the chunks' wall times, a float per filter
+    assert all(type(v) is float and 0 <= v < 30 for v in par.batch_seconds.values())
+    assert list(par.batch_seconds) == ["KF", "K2"]
+    mc.run_monte_carlo(m, filters, 3, 2, 0, sim=Simulation(par.sim.x[:2], par.sim.y[:2]), progress=True)
+    assert "| 0/2 [" in capsys.readouterr().err                  # a given sim: the 2 filters only
+
+
+class _Slotted:
+    """No __dict__: its attributes live in slots (a str __slots__ in the subclass below)."""
+
+    __slots__ = ("ok", "fn", "__weakref__")
+
+    def __init__(self):
+        self.ok = 1
+        self.fn = lambda x: x
+
+
+class _SlottedChild(_Slotted):
+    __slots__ = "gen"
+
+    def __init__(self):
+        super().__init__()
+        self.gen = (i for i in range(3))
+
+
+class _SlottedWithDict(_Slotted):
+    __slots__ = ("__dict__",)                                # slots and a __dict__
+
+    def __init__(self):
+        super().__init__()
+        self.lam = lambda: 0
+
+
+def test_pickling_check_of_objects_without_a_dict():
+    """An unpicklable object without __dict__ is still reported as a TypeError naming it: a lock
+    (no attributes to name), a slotted object (the bad slots are named, a held weak reference is
+    not an attribute pickle would send)."""
+    import threading
+    import weakref
+
+    with pytest.raises(TypeError, match=r"^filters\['f'\] cannot be sent to a process pool: it cannot be "
+                                        r"pickled: TypeError: cannot pickle '_thread.lock' object$"):
+        mc._check_picklable({"filters['f']": threading.Lock()})
+    obj = _SlottedChild()
+    ref = weakref.ref(obj)                                   # obj.__weakref__ is now set (unpicklable)
+    with pytest.raises(TypeError, match=r"^model cannot be sent to a process pool: it cannot be pickled "
+                                        r"\(attribute gen, fn\): "):
+        mc._check_picklable({"model": obj})
+    assert ref() is obj
+    with pytest.raises(TypeError, match=r"\(attribute lam, fn\): "):   # the __dict__ slot is not an attribute
+        mc._check_picklable({"model": _SlottedWithDict()})
+    assert mc._attributes(_Slotted())["ok"] == 1 and "__weakref__" not in mc._attributes(obj)
+
+
+def _nested(start, size):
+    """A chunk result with dict-valued and FilterResult-valued entries, a setting that is a tuple
+    of scalars, and a count nested one dict down."""
+    runs = np.arange(start, start + size, dtype=float)
+    res = FilterResult(runs[:, None, None] * np.ones((1, 2, 1)), None,
+                       {"per_mode": {"ess": runs[:, None] + 0.5, "n_diverged": size % 2}, "levels": (0.1, 0.9)})
+    return {"res": res, "sub": {"x": runs ** 2, "pair": (runs, [runs + 1])}, "levels": (0.025, 0.975), "name": "a"}
+
+
+def test_chunked_dict_valued_results_equal_the_serial_call():
+    """map_runs cut into chunks (serially or on threads) returns exactly the serial result for
+    results whose diagnostics hold dicts and FilterResults (concatenated per run, counts added),
+    and settings that are tuples of scalars (shared by every chunk, kept once)."""
+    serial = mc.map_runs(_nested, 7)
+    assert serial["res"].diagnostics["per_mode"]["n_diverged"] == 1          # 7 % 2, one chunk
+    for chunks, ex in ((3, None), (7, None), (3, concurrent.futures.ThreadPoolExecutor(2))):
+        try:
+            got = mc.map_runs(_nested, 7, ex, chunks=chunks)
+        finally:
+            if ex is not None:
+                ex.shutdown()
+        np.testing.assert_array_equal(got["res"].x, serial["res"].x)
+        d = got["res"].diagnostics
+        np.testing.assert_array_equal(d["per_mode"]["ess"], serial["res"].diagnostics["per_mode"]["ess"])
+        assert d["levels"] == (0.1, 0.9) and got["levels"] == (0.025, 0.975) and got["name"] == "a"
+        np.testing.assert_array_equal(got["sub"]["x"], np.arange(7.0) ** 2)
+        np.testing.assert_array_equal(got["sub"]["pair"][0], np.arange(7.0))
+        np.testing.assert_array_equal(got["sub"]["pair"][1][0], np.arange(7.0) + 1)
+        # chunks of sizes (3, 3, 1) -> 1 + 1 + 1; (1,) * 7 -> 7: a count is summed over chunks
+        assert d["per_mode"]["n_diverged"] == {3: 3, 7: 7}[chunks]
+    with pytest.raises(ValueError, match=r"chunks disagree on the scalar 'levels'"):
+        mc._concat_dict([{"levels": (0.1, 0.9)}, {"levels": (0.1, 0.8)}])
+    assert not mc._has_runs_axis(np.float64(1.0)) and not mc._has_runs_axis(np.array(2.0))
+    assert mc._has_runs_axis([1.0, np.zeros(2)]) and not mc._has_runs_axis([1.0, "a"])

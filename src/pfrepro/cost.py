@@ -171,9 +171,14 @@ def _count_flow(counter: dict):
 
 def _with_model(filt, proxy):
     """A shallow copy of ``filt`` whose model is ``proxy`` (the filter itself is untouched)."""
-    if hasattr(filt, "model"):
+    if hasattr(filt, "model") or hasattr(filt, "system"):
         c = copy.copy(filt)
-        c.model = proxy
+        if hasattr(filt, "model"):
+            c.model = proxy
+        if hasattr(filt, "system"):       # a jump-Markov filter reads its system, not .model
+            c.system = proxy
+        if hasattr(filt, "mode_filters"):  # an IMM Kalman filter: each mode filter's model counts too
+            c.mode_filters = [_with_model(f, _SharedCounter(_model_of(f), proxy.counts)) for f in filt.mode_filters]
         return c
     if hasattr(filt, "filt"):  # thin wrappers (e.g. a filter timed with a precomputed carrier)
         c = copy.copy(filt)
@@ -185,6 +190,8 @@ def _with_model(filt, proxy):
 def _model_of(filt):
     if hasattr(filt, "model"):
         return filt.model
+    if hasattr(filt, "system"):
+        return filt.system
     if hasattr(filt, "filt"):
         return _model_of(filt.filt)
     raise TypeError(f"{type(filt).__name__} has no .model")

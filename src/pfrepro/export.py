@@ -83,14 +83,23 @@ def filter_result_frame(result, truth=None, component_names=None, filter_name=No
 def monte_carlo_frame(mc, component_names=None, filters=None) -> pd.DataFrame:
     """A :class:`~pfrepro.montecarlo.MonteCarloResult` as one tidy frame of every filter.
 
-    Columns ``filter, run, k, component, estimate, truth, error`` (+ ``variance`` where the
-    filter gives covariances); ``filters`` selects and orders the filters (default all).
+    Columns ``filter, run, k, component, estimate, truth, error, diverged`` (+ ``variance``
+    where the filter gives covariances); ``filters`` selects and orders the filters (default
+    all). ``diverged`` is True on every row of a run the filter lost (a non-finite estimate at
+    any step, as counted by ``mc.n_diverged()``), so a lost run cannot pass unseen into a mean
+    of the finite rows.
     """
     names = list(mc.results) if filters is None else list(filters)
     unknown = [n for n in names if n not in mc.results]
     if unknown:
         raise KeyError(f"no filter(s) {unknown} in this result; it has {list(mc.results)}")
-    frames = [filter_result_frame(mc.results[n], mc.x_true, component_names, filter_name=n) for n in names]
+    frames = []
+    for n in names:
+        df = filter_result_frame(mc.results[n], mc.x_true, component_names, filter_name=n)
+        x = np.asarray(mc.results[n].x, dtype=float)
+        lost = ~np.all(np.isfinite(x.reshape(x.shape[0], -1)), axis=1)            # (runs,)
+        df["diverged"] = lost[df["run"].to_numpy()]
+        frames.append(df)
     return pd.concat(frames, ignore_index=True)
 
 

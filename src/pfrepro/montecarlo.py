@@ -154,7 +154,7 @@ class MonteCarloResult:
     # -- exports (pfrepro.export) ----------------------------------------------------------
     def to_frame(self, component_names=None, filters=None):
         """Tidy ``pandas.DataFrame`` of every filter: columns ``filter, run, k, component,
-        estimate, truth, error`` (see :func:`pfrepro.export.monte_carlo_frame`)."""
+        estimate, truth, error, diverged`` (see :func:`pfrepro.export.monte_carlo_frame`)."""
         from .export import monte_carlo_frame
 
         return monte_carlo_frame(self, component_names, filters)
@@ -333,14 +333,24 @@ def _concat_dict(parts: list[dict]) -> dict:
         vals = [p[key] for p in parts]
         if key in _SUMMED_KEYS:
             out[key] = type(vals[0])(sum(vals))
-        elif isinstance(vals[0], (np.ndarray, FilterResult, Simulation, dict, tuple, list)) \
-                and np.ndim(vals[0]) != 0:
+        elif _has_runs_axis(vals[0]):
             out[key] = _concat(vals)
         elif all(np.array_equal(v, vals[0]) for v in vals[1:]):
             out[key] = vals[0]
         else:
             raise ValueError(f"chunks disagree on the scalar {key!r}: {vals}; it cannot be combined")
     return out
+
+
+def _has_runs_axis(v) -> bool:
+    """Whether a chunk's dict value is per-run data to concatenate (an array with an axis, a
+    FilterResult, a Simulation, a dict, or a tuple/list holding one), not a setting (a scalar,
+    a string, a tuple of scalars) that every chunk must share."""
+    if isinstance(v, (FilterResult, Simulation, dict)):
+        return True
+    if isinstance(v, np.ndarray):
+        return v.ndim != 0
+    return isinstance(v, (tuple, list)) and any(_has_runs_axis(e) for e in v)
 
 
 def _gather(futures: list, bar) -> list:
@@ -430,10 +440,22 @@ def _check_picklable(objects: dict):
         try:
             pickle.dumps(obj)
         except Exception as exc:  # noqa: BLE001 - any pickling failure is reported the same way
-            bad = [k for k, v in getattr(obj, "__dict__", {}).items() if not _pickles(v)]
+            bad = [k for k, v in _attributes(obj).items() if not _pickles(v)]
             where = f" (attribute {', '.join(bad)})" if bad else ""
             raise TypeError(f"{label} cannot be sent to a process pool: it cannot be pickled{where}: "
                             f"{type(exc).__name__}: {exc}") from None
+
+
+def _attributes(obj) -> dict:
+    """The instance attributes pickle would send: ``__dict__`` and the classes' ``__slots__``
+    (an object may have either, both, or neither)."""
+    out = dict(getattr(obj, "__dict__", {}))
+    for cls in type(obj).__mro__:
+        slots = cls.__dict__.get("__slots__", ())
+        for name in (slots,) if isinstance(slots, str) else slots:
+            if name not in ("__dict__", "__weakref__") and hasattr(obj, name):
+                out[name] = getattr(obj, name)
+    return out
 
 
 def _pickles(v) -> bool:

@@ -42,7 +42,8 @@ __all__ = ["PAPER", "SCENARIO", "ALTERNATIVES", "SEEDS", "scenario", "truth_syst
            "lost_tracks", "PF_BUILDERS", "MAIN_BUILDERS", "equal_compute_name", "fig5_builders", "SYNTHESIS_FILTERS", "synthesis_record", "synthesis_record_path",
            "save_synthesis_record", "load_synthesis_record", "run_synthesis_record", "CHOICES", "HELD", "D_GRID",
            "READINGS", "HELD_READINGS", "TAIL", "LOST_KM", "pair_stats", "median_paired", "lost_mask", "plural", "compare_sentence",
-           "posterior_distance", "reading_builders", "D_FAVOURABLE", "per_run_rms", "robustness"]
+           "posterior_distance", "reading_builders", "D_FAVOURABLE", "per_run_rms", "robustness", "POST_STEPS",
+           "posterior_builders", "weighted_w1", "posterior_w1"]
 
 #: key of this paper in ``pfrepro.published`` and the claims registry
 PAPER = "immpfor_zhou2017"
@@ -519,6 +520,56 @@ def posterior_distance(run_: Run, name: str, ref: str):
     large-N reference ``ref``'s (how well the particle set approximates the posterior's first moment)."""
     d = run_.results[name].x[..., list(IDX_POS)] - run_.results[ref].x[..., list(IDX_POS)]
     return np.sqrt(np.mean(np.sum(d * d, axis=-1), axis=1))
+
+
+#: steps at which the particle sets are compared with the large-N reference: every 20 s (both turns inside)
+POST_STEPS = tuple(range(20, SCENARIO["duration"] + 1, 20))
+
+
+def posterior_builders(builders: dict, steps=POST_STEPS) -> dict:
+    """``builders`` (name -> (function, keywords)) whose filters keep their particle sets at ``steps``."""
+    return {name: (fn, {**kw, "keep_steps": tuple(steps)}) for name, (fn, kw) in builders.items()}
+
+
+def weighted_w1(a, wa, b, wb):
+    """1-D Wasserstein-1 distance between weighted point sets, batched over the leading axes.
+
+    ``a`` (..., M) with weights ``wa`` (..., M), ``b`` (..., K) with ``wb`` (..., K), each set of
+    weights summing to 1. W1 = integral of abs(F_a(t) - F_b(t)) dt, the area between the two
+    empirical distribution functions (``scipy.stats.wasserstein_distance`` for one pair).
+    """
+    v = np.concatenate([a, b], axis=-1)
+    p = np.concatenate([wa, -np.asarray(wb)], axis=-1)
+    order = np.argsort(v, axis=-1, kind="stable")
+    v = np.take_along_axis(v, order, axis=-1)
+    F = np.cumsum(np.take_along_axis(p, order, axis=-1), axis=-1)[..., :-1]   # F_a - F_b between points
+    return np.sum(np.abs(F) * np.diff(v, axis=-1), axis=-1)
+
+
+def posterior_w1(run_: Run, name: str, ref: str, idx=IDX_POS) -> np.ndarray:
+    """Per run: the distance (m) between ``name``'s particle approximation of the posterior position and
+    the large-N reference ``ref``'s, averaged over the kept steps (:data:`POST_STEPS`).
+
+    At each kept step the approximation is the mixture over modes of the weighted particle sets
+    (weight u_j(k) w_l^j, eqs 20-21's weights) after resampling; the distance is the sum over the
+    position components ``idx`` of the 1-D Wasserstein-1 distances of the marginals
+    (:func:`weighted_w1`). Unlike :func:`posterior_distance` it sees the spread and shape of the
+    set, not only its mean. Both filters must have kept their particles at the same steps."""
+    out = []
+    for nm in (name, ref):
+        d = run_.results[nm].diagnostics
+        if "particles" not in d:
+            raise ValueError(f"{nm!r} kept no particle sets: build it with posterior_builders")
+        x, w = d["particles"], d["particle_weights"]                 # (R, S, r, N, n), (R, S, r, N)
+        R_, S_, r, N, _ = x.shape
+        if S_ != len(POST_STEPS):
+            raise ValueError(f"{nm!r} kept {S_} steps, expected {len(POST_STEPS)} (POST_STEPS)")
+        u = d["mode_probs"][:, [k - 1 for k in POST_STEPS]]            # (R, S, r)
+        wj = (w * u[..., None]).reshape(R_, S_, r * N)
+        out.append((x[..., list(idx)].reshape(R_, S_, r * N, len(idx)), wj / wj.sum(-1, keepdims=True)))
+    (xa, wa), (xb, wb) = out
+    dist = sum(weighted_w1(xa[..., c], wa, xb[..., c], wb) for c in range(len(idx)))   # (R, S)
+    return dist.mean(axis=1)
 
 
 def plural(n: int, word: str, words: str | None = None) -> str:

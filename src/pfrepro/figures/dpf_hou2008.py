@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import contextlib
 
+import matplotlib.ticker
 import numpy as np
 import pandas as pd
 
@@ -16,7 +17,7 @@ from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F40
 from . import new_figure
 
 __all__ = ["pm", "rmse_table", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "legend_below", "reproduce", "TABLES",
-           "FIGURES", "N_STEPS", "paper_row_51"]
+           "FIGURES", "N_STEPS", "paper_row_51", "sweeps_51", "integration_error"]
 
 #: what :func:`reproduce` makes
 TABLES = ("RMSE table",)
@@ -224,6 +225,61 @@ def fig2(outside_over_time=None, cases=((0.5, 1 / 12), (0.12, 0.01))):
         ax.set_xlabel("k"); ax.set_ylabel("% of draws outside")
         ax.set_title(f"({'abcd'[n - 1]}) DPF with a Gaussian law\n(sec 5.1, mean over runs)", fontsize=8)
     legend_below(fig, axs, ncol=2, fontsize=8)
+    return fig
+
+
+def sweeps_51(st, sd, cap=None, q_rel=None):
+    """The sec 5.1 sweeps of the free choices the chapter shows as tables, drawn: (a) the DPF's θ RMSE and
+    (b) its 95 % interval coverage at T against the cap on α + β; (c) the DEKF's state RMSE against its
+    parameter noise q_0 (and unprojected).
+
+    ``st``: :func:`~pfrepro.experiments.dpf_hou2008.sensitivity_table` of the DPF sweep (rows ``"cap c"``,
+    ``"no cap"`` and ``"DPF"`` = the main cap); ``sd``: the same for the DEKF sweep (rows
+    ``"q0 = q P0"``, ``"unprojected"``); ``cap``, ``q_rel``: the chapter's own values (marked). Error bars
+    are ± 1 standard error over the runs."""
+    cap = E.S51["cap"] if cap is None else cap
+    q_rel = E.S51["dekf_q_rel"] if q_rel is None else q_rel
+    caps = [c for c in E.S51["caps"]]
+    rows = ["DPF" if c == cap else (f"cap {c:g}" if c else "no cap") for c in caps]
+    labels = [f"{c:g}" + (" (ours)" if c == cap else "") if c else "none" for c in caps]
+    fig, axs = new_figure(1, 3, figsize=(9.0, 2.9))
+    pos = np.arange(len(rows))
+    axs[0].errorbar(pos, st.loc[rows, "RMSE θ"], yerr=st.loc[rows, "se θ"], fmt="o-", color=method_color("DPF"),
+                    capsize=3, label="DPF")
+    axs[0].set_ylabel("θ RMSE")
+    axs[1].plot(pos, st.loc[rows, "coverage at T"], "o-", color=method_color("DPF"), label="DPF")
+    axs[1].axhline(0.95, color=REFERENCE_COLOR, lw=0.8, ls="--", label="nominal 0.95")
+    axs[1].set_ylim(-0.03, 1.03); axs[1].set_ylabel("coverage of θ at T")
+    for ax, t in zip(axs[:2], ("(a) DPF: θ error", "(b) DPF: 95 % interval")):
+        ax.set_xticks(pos, labels); ax.set_xlabel("cap on α + β"); ax.set_title(t, fontsize=9)
+    qrows = [r for r in sd.index if str(r).startswith("q0")] + [r for r in sd.index if r == "unprojected"]
+    qlab = [str(r).replace("q0 = ", "").replace(" P0", "") for r in qrows]
+    qlab = [lab + (" (ours)" if lab == f"{q_rel:g}" else "") for lab in qlab]
+    qpos = np.arange(len(qrows))
+    axs[2].errorbar(qpos, sd.loc[qrows, "RMSE x"], yerr=sd.loc[qrows, "se x"], fmt="s", color=method_color("DEKF"),
+                    capsize=3, label="DEKF")
+    axs[2].set_xticks(qpos, qlab, rotation=30, ha="right")
+    axs[2].set_xlabel("q₀ / P_θ0 (or unprojected θ)"); axs[2].set_ylabel("state RMSE")
+    axs[2].set_title("(c) DEKF: parameter noise", fontsize=9)
+    legend_below(fig, axs, ncol=3, fontsize=8)
+    return fig
+
+
+def integration_error(integ, used=None):
+    """The sec 5.2 integration sweep drawn: max state error over the 60 s truth (against 1024 RK4
+    substeps) per number of RK4 substeps, log-log, with the filters' choice marked. ``integ``:
+    :func:`~pfrepro.experiments.dpf_hou2008.integration_error_52`."""
+    used = E.S52["filter_substeps"] if used is None else used
+    fig, ax = new_figure(figsize=(4.2, 2.9))
+    n = np.asarray(integ.index, float)
+    for j, col in enumerate(integ.columns):
+        ax.loglog(n, integ[col].to_numpy(float), "o-", color=SERIES_COLORS[j % len(SERIES_COLORS)], label=str(col))
+    ax.axvline(used, color=REFERENCE_COLOR, lw=0.8, ls="--", label=f"filters: {used} substeps")
+    ax.set_xticks(n, [f"{v:g}" for v in n], minor=False)
+    ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
+    ax.set_xlabel("RK4 substeps per second"); ax.set_ylabel("max error over 60 s")
+    ax.legend(fontsize=8, frameon=False)
+    fig.tight_layout()
     return fig
 
 

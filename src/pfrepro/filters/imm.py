@@ -168,6 +168,18 @@ def _var_axis1(a):
     return out.reshape(R, n)
 
 
+def _check_keep_steps(keep_steps) -> tuple:
+    """``keep_steps`` of the IMM particle filters: increasing steps >= 1, as a tuple of ints."""
+    if keep_steps is None:
+        return ()
+    if isinstance(keep_steps, (str, bytes)) or not np.iterable(keep_steps):
+        raise TypeError(f"keep_steps must be a sequence of steps (int >= 1), got {keep_steps!r}")
+    steps = tuple(check_positive_int(k, "keep_steps entry") for k in keep_steps)
+    if any(b <= a for a, b in zip(steps[:-1], steps[1:])):
+        raise ValueError(f"keep_steps must be strictly increasing, got {steps}")
+    return steps
+
+
 def _init_on_system(filt, system, m0, P0, mode_requirements):
     """Filter set-up on a jump-Markov system: every mode model must meet the model contract.
 
@@ -267,6 +279,12 @@ class IMMParticleFilter(Filter):
         in step 8 (the interaction of the next step still draws a fresh set).
     m0, P0 : ndarray, optional
         Override the initial distribution N(m0, P0) shared by every mode.
+    keep_steps : sequence of int, optional
+        Steps k (1-based, increasing) at which the posterior particle sets are kept: after
+        step 8, the particles and weights that step 9's estimates use, in the diagnostics
+        ``particles`` (runs, S, r, N, dim_x) and ``particle_weights`` (runs, S, r, N); with
+        ``mode_probs`` they are the whole particle approximation of the posterior (used to
+        measure its distance to a large-N reference). Default: none kept.
 
     Notes
     -----
@@ -287,9 +305,10 @@ class IMMParticleFilter(Filter):
     model_requirements = ("transition_sampler", "additive_measurement")
 
     def __init__(self, system, n_particles: int, model_likelihood: str = "gaussian", n_th: float = 0.5,
-                 m0=None, P0=None):
+                 m0=None, P0=None, keep_steps=None):
         _init_on_system(self, system, m0, P0, self.model_requirements)
         self.n_particles = check_positive_int(n_particles, "n_particles")
+        self.keep_steps = _check_keep_steps(keep_steps)
         if model_likelihood not in MODEL_LIKELIHOODS:
             raise ValueError(f"model_likelihood must be one of {MODEL_LIKELIHOODS}, got {model_likelihood!r}")
         self.model_likelihood = model_likelihood
@@ -413,6 +432,11 @@ class IMMParticleFilter(Filter):
         collapsed = np.zeros((runs, T, r), dtype=bool)
         replaced = np.zeros((runs, T, r), dtype=np.intp)
         cost = {"likelihood": np.zeros(runs, dtype=np.int64), "density": np.zeros(runs, dtype=np.int64)}
+        keep = {k: i for i, k in enumerate(self.keep_steps)}
+        if self.keep_steps and self.keep_steps[-1] > T:
+            raise ValueError(f"keep_steps: step {self.keep_steps[-1]} is beyond the T = {T} steps of y")
+        kept_x = np.empty((runs, len(keep), r, N, n))
+        kept_w = np.empty((runs, len(keep), r, N))
         for k in range(1, T + 1):
             c, _ = mixing_probabilities(mu, sysm.Pi)
             if k > 1:
@@ -437,6 +461,9 @@ class IMMParticleFilter(Filter):
             x, w, nrep = self._resample(x, w, do, u, M_next, rng, k, cost)
             resampled[:, k - 1] = do
             replaced[:, k - 1] = nrep
+            if k in keep:
+                kept_x[:, keep[k]] = x
+                kept_w[:, keep[k]] = w
             est = np.einsum("arn,arni->ari", w, x)                                # (20)
             xj[:, k - 1] = est
             xs[:, k - 1] = np.einsum("ar,ari->ai", u, est)                        # (21)
@@ -446,7 +473,8 @@ class IMMParticleFilter(Filter):
         return FilterResult(xs, None, diagnostics={
             "mode_probs": probs, "model_estimates": xj, "log_model_likelihood": loglam, "ess": ess,
             "resampled": resampled, "collapsed": collapsed, "n_collapsed": int(collapsed.sum()),
-            "replaced": replaced, "likelihood_evals": cost["likelihood"], "density_evals": cost["density"]})
+            "replaced": replaced, "likelihood_evals": cost["likelihood"], "density_evals": cost["density"],
+            **({"particles": kept_x, "particle_weights": kept_w} if keep else {})})
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}(r={self.system.r}, N={self.n_particles}, "
@@ -516,8 +544,8 @@ class IMMPFOR(IMMParticleFilter):
 
     def __init__(self, system, n_particles: int, model_likelihood: str = "gaussian", n_th: float = 0.5,
                  d: float = 1.0, m0=None, P0=None, density: str = "gaussian", replace: str = "threshold",
-                 mix_modes: bool = True, metric: str = "whitened"):
-        super().__init__(system, n_particles, model_likelihood, n_th, m0, P0)
+                 mix_modes: bool = True, metric: str = "whitened", keep_steps=None):
+        super().__init__(system, n_particles, model_likelihood, n_th, m0, P0, keep_steps)
         if metric not in self.METRICS:
             raise ValueError(f"metric must be one of {self.METRICS}, got {metric!r}")
         self.metric = metric
