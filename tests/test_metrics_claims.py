@@ -264,8 +264,11 @@ def test_claims_table(tmp_path):
     reg.add("cost", "A costs less", reproduced=0.5, published=0.3, qualitative=True, basis="count")
     reg.add("read", "a conclusion", readings={"R = 10": True, "R = 100": False})
     t = claims_table(reg)
-    assert list(t.columns) == ["id", "claim", "ours", "published", "verdict", "test"]
+    assert list(t.columns) == ["id", "claim", "ours", "published", "judged", "verdict", "test"]
     assert t["verdict"].tolist() == ["reproduced", "inconclusive", "reproduced", "inconclusive"]
+    # what was judged: a cost claim's numbers (0.5 vs 0.3) are context, its ordering decides
+    assert t["judged"].tolist() == ["value", "ordering (paired)", "ordering, on counts (numbers: context)",
+                                    "statement under every reading"]
     assert t.loc[0, "ours"] == "10.50 ± 0.20" and t.loc[0, "published"] == "10.00 ± 0.10"
     assert "√(se²+se_pub²)" in t.loc[0, "test"] and "n1" in t.loc[0, "test"]
     assert t.loc[1, "ours"] == "Δ 0.020 ± 0.030" and "z = 0.7" in t.loc[1, "test"]
@@ -276,6 +279,36 @@ def test_claims_table(tmp_path):
     t2 = claims_table(load_all_claims(tmp_path), paper=True)
     assert t2.drop(columns="paper").equals(t)
     assert (t2["paper"] == "paper_x").all()
+
+
+def test_claims_table_says_what_was_judged():
+    """An ordering claim that shows a number pair far apart (9.74 vs 3.48) says that the ordering
+    was judged, not the values; every kind of claim gets its word."""
+    from pfrepro.claims import Claim, claims_table
+
+    def judged(**kw):
+        return Claim("p", "c", "text", **kw).judged()
+
+    assert judged(published=3.48, reproduced=9.74, basis="count", readings={"a": True, "b": True}) == \
+        "ordering, on counts under every reading (numbers: context)"
+    assert judged(basis="count", qualitative=True) == "ordering, on counts"
+    assert judged(published=1.0, reproduced=1.05, se=0.1) == "value"
+    assert judged(published=1.0, reproduced=3.0, se=0.1, qualitative=True) == "value, else ordering"
+    assert judged(published=1.0, reproduced=3.0, se=0.1, diff=1.0, diff_se=0.1) == "value, else ordering"
+    assert judged(published=1.0, reproduced=1.0, se=0.1, reading_values={"r": [1.0, 0.1]}) == \
+        "value under every reading"
+    assert judged(diff=1.0, diff_se=0.1, readings={"a": True}) == "ordering under every reading"
+    assert judged(readings={"a": True}) == "statement under every reading"
+    assert judged(qualitative=True) == "statement"
+    assert judged(qualitative=True, reproduced=2.0) == "statement (number: context)"
+    assert judged(published=1.0, reproduced=2.0, not_checkable="scenario unknown") == "not checkable"
+    assert judged() == "–"
+    # the row of the scorecard: the pair is shown, the verdict rests on the ordering, and the row says so
+    c = Claim("p", "cost", "A's cost grows more slowly", published=3.48, reproduced=9.74, basis="count",
+              qualitative=True)
+    row = claims_table([c]).iloc[0]
+    assert (row["ours"], row["published"], row["verdict"]) == ("9.74", "3.48", "reproduced")
+    assert row["judged"].startswith("ordering")
 
 
 def test_published_se_helpers():

@@ -7,7 +7,8 @@
   table cannot omit what the package exports.
 * ``.. pfrepro-module:: pfrepro.filters.dual_pf`` with ``:package: pfrepro.filters`` -- the
   module's docstring and the members it does *not* re-export through the package (those are
-  documented once, under the package), so nothing is documented twice.
+  documented once, under the package) and that it defines itself (a name it imports from a
+  sibling, kept importable there, is documented with the sibling), so nothing is documented twice.
 """
 import importlib
 import inspect
@@ -74,7 +75,8 @@ class ModuleRest(_Generated):
         mod = importlib.import_module(name)
         pkg = importlib.import_module(self.options.get("package") or name.rpartition(".")[0])
         exported = set(pkg.__all__)
-        rest = [n for n in _public(mod) if n not in exported]
+        rest = [n for n in _public(mod) if n not in exported
+                and getattr(getattr(mod, n, None), "__module__", name) in (name, None)]
         lines = [f".. automodule:: {name}"]
         if rest:
             lines += [f"   :members: {', '.join(rest)}", "   :undoc-members:", "   :show-inheritance:",

@@ -12,6 +12,7 @@ chaos        chaotic carrier sequences of the CMS-PF
 bounds       posterior Cramér–Rao bounds
 metrics      the papers' error measures with Monte Carlo standard errors
 montecarlo   batched Monte Carlo runner with per-filter random streams and timings
+results      what a filter returns (FilterResult), shared by the filters and the runner
 rng          per-run random streams (RunStreams): run i independent of the batch
 cost         deterministic cost counts and measured time for cost claims
 published    the papers' published tables as data

@@ -51,8 +51,8 @@ absolute number that the paper's unpublished settings decide passes
 ``not_checkable="<why>"``: its verdict is ``not checkable`` whatever the numbers.
 
 :func:`claims_table` turns a chapter's claims (or the scorecard's) into the compact
-table every page shows: the claim, ours ± SE, published (± its SE), the verdict and
-the test that was applied.
+table every page shows: the claim, ours ± SE, published (± its SE), what was judged
+(the value, the ordering or a statement), the verdict and the test that was applied.
 
 Each chapter saves its claims to ``<claims dir>/<paper>.json``; the scorecard
 page gathers all of them. The claims directory is ``$PFREPRO_CLAIMS_DIR`` or
@@ -317,6 +317,38 @@ class Claim:
             parts.append(self.note)
         return "; ".join(parts)
 
+    def judged(self) -> str:
+        """What the verdict was decided on, in a few words (the ``judged`` column of the tables).
+
+        ``"value"``: the published number against ours; ``"value, else ordering"``: the
+        number first, and the ordering or trend when the number is not matched
+        (*qualitatively reproduced*); ``"ordering (paired)"``: a paired difference, so the
+        numbers shown beside it are context; ``"ordering, on counts"``: a cost or
+        equal-budget claim decided on deterministic counts (a published ratio of seconds and our
+        count ratio are shown, not matched); ``"statement"``: a yes/no statement. Followed by
+        "under every reading": decided under each admissible reading of the paper.
+        """
+        if self.not_checkable:
+            return "not checkable"
+        every = " under every reading"
+        if self.basis == "count":
+            return "ordering, on counts" + (every if self.readings else "") + (
+                " (numbers: context)" if _isnum(self.reproduced) or _isnum(self.published) else "")
+        if _isnum(self.published) and _isnum(self.reproduced):
+            out = "value" + (every if self.reading_values else "")
+            if self.readings:
+                out += ", else ordering" + every
+            elif self.diff is not None or self.qualitative is not None:
+                out += ", else ordering"
+            return out
+        if self.readings:
+            return ("ordering" if self.diff is not None else "statement") + every
+        if self.diff is not None or self.diff_se is not None:
+            return "ordering (paired)"
+        if self.qualitative is not None:
+            return "statement" + (" (number: context)" if _isnum(self.reproduced) else "")
+        return "–"
+
     def as_row(self) -> dict:
         """The claim's fields and its verdict as a dict (one row of the scorecard / JSON file)."""
         d = asdict(self)
@@ -367,8 +399,10 @@ def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFra
     of claim rows (e.g. :func:`load_all_claims`). Columns (all strings, short
     headers so the table fits the text column): ``id`` (if ``ids``), ``paper`` (if
     ``paper``), ``claim``, ``ours`` (value ± SE, or the paired difference ± SE of an
-    ordering), ``published`` (± its SE), ``verdict``, ``test`` (the rule applied and
-    the claim's note).
+    ordering), ``published`` (± its SE), ``judged`` (what the verdict was decided on:
+    the value, the ordering or a statement, :meth:`Claim.judged`; an ordering claim shows
+    numbers that were not matched), ``verdict``, ``test`` (the rule applied and the
+    claim's note).
     """
     if isinstance(claims, ClaimsRegistry):
         items = list(claims.claims)
@@ -397,9 +431,10 @@ def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFra
         if ids:
             row["id"] = c.claim_id
         row.update({"claim": c.text, "ours": ours, "published": _published_cell(c),
-                    "verdict": c.verdict, "test": c.test_text()})
+                    "judged": c.judged(), "verdict": c.verdict, "test": c.test_text()})
         rows.append(row)
-    cols = (["paper"] if paper else []) + (["id"] if ids else []) + ["claim", "ours", "published", "verdict", "test"]
+    cols = ((["paper"] if paper else []) + (["id"] if ids else [])
+            + ["claim", "ours", "published", "judged", "verdict", "test"])
     return pd.DataFrame(rows, columns=cols)
 
 

@@ -26,9 +26,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .filters.base import FilterResult
 from .metrics import mse, rmse
 from .models.base import Simulation
+from .results import FilterResult
 from .rng import RunStreams
 from .validation import check_positive_int
 

@@ -17,7 +17,7 @@ from collections.abc import Iterable, Mapping
 import numpy as np
 
 __all__ = ["glue_value", "glue_md", "glue_figure", "plural", "count_is", "verdict_sentence", "VERDICT_ORDER",
-           "MISSING", "use_book_tables"]
+           "MISSING", "use_book_tables", "text_columns"]
 
 #: how a table shows a missing value (NaN), a dash with its meaning on hover, never "NaN"
 MISSING = "—"
@@ -34,17 +34,86 @@ def _nowrap_cells(html: str) -> str:
     return re.sub(r"(<td[^>]*>)([^<]*)(</td>)", lambda m: m.group(1) + nowrap_numbers(m.group(2)) + m.group(3), html)
 
 
-def _frame_html(df) -> str:
-    """A DataFrame as the book shows it: whole cells (no "..." cut), missing values as a dash,
-    numbers never broken."""
+#: a run of two letters (any script) left after the numbers are taken out: the cell is text
+_WORD = r"[^\W\d_]{2,}"
+
+
+def text_columns(df) -> list:
+    """The columns of ``df`` that hold text (names, reasons, verdicts), not numbers.
+
+    A column is text when it is not of a numeric dtype and more than half of its non-empty
+    cells still hold a word of two or more letters once every number is taken out
+    ("PF(500)", "diverged" and a reason in words are text; "0.0038 ± 0.0011", "12 %", "1e-3"
+    and "—" are not). The book's tables left-align these columns and right-align the rest
+    (numbers line up on their last digit, prose reads from the left).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The table.
+
+    Returns
+    -------
+    list
+        The labels of the text columns, in the table's order.
+    """
+    import re
+
     import pandas as pd
 
+    from .bookinfo import _NUMBER
+
+    out = []
+    for col in df.columns:
+        s = df[col]
+        if isinstance(s, pd.DataFrame) or pd.api.types.is_numeric_dtype(s) or pd.api.types.is_bool_dtype(s):
+            continue
+        cells = [str(v).strip() for v in s if not (v is None or (isinstance(v, float) and np.isnan(v)))]
+        cells = [v for v in cells if v and v not in (MISSING, "–", "-", "nan", "NaN", "None")]
+        if cells and 2 * sum(bool(re.search(_WORD, _NUMBER.sub(" ", v))) for v in cells) > len(cells):
+            out.append(col)
+    return out
+
+
+def _left_align_cells(html: str, positions: set) -> str:
+    """``class="pf-left"`` on the ``<td>`` cells at column ``positions`` of every body row."""
+    import re
+
+    if not positions:
+        return html
+
+    def row(m):
+        i = -1
+
+        def td(t):
+            nonlocal i
+            i += 1
+            return '<td class="pf-left">' if i in positions else t.group(0)
+
+        return re.sub(r"<td>", td, m.group(0))
+
+    return re.sub(r"<tr>.*?</tr>", row, html, flags=re.S)
+
+
+def _frame_html(df) -> str:
+    """A DataFrame as the book shows it: whole cells (no "..." cut), missing values as a dash,
+    numbers never broken, text columns left-aligned (:func:`text_columns`)."""
+    import pandas as pd
+
+    left = set(text_columns(df))
+    positions = {j for j, c in enumerate(df.columns) if c in left}
     with pd.option_context("display.max_colwidth", None):
-        return _nowrap_cells(df.to_html(na_rep=MISSING, border=0))
+        return _nowrap_cells(_left_align_cells(df.to_html(na_rep=MISSING, border=0), positions))
 
 
 def _styler_html(styler) -> str:
-    """A pandas Styler as the book shows it: numbers never broken."""
+    """A pandas Styler as the book shows it: numbers never broken, text columns left-aligned."""
+    cols = text_columns(styler.data)
+    if cols:
+        try:
+            styler = styler.set_properties(subset=cols, **{"text-align": "left"})
+        except (KeyError, ValueError, TypeError):  # pragma: no cover - an unusual column index: keep the table as is
+            pass
     return _nowrap_cells(styler.to_html())
 
 
@@ -52,8 +121,9 @@ def use_book_tables() -> None:
     """Show every DataFrame of the running notebook the book's way.
 
     Missing values (NaN) appear as "—" instead of "NaN" (a chapter says why next to its
-    table), no cell is cut to ``display.max_colwidth`` with "...", and numbers are never broken
-    over two lines (``span.pf-num``); Styler tables get the same dash and unbroken numbers. Called by :func:`pfrepro.plotting.use_book_style`, which every chapter runs
+    table), no cell is cut to ``display.max_colwidth`` with "...", numbers are never broken
+    over two lines (``span.pf-num``) and text columns are left-aligned (:func:`text_columns`);
+    Styler tables get the same dash, unbroken numbers and alignment. Called by :func:`pfrepro.plotting.use_book_style`, which every chapter runs
     first; outside IPython it only sets the pandas options.
     """
     import pandas as pd

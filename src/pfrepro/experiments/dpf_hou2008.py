@@ -581,7 +581,7 @@ def lost_51(run: Run, name: str, runs=None, T=None) -> pd.Series:
 def first_runs(run: Run, n: int, names=None) -> Run:
     """The first ``n`` runs of ``run`` (truths and the results of ``names``, default all), to pair a
     reading run on fewer runs with the main one on common runs."""
-    from ..filters.base import FilterResult
+    from ..results import FilterResult
 
     R = run.sim.y.shape[0]
 

@@ -320,7 +320,7 @@ class Run:
 
     def head(self, n: int) -> "Run":
         """The first ``n`` runs (per-run streams: identical to an experiment run with ``runs=n``)."""
-        from ..filters.base import FilterResult
+        from ..results import FilterResult
         from ..models.base import Simulation
 
         sim = Simulation(self.sim.x[:n], self.sim.y[:n])
@@ -343,7 +343,7 @@ def _chunk(args):
 
 
 def _cat_results(parts):
-    from ..filters.base import FilterResult
+    from ..results import FilterResult
     from ..models.jump_markov import JumpMarkovSimulation
 
     sims = [p[0] for p in parts]

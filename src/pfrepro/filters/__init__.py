@@ -18,6 +18,7 @@ from .imm import IMMPFOR, IMMKalman, IMMParticleFilter
 from .jump_markov_pf import JumpMarkovParticleFilter
 from .kalman import ExtendedKalmanFilter, KalmanFilter, kalman_update
 from .liu_west import LiuWestFilter
+from .parameter_learning import ParameterLearningFilter
 from .particle import BootstrapParticleFilter, WeightCollapseWarning, normalize_log_weights
 from .pfpf import ParticleFlowParticleFilter
 from .regularized import RegularizedParticleFilter
@@ -45,8 +46,8 @@ __all__ = [
     # the papers' filters
     "GaussianParticleFlowFilter", "CMSParticleFilter", "OracleCMSParticleFilter", "CMSStep",
     "EvolutionSamplingParticleFilter",
-    # state and static parameter (dual PF chapter)
-    "DualParticleFilter", "DualExtendedKalmanFilter", "LiuWestFilter", "ThetaGridReference",
+    # state and static parameter (dual PF chapter; the family's base class first)
+    "ParameterLearningFilter", "DualParticleFilter", "DualExtendedKalmanFilter", "LiuWestFilter", "ThetaGridReference",
     # interacting multiple models (IMM-PF chapter)
     "IMMKalman", "IMMParticleFilter", "IMMPFOR",
     # today's methods

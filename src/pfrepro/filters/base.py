@@ -1,11 +1,15 @@
-"""What every filter returns, and the small shared interface."""
-from __future__ import annotations
+"""The small interface every filter shares, and what it returns.
 
-from dataclasses import dataclass, field
+:class:`~pfrepro.results.FilterResult` is defined in :mod:`pfrepro.results` (the Monte Carlo runner and the
+filters both import it from there) and re-exported here, so ``from pfrepro.filters.base import
+FilterResult`` keeps working.
+"""
+from __future__ import annotations
 
 import numpy as np
 
 from ..models.base import ModelContractError, require_capabilities
+from ..results import FilterResult
 from ..rng import check_rng
 from ..validation import MEASUREMENT_SHAPES, as_covariance, as_measurements, as_vector
 
@@ -25,45 +29,6 @@ class FilterDivergenceWarning(RuntimeWarning):
 
 #: what a filter with an ``on_divergence`` setting does with a diverging run
 DIVERGENCE_POLICIES = ("warn", "drop", "raise")
-
-
-@dataclass
-class FilterResult:
-    """Filtered estimates for ``runs`` runs of ``T`` steps.
-
-    Attributes
-    ----------
-    x : ndarray
-        Posterior means E[x_k | y_1:k], shape (runs, T, dim_x); ``x[:, k - 1]`` estimates x_k.
-    P : ndarray or None
-        Posterior covariances (runs, T, dim_x, dim_x), where the filter provides them.
-    diagnostics : dict
-        Filter-specific extras (effective sample sizes, resampling flags,
-        collapse counts, lost grid mass, ...).
-    """
-
-    x: np.ndarray
-    P: np.ndarray | None = None
-    diagnostics: dict = field(default_factory=dict)
-
-    @property
-    def runs(self) -> int:
-        """Number of Monte Carlo runs."""
-        return self.x.shape[0]
-
-    # -- exports (pfrepro.export) ----------------------------------------------------------
-    def to_frame(self, truth=None, component_names=None):
-        """Tidy ``pandas.DataFrame``: one row per (run, k, component); see
-        :func:`pfrepro.export.filter_result_frame`."""
-        from ..export import filter_result_frame
-
-        return filter_result_frame(self, truth, component_names)
-
-    def to_csv(self, path, truth=None, component_names=None):
-        """Write :meth:`to_frame` to ``path`` as CSV; returns the path."""
-        from ..export import write_table
-
-        return write_table(self.to_frame(truth, component_names), path)
 
 
 class Filter:

@@ -36,16 +36,15 @@ on_divergence : {"warn", "drop", "raise"}
 """
 from __future__ import annotations
 
-import numpy as np
-
-from ..models.parameterized import as_theta
 import warnings
 
+import numpy as np
+
 from ..flow import solve_per_run
+from ..models.parameterized import as_theta
 from ..validation import as_covariance, as_finite_float, check_quantile_levels
-from .base import (DIVERGENCE_POLICIES, Filter, FilterDivergenceError, FilterDivergenceWarning, FilterResult,
-                   gaussian_loglik)
-from .dual_pf import init_parameterized_filter
+from .base import DIVERGENCE_POLICIES, FilterDivergenceError, FilterDivergenceWarning, FilterResult, gaussian_loglik
+from .parameter_learning import ParameterLearningFilter
 
 __all__ = ["DualExtendedKalmanFilter"]
 
@@ -57,15 +56,16 @@ def _jacobians(model, x, k, theta):
     return model.f(x, k, theta), model.jacobian_f(x, k, theta), model.jacobian_f_theta(x, k, theta)
 
 
-class DualExtendedKalmanFilter(Filter):
+class DualExtendedKalmanFilter(ParameterLearningFilter):
     """Wan & Nelson's dual EKF (module docstring)."""
 
     name = "DEKF"
+    parameter_needs = ("f", "h", "jacobian_f", "jacobian_f_theta", "jacobian_h")
+    scalar_theta = False
 
     def __init__(self, model, theta0, P_theta0, q0: float = 0.0, anneal: float = 1.0, q_min: float = 0.0,
                  clip_to_bounds: bool = False, on_divergence: str = "warn", m0=None, P0=None):
-        init_parameterized_filter(self, model, type(self).__name__, m0, P0, scalar_theta=False,
-                                  needs=("f", "h", "jacobian_f", "jacobian_f_theta", "jacobian_h"))
+        super().__init__(model, m0, P0)
         self.theta0 = as_theta(theta0, model.dim_theta, "theta0").reshape(model.dim_theta)
         self.P_theta0 = as_covariance(P_theta0, "P_theta0", model.dim_theta, allow_singular=True)
         q0 = as_finite_float(q0, "q0", nonnegative=True)

@@ -68,10 +68,11 @@ from __future__ import annotations
 import numpy as np
 from scipy import special
 
-from ..models.base import ModelContractError
-from ..models.parameterized import ParameterizedModel, as_theta
-from ..validation import as_covariance, as_finite_float, as_vector, check_positive_int, check_quantile_levels
-from .base import Filter, FilterDivergenceError, FilterResult
+from ..models.parameterized import as_theta
+from ..validation import as_finite_float, check_positive_int, check_quantile_levels
+from .base import FilterDivergenceError, FilterResult
+# the family's shared set-up; check_parameterized and init_parameterized_filter stay importable from here
+from .parameter_learning import ParameterLearningFilter, check_parameterized, init_parameterized_filter
 from .particle import normalize_log_weights
 from .resampling import check_scheme, resample_counts
 
@@ -86,33 +87,6 @@ FIT_OK, FIT_TOO_WIDE, FIT_ZERO_VAR, FIT_CAPPED = 0, 1, 2, 3
 #: concentration used when the variance vanishes and no cap is set
 NU_HARD_MAX = 1e12
 _MU_EPS = 1e-12
-
-
-def check_parameterized(model, who: str, scalar_theta: bool = True, needs=("f", "h")):
-    """The dual-estimation filters' model contract: a ParameterizedModel implementing ``needs``.
-
-    Raises :class:`~pfrepro.models.ModelContractError` (a ``TypeError``) naming the filter and
-    what the model lacks.
-    """
-    if not isinstance(model, ParameterizedModel):
-        raise ModelContractError(f"{who} needs a pfrepro.models.ParameterizedModel (a model with an unknown "
-                                 f"parameter θ), got {type(model).__name__}")
-    lacks = [m for m in needs if getattr(type(model), m, None) is getattr(ParameterizedModel, m)]
-    if lacks:
-        raise ModelContractError(f"{who} needs a model implementing {', '.join(needs)}; "
-                                 f"{type(model).__name__} does not implement {', '.join(lacks)}")
-    if scalar_theta and model.dim_theta != 1:
-        raise ValueError(f"{who} estimates a scalar parameter; model has dim_theta = {model.dim_theta}")
-    return model
-
-
-def init_parameterized_filter(filt, model, who: str, m0=None, P0=None, scalar_theta=True, needs=("f", "h")):
-    """What ``Filter.__init__`` does for a StateSpaceModel, for a ParameterizedModel: the contract
-    check, the model and the prior N(m0, P0) (default: the model's)."""
-    check_parameterized(model, who, scalar_theta, needs)
-    filt.model = model
-    filt.m0 = model.m0 if m0 is None else as_vector(m0, "m0", model.dim_x)
-    filt.P0 = model.P0 if P0 is None else as_covariance(P0, "P0", model.dim_x)
 
 
 def beta_moments(alpha, beta):
@@ -202,7 +176,7 @@ def _gauss_logpdf(nu, S):
     return -0.5 * np.sum(z * z, -1) - np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(-1) - 0.5 * m * np.log(2 * np.pi)
 
 
-class DualParticleFilter(Filter):
+class DualParticleFilter(ParameterLearningFilter):
     """Hou & Yin's dual particle filter (module docstring)."""
 
     name = "DPF"
@@ -211,9 +185,8 @@ class DualParticleFilter(Filter):
     def __init__(self, model, n_x: int, n_theta: int, weight: str = "predictive", cap=None,
                  theta0=None, roughening=None, resampling: str = "systematic", nu_min: float = 2.0,
                  theta_law: str = "beta"):
-        init_parameterized_filter(self, model, type(self).__name__,
-                                  needs=("f", "h") if weight == "plugin" or weight == "literal"
-                                  else ("f", "h", "jacobian_f", "jacobian_h"))
+        super().__init__(model, needs=("f", "h") if weight == "plugin" or weight == "literal"
+                         else ("f", "h", "jacobian_f", "jacobian_h"))
         self.n_x = check_positive_int(n_x, "n_x")
         self.n_theta = check_positive_int(n_theta, "n_theta")
         if weight not in PARAMETER_WEIGHTS:

@@ -28,8 +28,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import as_finite_float, check_positive_int, check_quantile_levels
-from .base import Filter, FilterDivergenceError, FilterResult
-from .dual_pf import init_parameterized_filter
+from .base import FilterDivergenceError, FilterResult
+from .parameter_learning import ParameterLearningFilter
 from .particle import normalize_log_weights
 from .resampling import check_scheme, resample_counts
 
@@ -67,7 +67,7 @@ def weighted_quantiles(w, v, q):
     return np.stack([np.array([np.interp(qq, cw[r], vs[r]) for r in range(v.shape[0])]) for qq in np.atleast_1d(q)])
 
 
-class LiuWestFilter(Filter):
+class LiuWestFilter(ParameterLearningFilter):
     """Liu & West's joint (x, θ) particle filter (module docstring)."""
 
     name = "Liu-West"
@@ -76,7 +76,7 @@ class LiuWestFilter(Filter):
     def __init__(self, model, n_particles: int, delta: float = 0.99, resampling: str = "systematic",
                  quantiles=(0.025, 0.5, 0.975)):
         """``quantiles``: levels of θ's weighted quantiles stored per step (diagnostics)."""
-        init_parameterized_filter(self, model, type(self).__name__)
+        super().__init__(model)
         self.n_particles = check_positive_int(n_particles, "n_particles")
         self.a = liu_west_a(delta)
         self.delta = float(delta)

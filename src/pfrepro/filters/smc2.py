@@ -24,7 +24,7 @@ import numpy as np
 from ..rng import take_runs
 from ..validation import as_finite_float, check_positive_int, check_probability
 from .base import Filter, FilterResult
-from .dual_pf import init_parameterized_filter
+from .parameter_learning import ParameterLearningFilter
 from .particle import normalize_log_weights
 from .resampling import check_scheme, resampling_counts_function
 from .smc_steps import repeat_rows
@@ -44,7 +44,7 @@ def _systematic_counts_nd(w, u):
     return np.diff(below, axis=-1, prepend=0)
 
 
-class SMC2(Filter):
+class SMC2(ParameterLearningFilter):
     """SMC² for a scalar static parameter of a :class:`~pfrepro.models.parameterized.ParameterizedModel`.
 
     Parameters
@@ -78,7 +78,7 @@ class SMC2(Filter):
 
     def __init__(self, model, n_theta: int = 200, n_x: int = 100, ess_threshold: float = 0.5,
                  rw_scale: float = 1.0, n_moves: int = 1, resampling: str = "systematic"):
-        init_parameterized_filter(self, model, type(self).__name__)
+        super().__init__(model)
         self.n_theta = check_positive_int(n_theta, "n_theta")
         if self.n_theta < 2:
             raise ValueError("n_theta must be >= 2 (the random walk is scaled by the θ-cloud's spread)")

@@ -27,7 +27,7 @@ import warnings
 from ..validation import check_positive_int, check_quantile_levels
 from .base import Filter, FilterResult
 from .particle import WeightCollapseWarning
-from .dual_pf import init_parameterized_filter
+from .parameter_learning import ParameterLearningFilter
 
 __all__ = ["ThetaGridReference", "posterior_summary"]
 
@@ -59,7 +59,7 @@ def posterior_summary(theta_grid, log_post, q=(0.025, 0.975), n_fine: int = 2001
     return mean, np.maximum(sec - mean**2, 0.0), qs
 
 
-class ThetaGridReference(Filter):
+class ThetaGridReference(ParameterLearningFilter):
     """Exact θ posterior (and θ-marginal state mean) for a scalar model (module docstring).
 
     Parameters
@@ -76,7 +76,7 @@ class ThetaGridReference(Filter):
     name = "exact θ posterior (grid)"
 
     def __init__(self, model, n_theta: int = 101, x_bounds=(-40.0, 40.0), n_grid: int = 321, n_fine: int = 2001):
-        init_parameterized_filter(self, model, type(self).__name__)
+        super().__init__(model)
         if model.dim_x != 1 or model.dim_y != 1:
             raise ValueError("ThetaGridReference is for scalar models (dim_x = dim_y = 1)")
         q = float(np.sqrt(model.Q[0, 0]))
