@@ -522,7 +522,7 @@ def posterior_distance(run_: Run, name: str, ref: str):
     return np.sqrt(np.mean(np.sum(d * d, axis=-1), axis=1))
 
 
-#: steps at which the particle sets are compared with the large-N reference: every 20 s (both turns inside)
+#: steps at which the particle sets are compared with the large-N reference, every 20 s (both turns inside)
 POST_STEPS = tuple(range(20, SCENARIO["duration"] + 1, 20))
 
 

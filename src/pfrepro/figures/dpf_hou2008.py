@@ -233,7 +233,7 @@ def sweeps_51(st, sd, cap=None, q_rel=None):
     (b) its 95 % interval coverage at T against the cap on α + β; (c) the DEKF's state RMSE against its
     parameter noise q_0 (and unprojected).
 
-    ``st``: :func:`~pfrepro.experiments.dpf_hou2008.sensitivity_table` of the DPF sweep (rows ``"cap c"``,
+    ``st``: ``pfrepro.experiments.dpf_hou2008.sensitivity_table`` of the DPF sweep (rows ``"cap c"``,
     ``"no cap"`` and ``"DPF"`` = the main cap); ``sd``: the same for the DEKF sweep (rows
     ``"q0 = q P0"``, ``"unprojected"``); ``cap``, ``q_rel``: the chapter's own values (marked). Error bars
     are ± 1 standard error over the runs."""
@@ -268,7 +268,7 @@ def sweeps_51(st, sd, cap=None, q_rel=None):
 def integration_error(integ, used=None):
     """The sec 5.2 integration sweep drawn: max state error over the 60 s truth (against 1024 RK4
     substeps) per number of RK4 substeps, log-log, with the filters' choice marked. ``integ``:
-    :func:`~pfrepro.experiments.dpf_hou2008.integration_error_52`."""
+    ``pfrepro.experiments.dpf_hou2008.integration_error_52``."""
     used = E.S52["filter_substeps"] if used is None else used
     fig, ax = new_figure(figsize=(4.2, 2.9))
     n = np.asarray(integ.index, float)
