@@ -327,3 +327,14 @@ def test_cost_counts_as_printed_by_hand():
     assert c["resampled"] == N * T and c["model_evaluations"] == 2 * N * T
     c2 = count_model_calls(BootstrapParticleFilter(model, N, ess_threshold=0.5), y)
     assert c2["resampled"] % N == 0 and c2["resampled"] <= N * T
+
+
+@pytest.mark.parametrize("integrator", ["euler", "rk4", "exact"])
+def test_update_with_the_callers_moments_is_bit_identical(integrator):
+    # the filter hands update() the prior moments it computed for the divergence test
+    m = UNGM.zhang2016() if integrator != "exact" else LinearGaussianModel(
+        F=[[1.0, 0.1], [0.0, 1.0]], H=[[1.0, 0.0]], Q=0.01 * np.eye(2), R=[[0.1]], x0=[0.0, 1.0])
+    g = GaussianParticleFlowFilter(m, 50, integrator=integrator, field="eq43")
+    x = np.random.default_rng(1).normal(size=(3, 50, m.dim_x))
+    y = np.random.default_rng(2).normal(size=(3, m.dim_y))
+    assert np.array_equal(g.update(x, y), g.update(x, y, moments=particle_moments(x)))

@@ -170,9 +170,12 @@ class GaussianParticleFlowFilter(Filter):
         self.points = ScaledSigmaPoints(model.dim_x, alpha, beta, kappa)
         self.return_cov = bool(return_cov)
 
-    def prior_statistics(self, x):
-        """Eqs (47)-(52): particle mean/cov, then UT moments y_hat, Pyy, Pxy of h."""
-        m, P = particle_moments(x)
+    def prior_statistics(self, x, moments=None):
+        """Eqs (47)-(52): particle mean/cov, then UT moments y_hat, Pyy, Pxy of h.
+
+        ``moments``: ``particle_moments(x)`` if the caller has it already (not recomputed).
+        """
+        m, P = particle_moments(x) if moments is None else moments
         sig = self.points.sigma_points(m, P, on_error="nan")      # (runs, 2d+1, d)
         Y = self.model.h(sig)                                      # (runs, 2d+1, m)
         y_hat, Pyy, dy = unscented_transform(Y, self.points.Wm, self.points.Wc,
@@ -180,14 +183,17 @@ class GaussianParticleFlowFilter(Filter):
         Pxy = np.einsum("i,rij,rik->rjk", self.points.Wc, sig - m[:, None, :], dy)
         return m, P, y_hat, 0.5 * (Pyy + np.swapaxes(Pyy, -1, -2)), Pxy
 
-    def update(self, x, y):
-        """Move prior particles ``x`` (runs, N, d) to the posterior given ``y`` (runs, m)."""
+    def update(self, x, y, moments=None):
+        """Move prior particles ``x`` (runs, N, d) to the posterior given ``y`` (runs, m).
+
+        ``moments``: ``particle_moments(x)`` if the caller has it already (not recomputed).
+        """
         model = self.model
         if self.integrator == "exact":
-            m, P = particle_moments(x)
+            m, P = particle_moments(x) if moments is None else moments
             m1, Phi = flow.exact_affine_map(m, P, model.H, model.R, y, 1.0)
             return m1[:, None, :] + (x - m[:, None, :]) @ np.swapaxes(Phi, -1, -2)
-        m, P, y_hat, Pyy, Pxy = self.prior_statistics(x)
+        m, P, y_hat, Pyy, Pxy = self.prior_statistics(x, moments)
         R, res = model.R, model.residual_y
         r = (lambda a, b: a - b) if res is None else res
         # G(lam), c(lam) do not depend on the particles: all the lambdas the integrator
@@ -248,13 +254,17 @@ class GaussianParticleFlowFilter(Filter):
         chapter's configurations the largest values are a growth of 1.0 and a shift of
         about 11 standard deviations. Each run is judged on its own values.
         """
+        return self._divergence_test(x, m_prior, P_prior)[0]
+
+    def _divergence_test(self, x, m_prior, P_prior):
+        """:meth:`_diverged` and the moved particles' moments ``(m, P)`` it computed on the way."""
         runs = x.shape[0]
         ok = np.all(np.isfinite(x.reshape(runs, -1)), axis=1)
         m, P = particle_moments(x)
         prior = np.maximum(np.diagonal(P_prior, axis1=-2, axis2=-1), np.finfo(float).tiny)
         grown = np.any(np.diagonal(P, axis1=-2, axis2=-1) > self.max_growth * prior, axis=1)
         shifted = np.any((m - m_prior) ** 2 > self.max_shift**2 * prior, axis=1)
-        return ~ok | grown | shifted
+        return ~ok | grown | shifted, (m, P)
 
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
         y = self._prepare(y, rng)
@@ -277,12 +287,13 @@ class GaussianParticleFlowFilter(Filter):
                 m_prior, P_prior = particle_moments(x)
                 bad = ~np.all(np.isfinite(P_prior.reshape(len(alive), -1)), axis=1)
                 if not bad.any():
-                    x_new = self.update(x, y[alive, k - 1])
+                    x_new = self.update(x, y[alive, k - 1], moments=(m_prior, P_prior))
                 else:
                     x_new = np.full_like(x, np.nan)
                     if (~bad).any():
                         x_new[~bad] = self.update(x[~bad], y[alive[~bad], k - 1])
-                bad |= self._diverged(x_new, m_prior, P_prior)
+                failed, post = self._divergence_test(x_new, m_prior, P_prior)
+                bad |= failed
                 x = x_new
                 if bad.any():
                     if self.on_divergence == "raise":
@@ -295,9 +306,12 @@ class GaussianParticleFlowFilter(Filter):
                     alive, x = alive[~bad], x[~bad]
                     if alive.size == 0:
                         break
-                xs[alive, k - 1] = x.mean(axis=1)
+                if bad.any():    # the survivors' moments, recomputed on their own array
+                    post = particle_moments(x)
+                # (the mean of particle_moments is x.mean(axis=1), the same call on the same array)
+                xs[alive, k - 1] = post[0]
                 if Ps is not None:
-                    Ps[alive, k - 1] = particle_moments(x)[1]
+                    Ps[alive, k - 1] = post[1]
         n_div = int((diverged_at > 0).sum())
         if n_div and self.on_divergence == "warn":
             warnings.warn(FilterDivergenceWarning(
