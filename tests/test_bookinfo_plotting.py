@@ -6,6 +6,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+import pandas as pd
 import pytest
 
 from pfrepro import bookinfo, plotting
@@ -226,3 +227,13 @@ def test_figure_cells_end_with_the_figure():
                 line = text[:m.start()].count("\n") + 1
                 bad.append(f"{path.name}:{line}: figure cell ends with {ast.unparse(last)[:60]!r}")
     assert not bad, "\n".join(bad)
+
+
+def test_breakable_text_offers_breaks_inside_tokens_only_in_text():
+    b = bookinfo.breakable_text
+    assert b("pf_resampling=multinomial: 12.57") == "pf_<wbr>resampling=<wbr>multinomial: 12.57"
+    assert b("published/measured, N/2") == "published/<wbr>measured, N/<wbr>2"
+    # tags and their attributes untouched; a separator at a token's end gets no break
+    assert b('<a href="a_b.html#x=y">t2_x</a> a_ b=') == '<a href="a_b.html#x=y">t2_<wbr>x</a> a_ b='
+    html = bookinfo.labelled_table_html(pd.DataFrame({"id": ["t2_x_PF(500)"], "test": ["integrator=rk4: 0.5"]}))
+    assert "t2_<wbr>x_<wbr>PF(" in html and 'integrator=<wbr>rk4: <span class="pf-num">0.5</span>' in html

@@ -151,30 +151,36 @@ def nowrap_numbers(text: str) -> str:
     return text.replace("± ", "±&nbsp;")
 
 
+#: characters after which a table cell may wrap inside a token ("pf_resampling=<wbr>multinomial",
+#: "published/<wbr>measured"): a long token breaks there, never inside a run of letters
+_BREAK_AFTER = re.compile(r"([_=/])(?=[^\s<])")
+
+
+def breakable_text(body: str) -> str:
+    """HTML ``body`` with a ``<wbr>`` (a line-break opportunity) after every ``_``, ``=`` or ``/``
+    inside a token, in the text between tags only (tags and their attributes are left alone)."""
+    return re.sub(r">([^<]*)<", lambda m: ">" + _BREAK_AFTER.sub(r"\1<wbr>", m.group(1)) + "<", f">{body}<")[1:-1]
+
+
 def labelled_table_html(table, *, classes: str = "pf-claims pf-text") -> str:
     """A DataFrame of HTML cells as a ``<table>`` whose cells carry their column name.
 
     Every ``<td>`` gets ``data-label="<column>"``, so below the phone breakpoint the stylesheet
     (``book/_static/pfrepro.css``) shows each row as a stacked card of "column: value" lines
     instead of columns too narrow to read; numbers in plain cells are wrapped by
-    :func:`nowrap_numbers` (cells that already hold HTML tags are left as they are), and claim
-    ids (column ``id`` or ``claim_id``) may wrap after an underscore only.
+    :func:`nowrap_numbers` (cells that already hold HTML tags are left as they are), and every
+    cell may wrap inside a long token only after ``_``, ``=`` or ``/`` (:func:`breakable_text`:
+    claim ids such as "t2_x_PF(500)", readings such as "pf_resampling=multinomial"), never
+    inside a word or a number.
     """
     cols = [str(c) for c in table.columns]
     head = "".join(f'<th scope="col">{html.escape(c)}</th>' for c in cols)
-
-    def breakable_id(v: str) -> str:
-        # claim ids ("t2_x_PF(500)") may wrap after an underscore, never inside "PF(500)"
-        return re.sub(r">([^<]*)<", lambda m: ">" + m.group(1).replace("_", "_<wbr>") + "<", f">{v}<")[1:-1]
-
     rows = []
     for rec in table.itertuples(index=False):
         cells = []
         for c, v in zip(cols, rec):
             v = str(v)
-            body = v if "<" in v else nowrap_numbers(v)
-            if c in ("id", "claim_id"):
-                body = breakable_id(body)
+            body = breakable_text(v if "<" in v else nowrap_numbers(v))
             cells.append(f'<td data-label="{html.escape(c)}" class="pf-col-{re.sub(r"[^a-z0-9]+", "-", c.lower())}">{body}</td>')
         rows.append("<tr>" + "".join(cells) + "</tr>")
     return (f'<table class="{html.escape(classes)}"><thead><tr>{head}</tr></thead>'

@@ -30,6 +30,9 @@ Per page it fails on
               (scrollbar or edge shadow) that it scrolls;
 ``overlap``   text in a table cell running out of its cell (drawn over the next one);
 ``number``    a number in a table broken over two lines ("0.00 38");
+``word``      a word in a table broken over two lines ("systema" / "tic", "inconcl" / "usive"):
+              a cell may wrap between words or after a ``_``, ``=`` or ``/`` it offers, never
+              inside a run of letters;
 ``figtext``   a figure whose smallest text (:data:`MIN_FONT_PT` at :data:`BOOK_DPI`) is shown
               smaller than :data:`MIN_TEXT_PX`; on a phone a link to the full-size image
               (tap to enlarge) is accepted instead;
@@ -66,7 +69,7 @@ from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
 KINDS = ("console", "network", "math", "tex", "image", "table", "equation", "overflow", "link",
-         "wide", "overlap", "number", "figtext", "rst", "ellipsis", "figure")
+         "wide", "overlap", "number", "word", "figtext", "rst", "ellipsis", "figure")
 
 #: viewports every page is read at: a laptop and a phone (CSS px)
 WIDTHS = (1366, 400)
@@ -473,7 +476,9 @@ PAGE_JS = r"""
   // no text cut short with an ellipsis
   // a number on its own (not the "-1" of "k-1", nor digits inside a name such as "x2")
   const numRe = /(?<![\w.])[-+−]?\d+(?:[.,]\d+)*(?:[eE][-+−]?\d+)?%?/g;
-  let nOverlap = 0, nNumber = 0, nEllipsis = 0;
+  // a word: a run of letters (a break after "_", "=" or "/" is not inside one)
+  const wordRe = /\p{L}{4,}/gu;
+  let nOverlap = 0, nNumber = 0, nWord = 0, nEllipsis = 0;
   document.querySelectorAll('td, th').forEach(cell => {
     if (!col.contains(cell) || cell.closest('mjx-container') || !visible(cell)) return;
     const cr = cell.getBoundingClientRect();
@@ -497,6 +502,14 @@ PAGE_JS = r"""
         const tops = new Set([...r2.getClientRects()].filter(q => q.width > 0).map(q => Math.round(q.top)));
         if (tops.size > 1 && nNumber++ < 5)
           fails.push({kind: 'number', what: label(cell), detail: `number ${JSON.stringify(m[0])} broken over ${tops.size} lines`, box: box(cell)});
+      }
+      // words broken across lines (overflow-wrap splitting a word too long for its column)
+      for (const m of n.textContent.matchAll(wordRe)) {
+        const r2 = document.createRange();
+        r2.setStart(n, m.index); r2.setEnd(n, m.index + m[0].length);
+        const tops = new Set([...r2.getClientRects()].filter(q => q.width > 0).map(q => Math.round(q.top)));
+        if (tops.size > 1 && nWord++ < 5)
+          fails.push({kind: 'word', what: label(cell), detail: `word ${JSON.stringify(m[0])} broken over ${tops.size} lines`, box: box(cell)});
       }
     }
     // typed "…", or pandas' "..." at the end of a cell cut to display.max_colwidth (the cell's
