@@ -4,6 +4,7 @@ the result's per-run metrics and divergence count, the input checks."""
 from __future__ import annotations
 
 import concurrent.futures
+import functools
 import zlib
 
 import numpy as np
@@ -334,3 +335,34 @@ def test_chunked_dict_valued_results_equal_the_serial_call():
         mc._concat_dict([{"levels": (0.1, 0.9)}, {"levels": (0.1, 0.8)}])
     assert not mc._has_runs_axis(np.float64(1.0)) and not mc._has_runs_axis(np.array(2.0))
     assert mc._has_runs_axis([1.0, np.zeros(2)]) and not mc._has_runs_axis([1.0, "a"])
+
+
+class _Late:
+    """A model-like object; its class is given a module the pool's workers never had."""
+
+    def simulate(self, T, runs, streams):  # pragma: no cover - never reached in the worker
+        raise AssertionError
+
+
+def test_a_class_defined_after_the_pool_started_gives_a_clear_error():
+    # the notebook pitfall: workers forked before a class existed cannot unpickle its objects,
+    # die, and the pool reports "terminated abruptly"; the runner says why and what to do
+    import sys
+    import types
+    from concurrent.futures.process import BrokenProcessPool
+
+    with mc.process_pool(1) as pool:
+        assert pool.submit(int, "1").result() == 1              # the worker exists now
+        late = types.ModuleType("pfrepro_test_defined_late")
+        sys.modules[late.__name__] = late
+        try:
+            cls = type("LateModel", (_Late,), {"__module__": late.__name__})
+            late.LateModel = cls
+            with pytest.raises(BrokenProcessPool, match="defined in the notebook"):
+                mc.map_runs(functools.partial(_call_simulate, cls()), 4, pool)
+        finally:
+            del sys.modules[late.__name__]
+
+
+def _call_simulate(model, start, size):  # pragma: no cover - runs in the worker
+    return model.simulate(1, size, None)

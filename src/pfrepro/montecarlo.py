@@ -353,12 +353,28 @@ def _has_runs_axis(v) -> bool:
     return isinstance(v, (tuple, list)) and any(_has_runs_axis(e) for e in v)
 
 
+#: why a pool worker dies in practice, said where the reader sees the error
+_BROKEN_POOL_HINT = (
+    "a worker process of the pool died before returning its result. The usual cause: a model, "
+    "filter or function whose class is defined in the notebook (or script) after the pool's "
+    "workers were started; the workers started earlier cannot load it (a class defined in "
+    "__main__ is pickled by name). Create the pool after defining every class it runs, or "
+    "define the classes in a module. Other causes: the machine ran out of memory, or the worker "
+    "was killed. The pool is unusable now; create a new one")
+
+
 def _gather(futures: list, bar) -> list:
+    from concurrent.futures.process import BrokenProcessPool
+
     out = []
     try:
         for f in futures:
             out.append(f.result())
             bar.update(1)
+    except BrokenProcessPool as e:
+        for f in futures:
+            f.cancel()
+        raise BrokenProcessPool(_BROKEN_POOL_HINT) from e
     except BaseException:
         for f in futures:
             f.cancel()
