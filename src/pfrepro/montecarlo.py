@@ -371,13 +371,11 @@ def _gather(futures: list, bar) -> list:
         for f in futures:
             out.append(f.result())
             bar.update(1)
-    except BrokenProcessPool as e:
+    except BaseException as e:
         for f in futures:
             f.cancel()
-        raise BrokenProcessPool(_BROKEN_POOL_HINT) from e
-    except BaseException:
-        for f in futures:
-            f.cancel()
+        if isinstance(e, BrokenProcessPool):
+            raise BrokenProcessPool(_BROKEN_POOL_HINT) from e
         raise
     return out
 

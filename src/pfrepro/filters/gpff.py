@@ -252,12 +252,9 @@ class GaussianParticleFlowFilter(Filter):
         deviations is an innovation the model gives no probability (an outlier such as
         y = 1e200), which would otherwise pass on a huge finite estimate. In the GPFF
         chapter's configurations the largest values are a growth of 1.0 and a shift of
-        about 11 standard deviations. Each run is judged on its own values.
+        about 11 standard deviations. Each run is judged on its own values. Returns the
+        per-run verdict and the moved particles' moments ``(m, P)`` computed on the way.
         """
-        return self._divergence_test(x, m_prior, P_prior)[0]
-
-    def _divergence_test(self, x, m_prior, P_prior):
-        """:meth:`_diverged` and the moved particles' moments ``(m, P)`` it computed on the way."""
         runs = x.shape[0]
         ok = np.all(np.isfinite(x.reshape(runs, -1)), axis=1)
         m, P = particle_moments(x)
@@ -292,7 +289,7 @@ class GaussianParticleFlowFilter(Filter):
                     x_new = np.full_like(x, np.nan)
                     if (~bad).any():
                         x_new[~bad] = self.update(x[~bad], y[alive[~bad], k - 1])
-                failed, post = self._divergence_test(x_new, m_prior, P_prior)
+                failed, post = self._diverged(x_new, m_prior, P_prior)
                 bad |= failed
                 x = x_new
                 if bad.any():
