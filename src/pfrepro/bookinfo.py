@@ -169,7 +169,7 @@ def labelled_table_html(table, *, classes: str = "pf-claims pf-text") -> str:
     (``book/_static/pfrepro.css``) shows each row as a stacked card of "column: value" lines
     instead of columns too narrow to read; numbers in plain cells are wrapped by
     :func:`nowrap_numbers` (cells that already hold HTML tags are left as they are), and every
-    cell may wrap inside a long token only after ``_``, ``=`` or ``/`` (:func:`breakable_text`:
+    cell may wrap inside a long token only after ``_``, ``=`` or ``/`` (``breakable_text``:
     claim ids such as "t2_x_PF(500)", readings such as "pf_resampling=multinomial"), never
     inside a word or a number.
     """
