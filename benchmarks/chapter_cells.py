@@ -36,9 +36,9 @@ from nbclient import NotebookClient
 #: (in pfrepro.montecarlo and in every experiment module that imported them by name) so that
 #: each outermost call appends a JSON line to the file named by PFREPRO_CALL_LOG
 _HOOK = '''
-import functools as _ft, importlib as _il, inspect as _insp, json as _js, os as _os, pkgutil as _pk, time as _tm
+import functools as _ft, importlib as _il, inspect as _insp, json as _js, os as _os, pkgutil as _pk, threading as _th, time as _tm
 import pfrepro.experiments as _ex, pfrepro.montecarlo as _mc
-_depth = [0]
+_depth = _th.local()     # per thread: a chapter may submit Monte Carlo calls from threads (the synthesis does)
 _hook_file = _insp.currentframe().f_code.co_filename     # this cell's own frames are skipped
 def _cell_line():
     for fr in _insp.stack(context=1):
@@ -50,13 +50,13 @@ def _wrap(fn, kind):
         return fn
     @_ft.wraps(fn)
     def w(*a, **k):
-        _depth[0] += 1
+        _depth.n = getattr(_depth, "n", 0) + 1
         t0 = _tm.perf_counter()
         try:
             return fn(*a, **k)
         finally:
-            _depth[0] -= 1
-            if _depth[0] == 0:
+            _depth.n -= 1
+            if _depth.n == 0:
                 row = {"kind": kind, "wall_s": _tm.perf_counter() - t0, "line": _cell_line()}
                 if kind == "run_monte_carlo":
                     f = k.get("filters", a[1] if len(a) > 1 else {})
@@ -105,7 +105,8 @@ def main(argv=None) -> None:
                        resources={"metadata": {"path": str(path.parent)}}).execute()
         total = time.perf_counter() - t0
         rows = []
-        for i, cell in enumerate(nb.cells):
+        skip = 1 if log else 0       # the hook cell is not the chapter's: number the chapter's cells as in the file
+        for i, cell in enumerate(nb.cells[skip:]):
             if cell.cell_type == "code":
                 s = _seconds(cell)
                 first = next((ln for ln in cell.source.splitlines()
