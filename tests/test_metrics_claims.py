@@ -196,7 +196,8 @@ def test_published_table_and_value(fake_paper):
 
 
 def test_ordering_claims_on_paired_differences():
-    from pfrepro.claims import ClaimsRegistry, ordering_holds, paired_difference, verdict
+    from pfrepro.claims import ClaimsRegistry, ordering_holds, verdict
+    from pfrepro.stats import paired_difference
 
     a = np.array([1.0, 2.0, 3.0, 4.0])
     d, se = paired_difference(a + 1.0, a)  # constant difference: se 0
@@ -328,7 +329,7 @@ def test_published_se_helpers():
 def test_paired_difference_refuses_unequal_run_sets():
     """The book-wide common-runs rule (claims.common_runs): every paired difference goes through it."""
     import pandas as pd
-    from pfrepro.claims import CommonRunsError, common_runs, paired_difference
+    from pfrepro.stats import CommonRunsError, common_runs, paired_difference
     a = pd.Series([1.0, 2.0, 4.0], index=pd.RangeIndex(1, 4, name="run"))
     b = pd.Series([0.5, 1.5, 3.0], index=pd.RangeIndex(1, 4, name="run"))
     assert paired_difference(a, b)[0] == pytest.approx(2.0 / 3.0)

@@ -81,15 +81,6 @@ def test_no_extrapolation_beyond_a_flat_looking_frontier_end():
     assert S._word(e) == "undecided (off frontier)"
 
 
-def test_holm_by_hand():
-    # m = 4, alpha 0.05: thresholds 0.0125, 0.0167, 0.025, 0.05 in p order
-    p = [0.010, 0.040, 0.016, 0.030]
-    assert list(S.holm(p)) == [True, False, True, False]       # 0.010 <= .0125, 0.016 <= .0167, 0.030 > .025 stops
-    assert list(S.holm([0.06, 0.001])) == [False, True] and list(S.holm([0.02, 0.001])) == [True, True]
-    assert list(S.holm([0.001, np.nan])) == [True, False]
-    assert S.p_two_sided(2.0, 1.0) == pytest.approx(0.0455, abs=1e-4) and S.p_two_sided(0.0, 1.0) == 1.0
-
-
 def test_ranking_is_family_wise_and_symmetric():
     # a < b < c, each adjacent pair within noise, but a and c clearly apart: c is beaten by a only
     n = 400

@@ -17,8 +17,11 @@ rng          per-run random streams (RunStreams): run i independent of the batch
 cost         deterministic cost counts and measured time for cost claims
 published    the papers' published tables as data
 claims       claims registry and the verdict rule behind the scorecard
+stats        the claims' shared estimators: paired differences, ratios, bootstrap, equivalence, Holm
+verdicts     one module per paper that decides its claims from its experiments' results
+findings     what a chapter found, said first; the book's summary in the introduction
 choices      free choices a paper leaves open, and the verdict under each reading
-experiments  one module per paper: model, filters, settings, seeds
+experiments  one module per paper: model, filters, settings, seeds, run_all
 figures      the papers' figures and tables as functions
 papers, cli  the paper registry and the ``pfrepro`` command line
 export       tidy frames, CSV files and the book's download links

@@ -65,7 +65,7 @@ def papers_in_book(root: Path | None = None, *, report: bool = False) -> dict[st
 
     A chapter covers a paper when its source imports the paper's experiment module
     (``from pfrepro.experiments import <key>`` or ``pfrepro.experiments.<key>``) or opens its
-    claims registry (``ClaimsRegistry("<key>")``). Order: book order.
+    claims registry (``ClaimsRegistry("<key>")``) or runs it (``get_paper("<key>")``). Order: book order.
     """
     from .published import CLAIM_SOURCES, PAPERS
 
@@ -81,7 +81,8 @@ def papers_in_book(root: Path | None = None, *, report: bool = False) -> dict[st
         for key in keys:
             k = re.escape(key)
             pat = (rf"from\s+pfrepro\.experiments\s+import\s+{k}\b|import\s+pfrepro\.experiments\.{k}\b"
-                   rf"|from\s+pfrepro\.experiments\.{k}\s+import|ClaimsRegistry\(\s*[\"']{k}[\"']")
+                   rf"|from\s+pfrepro\.experiments\.{k}\s+import|ClaimsRegistry\(\s*[\"']{k}[\"']"
+                   rf"|get_paper\(\s*[\"']{k}[\"']")
             if key not in found and re.search(pat, text):
                 found[key] = doc
     return found

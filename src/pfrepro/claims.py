@@ -69,8 +69,11 @@ from pathlib import Path
 
 import pandas as pd
 
+# the paired-comparison statistics live in pfrepro.stats; re-exported here, where chapters found them
+from .stats import CommonRunsError, common_runs, paired_difference
+
 __all__ = ["Claim", "ClaimsRegistry", "verdict", "VERDICTS", "claims_dir", "load_all_claims",
-           "DEFAULT_REL_TOL", "Z_CRIT", "paired_difference", "common_runs", "CommonRunsError", "ordering_holds", "weakest_ordering",
+           "DEFAULT_REL_TOL", "Z_CRIT", "ordering_holds", "weakest_ordering",
            "readings_hold", "claims_table", "BASES", "number_matches", "check_saved_claims"]
 
 VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive")
@@ -86,52 +89,6 @@ BASES = ("", "count")
 def _isnum(v) -> bool:
     # numpy scalars (float32, int64, ...) are numbers too; booleans are not
     return isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v)
-
-
-class CommonRunsError(ValueError):
-    """A paired comparison over two different run sets."""
-
-
-def common_runs(a, b):
-    """Check that ``a`` and ``b`` are per-run values on the same run set; return them as float arrays.
-
-    The book-wide rule "comparisons use common runs only": pandas objects carry their run
-    labels (the index), which must be equal, in the same order; arrays must have the same
-    shape (no broadcasting: one value against many runs, or 40 runs against 100, is refused).
-    Select the common runs first (``a.loc[b.index]``, ``a[:n]``) when they differ. Raises
-    :class:`CommonRunsError`.
-    """
-    import numpy as np
-
-    import pandas as pd
-
-    ia = a.index if isinstance(a, (pd.Series, pd.DataFrame)) else None
-    ib = b.index if isinstance(b, (pd.Series, pd.DataFrame)) else None
-    if ia is not None and ib is not None and not ia.equals(ib):
-        raise CommonRunsError(f"paired comparison over unequal run sets ({len(ia)} runs against {len(ib)}, "
-                              "labels differ): compare on common runs only")
-    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    if a.shape != b.shape:
-        raise CommonRunsError(f"paired comparison over unequal run sets (shapes {a.shape} and {b.shape}): "
-                              "compare on common runs only")
-    return a, b
-
-
-def paired_difference(a, b):
-    """Mean and standard error of the per-run differences ``a - b`` (common random numbers).
-
-    ``a`` and ``b`` are per-run values of two methods on the *same* runs (same
-    truths), checked by :func:`common_runs`. Returns ``(mean, se)`` with
-    ``se = std(a - b, ddof=1) / sqrt(runs)``.
-    """
-    import numpy as np
-
-    a, b = common_runs(a, b)
-    d = a - b
-    d = d.ravel()
-    if d.size < 2 or not np.all(np.isfinite(d)):
-        raise ValueError(f"paired_difference needs >= 2 finite paired values, got {d.size}")
-    return float(d.mean()), float(d.std(ddof=1) / np.sqrt(d.size))
 
 
 def ordering_holds(diff, diff_se):

@@ -255,7 +255,10 @@ def cmd_run(args) -> int:
     for path in written:
         print(f"  {path.relative_to(out)}")
     df = rep.claims.to_frame()
-    print(f"\nverdicts of the {len(df)} table-cell claims (the chapter has the ordering and cost claims too):")
+    if paper.verdicts_module is not None:
+        print(f"\nverdicts of the {len(df)} claims (the chapter's claims, decided by the same code):")
+    else:
+        print(f"\nverdicts of the {len(df)} table-cell claims (the chapter has the ordering and cost claims too):")
     for v, n in rep.verdict_counts().items():
         print(f"  {n:3d}  {v}")
     if len(df):

@@ -1,14 +1,20 @@
 """The registry of reproduced papers: what ``pfrepro list`` shows and ``pfrepro run`` runs.
 
-Adding a paper is one :class:`Paper` entry in :data:`PAPERS`. The entry names the paper's
-experiment module ``pfrepro.experiments.<key>`` (the functions its chapter calls) and its
-figure module ``pfrepro.figures.<key>``, which must define
+Adding a paper is one :class:`Paper` entry in :data:`PAPERS`. Each paper has three modules:
 
-* ``TABLES`` and ``FIGURES``: the labels of the tables and figures it regenerates, and
-* ``reproduce(runs=None, seed=None, executor=None, steps=None) -> Reproduction``: the
-  paper's tables and figures from the experiment module's functions (``runs``/``seed``
-  ``None`` mean the paper's own counts and our fixed seeds; ``steps(label)`` is called
-  before each experiment, for a progress display).
+* ``pfrepro.experiments.<key>`` runs the experiments, readings and sweeps:
+  ``run_all(runs=None, seeds=None, executor=None, steps=None) -> results`` (``runs``/``seeds``
+  ``None`` mean the paper's own counts and the book's fixed seeds, :data:`SEEDS` of the module;
+  ``steps(label)`` is called before each experiment, for a progress display). The results
+  object has a ``settings`` dict (the runs and seeds it used). The module's ``CHOICES`` are the
+  chapter's free choices.
+* ``pfrepro.verdicts.<key>`` decides the claims: ``record_claims(reg, results)`` adds every
+  claim of the paper to a :class:`~pfrepro.claims.ClaimsRegistry`.
+* ``pfrepro.figures.<key>`` draws: ``TABLES``/``FIGURES`` (labels), ``tables(results)`` and
+  ``figures(results)`` (label -> DataFrame / matplotlib Figure).
+
+The chapter and the command line both go through :meth:`Paper.run`, so they save the same
+claims for the same runs and seeds.
 """
 from __future__ import annotations
 
@@ -23,7 +29,8 @@ import pandas as pd
 
 from .claims import ClaimsRegistry
 
-__all__ = ["Paper", "PAPERS", "Reproduction", "get_paper", "paper_keys", "call_with_executor", "cell_claims", "override_seeds"]
+__all__ = ["Paper", "PAPERS", "Reproduction", "get_paper", "paper_keys", "call_with_executor", "cell_claims", "override_seeds",
+           "resolve_seeds"]
 
 
 @dataclass(frozen=True)
@@ -69,9 +76,45 @@ class Paper:
         """Names of the figures the paper's figures module reproduces (its ``FIGURES``)."""
         return tuple(self.figures_module.FIGURES)
 
+    @property
+    def experiments_module(self):
+        """``pfrepro.experiments.<key>`` (imported on first use)."""
+        return importlib.import_module(f"pfrepro.experiments.{self.key}")
+
+    @property
+    def verdicts_module(self):
+        """``pfrepro.verdicts.<key>``, the module that decides the paper's claims (``None`` if it has none yet)."""
+        try:
+            return importlib.import_module(f"pfrepro.verdicts.{self.key}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"pfrepro.verdicts.{self.key}":
+                raise
+            return None
+
+    def run(self, runs=None, seeds=None, executor=None, steps=None):
+        """Run every experiment of the paper and decide its claims: ``(results, registry)``.
+
+        The one path from experiments to verdicts: the chapter calls it, and so does
+        ``pfrepro run``. ``runs`` replaces every Monte Carlo run count of the paper, ``seeds``
+        the fixed seeds (an int: a base, see :func:`resolve_seeds`; a dict: some entries).
+        """
+        verdicts = self.verdicts_module
+        if verdicts is None:
+            raise NotImplementedError(f"{self.key} has no pfrepro.verdicts module yet")
+        E = self.experiments_module
+        results = E.run_all(runs=runs, seeds=seeds, executor=executor, steps=steps)
+        reg = ClaimsRegistry(self.key, choices=E.CHOICES)
+        verdicts.record_claims(reg, results)
+        return results, reg
+
     def reproduce(self, runs=None, seed=None, executor=None, steps=None) -> "Reproduction":
-        """Run the paper's experiments and return its tables and figures."""
-        return self.figures_module.reproduce(runs=runs, seed=seed, executor=executor, steps=steps)
+        """Run the paper's experiments and return its tables, figures and claims (:meth:`run`)."""
+        if self.verdicts_module is None:   # a paper not yet moved to run_all / record_claims
+            return self.figures_module.reproduce(runs=runs, seed=seed, executor=executor, steps=steps)
+        results, reg = self.run(runs=runs, seeds=seed, executor=executor, steps=steps)
+        F = self.figures_module
+        return Reproduction(self.key, tables=F.tables(results), figures=F.figures(results), claims=reg,
+                            settings=dict(results.settings))
 
 
 #: every paper the command line knows; add a paper here (one entry)
@@ -147,6 +190,29 @@ def cell_claims(paper: str, table: pd.DataFrame, claim_id, text, source: str, *,
         reg.add(claim_id(row), text(row), published=float(p), reproduced=float(row[ours]),
                 se=float(row[se]), source=source)
     return reg
+
+
+def resolve_seeds(defaults: dict, seeds=None) -> dict:
+    """The seeds an experiment module runs with: a new dict, never the module's own.
+
+    ``seeds=None``: ``defaults`` (the book's fixed seeds); an int ``base``: every entry replaced,
+    in the dict's order, by ``base``, ``base + 1``, ... (``pfrepro run --seed``); a mapping: the
+    named entries replaced (``KeyError`` for a name ``defaults`` does not have).
+    """
+    out = dict(defaults)
+    if seeds is None:
+        return out
+    if isinstance(seeds, numbers.Integral) and not isinstance(seeds, bool):
+        if seeds < 0:
+            raise ValueError(f"a base seed must be >= 0, got {seeds}")
+        return {k: int(seeds) + i for i, k in enumerate(out)}
+    if not hasattr(seeds, "items"):
+        raise TypeError(f"seeds must be None, an int base or a mapping name -> seed, got {type(seeds).__name__}")
+    unknown = sorted(set(seeds) - set(out))
+    if unknown:
+        raise KeyError(f"unknown seed name(s) {unknown}; the seeds are {list(out)}")
+    out.update({k: int(v) for k, v in seeds.items()})
+    return out
 
 
 @contextlib.contextmanager

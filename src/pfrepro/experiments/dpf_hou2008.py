@@ -24,7 +24,7 @@ from ..models.reentry import FT, Reentry
 from ..models.ungm_theta import UNGMTheta
 from ..models.base import Simulation
 from ..choices import FIXED, READING, SWEEP, FreeChoice, choices_table
-from ..claims import CommonRunsError, paired_difference
+from ..stats import CommonRunsError, paired_difference
 from ..montecarlo import run_monte_carlo, truth_streams
 
 __all__ = ["PAPER", "SEED_51", "SEED_52", "S51", "S52", "Q52", "CHOICES", "assumptions_table", "model_51",

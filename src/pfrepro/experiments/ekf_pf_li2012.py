@@ -38,13 +38,14 @@ from ..metrics import mc_summary, rmse, rmse_over_time
 from ..models import UNGM
 from ..models.base import Simulation
 from ..montecarlo import MonteCarloResult, run_monte_carlo, time_filters, time_single_run, truth_streams
+from ..stats import ratio_of_means
 from ..validation import check_positive_int
 
 __all__ = [
     "PAPER", "T", "N_PARTICLES", "RUNS_TABLE", "RUNS_FIGURES", "SEED_TABLE", "SEED_FIGURES",
     "P0_DEFAULT", "RESAMPLING_DEFAULT", "RATIO_STRONG_MIN", "RATIO_WEAK_MAX", "GRID_BOUNDS", "GRID_N", "P0_SWEEP", "RESAMPLING_SWEEP",
     "N_SWEEP", "FILTER_LABELS", "MODEL_LABELS", "make_model", "make_filters", "simulate", "run",
-    "table1", "ratio_of_means", "gap_to", "per_time_rmse", "statistic_readings", "sensitivity",
+    "table1", "gap_to", "per_time_rmse", "statistic_readings", "sensitivity",
     "rmse_and_cost_vs_n", "cost_ratios", "jacobian_check", "literal_eq11_ekf",
     "eq9_linearisation_check", "resampling_after_estimate_effect", "published_table1",
     "cost_evidence", "ratio_claim_holds", "CHOICES", "STATISTICS", "STATISTIC_LABELS", "statistic_reading", "ratio_reading",
@@ -221,23 +222,8 @@ def run(which: int, runs: int, seed: int, include=("EKF", "PF", "Exact"), *, P0:
 
 
 # --------------------------------------------------------------------------------------
-# statistics
+# statistics (ratio_of_means: pfrepro.stats)
 # --------------------------------------------------------------------------------------
-def ratio_of_means(a, b) -> tuple[float, float]:
-    """mean(a) / mean(b) for paired per-run values, with its delta-method standard error."""
-    a = np.asarray(a, float).ravel()
-    b = np.asarray(b, float).ravel()
-    if a.shape != b.shape or a.size < 2:
-        raise ValueError("ratio_of_means needs two paired samples of equal length >= 2")
-    ma, mb = a.mean(), b.mean()
-    if mb == 0:
-        raise ZeroDivisionError("mean of the denominator sample is zero")
-    r = ma / mb
-    c = np.cov(a, b, ddof=1)
-    var = (c[0, 0] - 2 * r * c[0, 1] + r * r * c[1, 1]) / (mb * mb * a.size)
-    return float(r), float(np.sqrt(max(var, 0.0)))
-
-
 def gap_to(res: MonteCarloResult, name: str, ref: str = "Exact") -> dict:
     """Mean per-run RMSE gap of filter ``name`` above ``ref`` (paired), with its SE."""
     d = res.rmse(name) - res.rmse(ref)

@@ -22,13 +22,14 @@ wrapped residuals; MSE std = sample std (ddof = 1) of the per-run MSE over the 1
 """
 from __future__ import annotations
 
+import functools
 from functools import partial
 
 import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 
-from .. import flow, published
+from .. import flow, published, stats
 from ..filters import (BootstrapParticleFilter, ExtendedKalmanFilter, GaussianParticleFlowFilter,
                        GridFilter, KalmanFilter, ScaledSigmaPoints, UnscentedKalmanFilter,
                        kalman_update, unscented_transform)
@@ -44,8 +45,8 @@ __all__ = ["PAPER", "RUNS", "SEEDS", "UT", "N_LAMBDA", "TIMING_REPEATS", "random
            "cwpa_q_check", "run_cwpa", "cwpa_r_sensitivity", "run_ung", "run_bot", "table1", "table2",
            "cost_ratios", "schedule_sweep", "ung_table_filters", "bot_table_filters", "cost_filters", "cost_evidence",
            "CHOICES", "INTEGRATORS", "PF_SCHEMES", "UT_SETS", "EQUIV_MARGIN", "HEAVY_SHARE", "CONV_BANDS",
-           "reading_filters", "run_readings", "reading_label", "heavy_tailed", "median_paired", "std_difference",
-           "equivalence", "convergence_time", "eq43_check", "eqs16_18_check", "cost_reading_counts"]
+           "reading_filters", "run_readings", "reading_label", 
+           "convergence_time", "eq43_check", "eqs16_18_check", "cost_reading_counts"]
 
 PAPER = "gpff_zhang2016"
 RUNS = 100
@@ -735,46 +736,11 @@ def reading_label(base: str, choice: str, value: str, main_value: str) -> str:
 
 
 # ============================================================================ statistics for the claims
-def heavy_tailed(v, share=HEAVY_SHARE) -> bool:
-    """True if the largest absolute value carries more than ``share`` of the total (finite values)."""
-    v = np.abs(np.asarray(v, float))
-    v = v[np.isfinite(v)]
-    return bool(v.size and v.sum() > 0 and v.max() > share * v.sum())
-
-
-def median_paired(a, b, n_boot=BOOT, seed=BOOT_SEED):
-    """Median of the paired differences a - b over the runs where both are finite, and its
-    bootstrap standard error (``n_boot`` resamples of the runs, fixed seed)."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    ok = np.isfinite(a) & np.isfinite(b)
-    d = a[ok] - b[ok]
-    rng = np.random.default_rng(seed)
-    idx = rng.integers(0, d.size, (n_boot, d.size))
-    return float(np.median(d)), float(np.std(np.median(d[idx], axis=1), ddof=1))
-
-
-def std_difference(a, b, n_boot=BOOT, seed=BOOT_SEED):
-    """Spread ordering: std(a) - std(b) over the runs where both are finite (sample std, ddof 1),
-    with a paired bootstrap standard error (runs resampled together, fixed seed)."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    ok = np.isfinite(a) & np.isfinite(b)
-    a, b = a[ok], b[ok]
-    rng = np.random.default_rng(seed)
-    idx = rng.integers(0, a.size, (n_boot, a.size))
-    boot = np.std(a[idx], axis=1, ddof=1) - np.std(b[idx], axis=1, ddof=1)
-    return float(np.std(a, ddof=1) - np.std(b, ddof=1)), float(np.std(boot, ddof=1))
-
-
-def equivalence(diff, diff_se, margin, z=2.0):
-    """Equivalence (two one-sided tests at the 2-SE level): True iff the interval
-    ``diff ± z * diff_se`` lies inside ``(-margin, margin)``; False iff the interval lies
-    wholly outside it (a difference larger than the margin); ``None`` otherwise."""
-    lo, hi = diff - z * diff_se, diff + z * diff_se
-    if -margin < lo and hi < margin:
-        return True
-    if lo >= margin or hi <= -margin:
-        return False
-    return None
+# the shared estimators (pfrepro.stats) with this chapter's bootstrap size, seed and heavy-tail share
+heavy_tailed = functools.partial(stats.heavy_tailed, share=HEAVY_SHARE)
+median_paired = functools.partial(stats.median_paired, n_boot=BOOT, seed=BOOT_SEED)
+std_difference = functools.partial(stats.std_difference, n_boot=BOOT, seed=BOOT_SEED)
+equivalence = stats.equivalence
 
 
 def convergence_time(err, band):

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..claims import paired_difference
+from ..stats import bootstrap_median, paired_difference
 from ..filters import ExtendedKalmanFilter, UnscentedKalmanFilter
 from ..filters.imm import IMMKalman, IMMParticleFilter, IMMPFOR
 from ..models.jump_markov import JumpMarkovSystem, schedule_from_segments
@@ -486,11 +486,7 @@ def pair_stats(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 500, se
 def median_paired(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 2000, seed: int = SEEDS["checks"]):
     """Median over runs of the per-run RMS position error difference ``a - b``, its bootstrap
     standard error and 95 % percentile interval: ``(median, se, lo, hi)`` (heavy tails cannot swamp it)."""
-    d = per_run_rms(run_, a) - per_run_rms(run_, b)
-    rng = np.random.default_rng(seed)
-    meds = np.median(d[rng.integers(0, d.size, size=(B, d.size))], axis=1)
-    lo, hi = np.percentile(meds, [2.5, 97.5])
-    return float(np.median(d)), float(np.std(meds, ddof=1)), float(lo), float(hi)
+    return bootstrap_median(per_run_rms(run_, a) - per_run_rms(run_, b), B, seed)
 
 
 def robustness(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 2000, seed: int = SEEDS["checks"]) -> dict:

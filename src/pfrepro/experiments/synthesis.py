@@ -39,7 +39,7 @@ every step; Liu-West on ``theta_hou``) whose cost is B, on the same truths: per 
 MSE is interpolated linearly in log cost between the two configurations of the PF's efficient
 frontier that bracket B (:func:`efficient_frontier`, :func:`pf_at_cost`), and the paired
 per-run difference MSE(PF at B) - MSE(method) with its standard error decides better / equal /
-worse. Significance is family-wise (:data:`ALPHA`, Holm's step-down rule, :func:`holm`) over every
+worse. Significance is family-wise (:data:`ALPHA`, Holm's step-down rule, :func:`pfrepro.stats.holm`) over every
 equal-budget comparison of the verdict table on one cost axis; a *tie* is a difference that is not
 significant under that rule (not a proof of equality). Outside the PF's range of costs the nearest
 PF is used and only the conclusion that survives the cost mismatch is kept (no extrapolation:
@@ -67,6 +67,8 @@ import numpy as np
 import pandas as pd
 
 from .. import prose as _prose
+from .. import stats
+from ..stats import holm, p_two_sided
 from ..bounds import pcrb_linear_dynamics
 from ..choices import FIXED, READING, SWEEP, FreeChoice, over
 from ..claims import ClaimsRegistry, ordering_holds
@@ -85,8 +87,8 @@ from . import gpff_zhang2016 as GPFF
 from . import immpfor_zhou2017 as IMM
 
 __all__ = ["PAPER", "RUNS", "SEEDS", "TIMING_REPEATS", "PF_N", "SCHEMES", "SCHEME_N", "METHOD_N", "BOT_REF_N",
-           "TIMING_STEPS", "COUNT_STEPS", "ALPHA", "NOT_RUN", "CHOICES", "RUNS_OF", "BOT_READINGS", "holm",
-           "p_two_sided", "plural", "bench_filter", "bot_ess1", "bot_offset_sds", "dpf_vs_liu_west", "bot_pcrb_x0_known", "paper_table", "BENCHMARKS", "Method", "Benchmark", "BenchResult",
+           "TIMING_STEPS", "COUNT_STEPS", "ALPHA", "NOT_RUN", "CHOICES", "RUNS_OF", "BOT_READINGS",
+           "plural", "bench_filter", "bot_ess1", "bot_offset_sds", "dpf_vs_liu_west", "bot_pcrb_x0_known", "paper_table", "BENCHMARKS", "Method", "Benchmark", "BenchResult",
            "build", "run_benchmark", "run_all", "efficient_frontier", "pf_at_cost", "equal_budget", "distance_table",
            "ranking", "verdicts", "frontier", "record_claims", "benchmarks_table", "bot_pcrb", "methods_table",
            "ranking_compact", "paper_lines", "LW_N", "DPF_N", "PCRB_RUNS", "CLAIM_TEXT", "ALL_BENCHMARKS", "build_imm",
@@ -558,7 +560,7 @@ def run_all(keys=ALL_BENCHMARKS, runs: int = RUNS, *, executor=None,
 
 # --------------------------------------------------------------------------------- analysis
 def _ratio(a, b):
-    return LI.ratio_of_means(a, b)
+    return stats.ratio_of_means(a, b)
 
 
 def _cost(r: BenchResult, name: str, axis: str) -> float:
@@ -606,30 +608,6 @@ def pf_at_cost(r: BenchResult, target: float, axis: str = "count"):
     j = int(np.searchsorted(lc, lt)) - 1
     w = (lt - lc[j]) / (lc[j + 1] - lc[j])
     return (1 - w) * r.err[names[j]].to_numpy() + w * r.err[names[j + 1]].to_numpy(), "inside"
-
-
-def p_two_sided(d: float, se: float) -> float:
-    """Two-sided p-value of a paired mean difference ``d`` with standard error ``se`` (normal z test)."""
-    if not (np.isfinite(d) and np.isfinite(se)):
-        return float("nan")
-    if se <= 0:
-        return 0.0 if d != 0 else 1.0
-    return float(math.erfc(abs(d / se) / math.sqrt(2.0)))
-
-
-def holm(pvalues, alpha: float = ALPHA) -> np.ndarray:
-    """Holm's step-down rule: which of the hypotheses with ``pvalues`` are rejected at family-wise
-    error rate ``alpha``. Sorted p_(1) <= ... <= p_(m); reject while p_(i) <= alpha / (m - i + 1)
-    (i = 1..m), stop at the first that is not. NaN p-values are never rejected (and count in m)."""
-    p = np.asarray(pvalues, float)
-    m = p.size
-    reject = np.zeros(m, bool)
-    order = np.argsort(np.where(np.isnan(p), np.inf, p), kind="stable")
-    for i, idx in enumerate(order):
-        if not (p[idx] <= alpha / (m - i)):
-            break
-        reject[idx] = True
-    return reject
 
 
 def _decide(d, se, where, significant=None):

@@ -134,7 +134,7 @@ def against_today(paper: str, runs: int | None = None, *, executor=None, given: 
     if counted:
         cc = cost_counts(counted, mc.sim.y[:1, :steps], rng_seed=sp["seed"])
         cost.update({k: float(cc.loc[k, "model_evaluations"]) / steps for k in counted})
-    from .synthesis import holm, p_two_sided
+    from ..stats import holm, p_two_sided
 
     (pname,) = list(sp["paper"])
     base = err[pname]

@@ -1,0 +1,128 @@
+"""What a chapter found, said first: the findings block at the top of every paper chapter and
+the book's summary in the introduction, generated from the claims (never typed).
+
+A chapter calls :func:`chapter_findings` right after :meth:`pfrepro.papers.Paper.run`. It glues
+an HTML block -- one line per main claim (its text, the verdict word linked to the verdict rule,
+ours against the printed number, a link to the claim's row in the chapter's claims table), the
+count of every verdict, and the one thing a practitioner should take away -- and saves the same
+summary to ``<claims dir>/findings/<paper>.json``. The introduction is read after the chapters
+(``book/index.md``) and gathers those files with :func:`book_findings_html`.
+"""
+from __future__ import annotations
+
+import html
+import json
+from pathlib import Path
+
+from .claims import Claim, ClaimsRegistry, _pm, claims_dir
+from .prose import verdict_sentence
+
+__all__ = ["findings_html", "chapter_findings", "save_findings", "load_findings", "book_findings_html",
+           "RULE_HREF", "verdict_link"]
+
+#: where the verdict words are defined (the scorecard's section "The rule")
+RULE_HREF = "99_scorecard.html#the-rule"
+
+
+def verdict_link(verdict: str) -> str:
+    """The verdict word as a link to its definition, styled like the claims tables' verdicts."""
+    cls = "pf-verdict pf-verdict-" + verdict.replace(" ", "-")
+    return f'<a class="{cls}" href="{RULE_HREF}"><strong>{html.escape(verdict)}</strong></a>'
+
+
+def _claim_line(paper: str, c: Claim) -> str:
+    from .bookinfo import claim_anchor
+
+    parts = [f"{html.escape(c.text)}: {verdict_link(c.verdict)}"]
+    if c.published_text or c.published is not None:
+        printed = c.published_text or _pm(c.published, c.published_se)
+        if c.reproduced is not None:
+            parts.append(f" (ours {html.escape(_pm(c.reproduced, c.se))} against the printed "
+                         f"{html.escape(str(printed))})")
+    return (f'<li>{"".join(parts)} <a class="pf-claim-link" href="#{claim_anchor(paper, c.claim_id)}">'
+            "see the claim</a></li>")
+
+
+def findings_html(reg: ClaimsRegistry, main_claims, takeaway: str) -> str:
+    """The findings block of a chapter: the main claims with their verdicts, the counts, the takeaway.
+
+    ``main_claims``: claim ids of ``reg``, in the order to show (``KeyError`` for an id ``reg``
+    does not have); ``takeaway``: one sentence (HTML-escaped here).
+    """
+    by_id = {c.claim_id: c for c in reg.claims}
+    missing = [i for i in main_claims if i not in by_id]
+    if missing:
+        raise KeyError(f"main claims not recorded by {reg.paper}: {missing}")
+    items = "".join(_claim_line(reg.paper, by_id[i]) for i in main_claims)
+    counts = verdict_sentence([c.verdict for c in reg.claims], noun="claim")
+    return ('<div class="pf-findings">'
+            f'<ul class="pf-findings-main">{items}</ul>'
+            f'<p class="pf-findings-counts">{html.escape(counts)} '
+            f'(<a href="{RULE_HREF}">what the verdicts mean</a>).</p>'
+            f'<p class="pf-findings-takeaway"><strong>For a practitioner:</strong> {html.escape(takeaway)}</p>'
+            "</div>")
+
+
+def save_findings(reg: ClaimsRegistry, main_claims, takeaway: str, directory: Path | None = None) -> Path:
+    """Write the chapter's findings for the introduction (``<directory>/findings/<paper>.json``)."""
+    d = Path(directory) if directory is not None else claims_dir()
+    (d / "findings").mkdir(parents=True, exist_ok=True)
+    path = d / "findings" / f"{reg.paper}.json"
+    verdicts = [c.verdict for c in reg.claims]
+    by_id = {c.claim_id: c for c in reg.claims}
+    path.write_text(json.dumps({"paper": reg.paper, "counts": {v: verdicts.count(v) for v in dict.fromkeys(verdicts)},
+                                "main": [{"claim_id": i, "text": by_id[i].text, "verdict": by_id[i].verdict}
+                                         for i in main_claims],
+                                "takeaway": takeaway}, indent=1), encoding="utf-8")
+    return path
+
+
+def chapter_findings(name: str, reg: ClaimsRegistry, verdicts_module, results) -> str:
+    """Glue a chapter's findings block under ``name`` (``{glue:}`name```) and save it for the
+    introduction; ``verdicts_module`` is the paper's :mod:`pfrepro.verdicts` module (its
+    ``MAIN_CLAIMS`` and ``takeaway(reg, results)``). Returns the HTML."""
+    from IPython.display import HTML
+    from myst_nb import glue
+
+    takeaway = verdicts_module.takeaway(reg, results)
+    out = findings_html(reg, verdicts_module.MAIN_CLAIMS, takeaway)
+    glue(name, HTML(out), display=False)
+    save_findings(reg, verdicts_module.MAIN_CLAIMS, takeaway)
+    return out
+
+
+def load_findings(directory: Path | None = None) -> dict:
+    """Every saved findings summary, ``{paper: summary}`` in file-name order."""
+    d = (Path(directory) if directory is not None else claims_dir()) / "findings"
+    return {p.stem: json.loads(p.read_text(encoding="utf-8")) for p in sorted(d.glob("*.json"))}
+
+
+def book_findings_html(directory: Path | None = None) -> str:
+    """The introduction's opening: one line per paper chapter of this build (the counts of its
+    verdicts, its takeaway, a link to the chapter), then the synthesis's answer."""
+    from .bookinfo import papers_in_book
+    from .published import PAPERS, REPORT_KEYS
+
+    found = load_findings(directory)
+    chapters = papers_in_book(report=True)   # {key: chapter docname}, book order
+    rows = []
+    for key, chapter in chapters.items():
+        if key in REPORT_KEYS:
+            continue
+        f = found.get(key)
+        href = Path(chapter).stem + ".html"
+        title = html.escape(PAPERS.get(key, key))
+        if f is None:
+            rows.append(f'<li><a href="{href}">{title}</a>: no findings were saved in this build.</li>')
+            continue
+        counts = verdict_sentence(f["counts"], noun="claim")
+        rows.append(f'<li><a href="{href}">{title}</a>. {html.escape(counts)}. '
+                    f'{html.escape(f["takeaway"])}</li>')
+    out = f'<ul class="pf-findings-book">{"".join(rows)}</ul>'
+    for key in REPORT_KEYS:
+        f = found.get(key)
+        if f is not None and key in chapters:
+            out += (f'<p class="pf-findings-takeaway"><strong>Across the papers</strong> '
+                    f'(<a href="{Path(chapters[key]).stem}.html">{html.escape(REPORT_KEYS[key].split(":")[0])}</a>): '
+                    f'{html.escape(f["takeaway"])}</p>')
+    return out
