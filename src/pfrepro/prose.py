@@ -16,7 +16,7 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
-__all__ = ["glue_value", "glue_md", "glue_figure", "plural", "count_is", "verdict_sentence", "VERDICT_ORDER",
+__all__ = ["glue_value", "glue_md", "glue_all", "Md", "glue_figure", "plural", "count_is", "verdict_sentence", "VERDICT_ORDER",
            "MISSING", "use_book_tables", "text_columns"]
 
 #: how a table shows a missing value (NaN), a dash with its meaning on hover, never "NaN"
@@ -176,6 +176,22 @@ def glue_md(name: str, text: str) -> None:
     from myst_nb import glue
 
     glue(name, Markdown(text), display=False)
+
+
+class Md(str):
+    """A generated Markdown phrase: :func:`glue_all` glues it for ``{glue:md}`` (a plain ``str`` is text)."""
+
+
+def glue_all(values) -> None:
+    """Glue every ``name -> value`` of ``values``: :class:`Md` phrases with :func:`glue_md`, the rest
+    with :func:`glue_value`. For the dict a :mod:`pfrepro.verdicts` module's ``prose(reg, results)``
+    returns, so that the numbers and words around a chapter's verdicts are computed (and tested)
+    in the package, and the chapter only glues them."""
+    for name, value in values.items():
+        if isinstance(value, Md):
+            glue_md(name, str(value))
+        else:
+            glue_value(name, value)
 
 
 def glue_figure(name: str, fig) -> None:
