@@ -18,7 +18,7 @@ from .claims import Claim, ClaimsRegistry, _pm, claims_dir
 from .prose import verdict_sentence
 
 __all__ = ["findings_html", "chapter_findings", "save_findings", "load_findings", "book_findings_html",
-           "RULE_HREF", "verdict_link"]
+           "intro_coverage", "RULE_HREF", "verdict_link"]
 
 #: where the verdict words are defined (the scorecard's section "The rule")
 RULE_HREF = "99_scorecard.html#the-rule"
@@ -97,14 +97,18 @@ def load_findings(directory: Path | None = None) -> dict:
     return {p.stem: json.loads(p.read_text(encoding="utf-8")) for p in sorted(d.glob("*.json"))}
 
 
-def book_findings_html(directory: Path | None = None) -> str:
+def book_findings_html(directory: Path | None = None, root: Path | None = None) -> str:
     """The introduction's opening: one line per paper chapter of this build (the counts of its
-    verdicts, its takeaway, a link to the chapter), then the synthesis's answer."""
+    verdicts, its takeaway, a link to the chapter), then the synthesis's answer.
+
+    ``directory``: the claims directory (default :func:`pfrepro.claims.claims_dir`); ``root``: where
+    to look for ``_toc.yml`` (default: upwards from the working directory).
+    """
     from .bookinfo import papers_in_book
     from .published import PAPERS, REPORT_KEYS
 
     found = load_findings(directory)
-    chapters = papers_in_book(report=True)   # {key: chapter docname}, book order
+    chapters = papers_in_book(root, report=True)   # {key: chapter docname}, book order
     rows = []
     for key, chapter in chapters.items():
         if key in REPORT_KEYS:
@@ -126,3 +130,38 @@ def book_findings_html(directory: Path | None = None) -> str:
                     f'(<a href="{Path(chapters[key]).stem}.html">{html.escape(REPORT_KEYS[key].split(":")[0])}</a>): '
                     f'{html.escape(f["takeaway"])}</p>')
     return out
+
+
+_WORDS = dict(enumerate("zero one two three four five six seven eight nine ten".split()))
+
+
+def intro_coverage(covered: dict | None = None) -> dict:
+    """The introduction's words about what this build covers, from ``_toc.yml`` (no count typed).
+
+    ``covered``: ``{paper key: chapter}`` (default :func:`pfrepro.bookinfo.papers_in_book`).
+    Returns ``intro_papers`` ("the five particle-filtering papers" or "three of five ..."),
+    ``intro_years`` ("between 2008 and 2017") and ``intro_missing`` (a :class:`pfrepro.prose.Md`
+    sentence naming the papers without a chapter, or saying there are none).
+    """
+    import re
+
+    from .bookinfo import papers_in_book
+    from .prose import Md
+    from .published import PAPERS
+
+    covered = papers_in_book() if covered is None else covered
+    missing = [k for k in PAPERS if k not in covered]
+    years = [int(y) for k in covered for y in re.findall(r"\((\d{4})\)", PAPERS[k])]
+    n_cov, n_all = len(covered), len(PAPERS)
+    word = lambda n: _WORDS.get(n, str(n))  # noqa: E731
+    return {
+        "intro_papers": (f"the {word(n_all)} particle-filtering papers" if n_cov == n_all else
+                         f"{word(n_cov)} of {word(n_all)} particle-filtering papers"),
+        "intro_years": (f"between {min(years)} and {max(years)}" if len(set(years)) > 1 else
+                        f"in {years[0]}" if years else ""),
+        "intro_missing": Md("Every paper of the project has a chapter in this build." if not missing else
+                            f"{word(len(missing)).capitalize()} of the {word(n_all)} papers "
+                            f"{'is' if len(missing) == 1 else 'are'} not covered in this build: "
+                            + "; ".join(f"*{PAPERS[k]}*" for k in missing)
+                            + ". They will get chapters of the same form; until then they appear in no table of this book."),
+    }
