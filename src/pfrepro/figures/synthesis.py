@@ -1,17 +1,22 @@
-"""Figures of the synthesis chapter (``book/70_synthesis.md``): accuracy-cost frontiers.
+"""Figures and tables of the synthesis chapter (``book/70_synthesis.md``): accuracy-cost frontiers,
+the rankings, the verdict tables as the chapter shows them.
 
-The experiments are :mod:`pfrepro.experiments.synthesis`; this module only draws them.
+The experiments are :mod:`pfrepro.experiments.synthesis`, the decisions
+:mod:`pfrepro.verdicts.synthesis`; this module only draws and formats them.
 """
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 
 from ..experiments import synthesis as S
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
+from ..verdicts import synthesis as V
 from . import new_figure
 
-__all__ = ["frontier_figure", "STYLE"]
+__all__ = ["frontier_figure", "STYLE", "benchmarks_table", "ess_table", "ranking_compact", "paper_table",
+           "today_table"]
 
 #: marker and colour per method family (baselines grey/black, the papers' methods in their colour
 #: of the book's palette, :data:`pfrepro.plotting.METHOD_COLORS`)
@@ -59,7 +64,7 @@ def frontier_figure(results: dict, axis: str = "count"):
     handles = {}
     for ax, (key, r) in zip(axes.ravel(), results.items()):
         fr = S.frontier(r)
-        base = fr.loc[S.efficient_frontier(r, axis)]
+        base = fr.loc[V.efficient_frontier(r, axis)]
         ax.plot(base[col], base["MSE / opt."], "-", color="black", lw=0.9, zorder=1)
         for name, row in fr.iterrows():
             mk, c = STYLE.get(row["family"], ("o", SERIES_COLORS[5]))
@@ -85,3 +90,64 @@ def frontier_figure(results: dict, axis: str = "count"):
     legend_rows = int(np.ceil(len(handles) / ncol_leg))
     fig.tight_layout(rect=(0, min(0.45, (0.17 * legend_rows + 0.1) / height), 1, 1))
     return fig
+
+
+def _short(paper: str) -> str:
+    """"Zhang et al. 2016" for a paper key (first author and year of :data:`pfrepro.published.PAPERS`)."""
+    from ..published import PAPERS
+
+    return PAPERS[paper].split(",")[0] + " " + PAPERS[paper].split("(")[1][:4]
+
+
+def benchmarks_table(results) -> pd.DataFrame:
+    """:func:`pfrepro.experiments.synthesis.benchmarks_table` with the paper as author and year."""
+    bt = S.benchmarks_table(results)
+    bt["paper"] = [_short(p) for p in bt["paper"]]
+    return bt
+
+
+def ess_table(results) -> pd.DataFrame:
+    """The bootstrap PF's effective sample size at the first measurement under both bearings-only
+    readings (:func:`pfrepro.experiments.synthesis.bot_ess1`), formatted for the chapter."""
+    ess = pd.concat({"offset (as printed)": S.bot_ess1(results["bot"]),
+                     "centred (m0 = x0)": S.bot_ess1(results["bot_centred"])}, names=["prior", "filter"])
+    ess["N"] = ess["N"].astype(int)
+    ess["runs with ESS < 1 % of N"] = (100 * ess["runs with ESS < 1 % of N"]).map(lambda v: f"{v:.0f} %")
+    return ess
+
+
+def ranking_compact(r) -> pd.DataFrame:
+    """:func:`pfrepro.verdicts.synthesis.ranking` with few, short columns for the text column."""
+    rk = V.ranking(r)
+    return pd.DataFrame({"rank": rk["rank"].map(lambda v: "–" if not np.isfinite(v) else f"{v:.0f}"),
+                         "MSE / ref.": [f"{m:.3g} ± {s:.2g}" if np.isfinite(m) else "–"
+                                        for m, s in zip(rk["MSE / opt."], rk["SE"])],
+                         "evals/step": rk["evals/step"].map(lambda v: f"{v:.0f}"),
+                         "tie / note": rk["tie"]}, index=rk.index)
+
+
+def paper_table(results) -> pd.DataFrame:
+    """The verdicts per paper's method as a table (one row per method and benchmark; the BOT
+    readings side by side): distance to the reference, equal-count and equal-time words, z."""
+    vt = V.verdict_table(results)
+    sub = vt[vt["paper"] != ""]
+    rows = []
+    for _, row in sub.iterrows():
+        fin = np.isfinite(row["MSE / opt."])
+        rows.append({"paper": _short(row["paper"]), "benchmark": row["benchmark"], "method": row["method"],
+                     "MSE / ref.": f"{row['MSE / opt.']:.3g} ± {row['SE']:.2g}" if fin else "diverged",
+                     "by count": row["by count"],
+                     "z (count)": f"{row['z count']:+.1f}" if fin and np.isfinite(row["z count"]) else "–",
+                     "by time": row["by time"]})
+    return pd.DataFrame(rows)
+
+
+def today_table(results) -> pd.DataFrame:
+    """Today's methods against the baseline at equal budget (their own Holm family,
+    ``verdict_table(results, today=True)``): distance to the reference, count, words, z."""
+    tv = V.verdict_table(results, today=True)
+    tv["MSE / ref."] = [f"{m:.3g} ± {s_:.2g}" if np.isfinite(m) else "diverged"
+                        for m, s_ in zip(tv["MSE / opt."], tv["SE"])]
+    tv["evals/step"] = [f"{S._cost(results[b], m, 'count'):.0f}" for b, m in zip(tv["benchmark"], tv["method"])]
+    tv["z (count)"] = [f"{z:+.1f}" if np.isfinite(z) else "–" for z in tv["z count"]]
+    return tv[["benchmark", "method", "MSE / ref.", "evals/step", "by count", "z (count)", "by time"]]
