@@ -1,5 +1,6 @@
-"""Synthesis chapter (issue 13): equal-budget interpolation, decisions, ranking with ties, claims."""
-import math
+"""Synthesis experiments (pfrepro.experiments.synthesis): the benchmarks reuse the chapters' builders,
+runs are independent of the batch and the pool, the manoeuvring target reuses the IMM chapter's record,
+run_all's seeds travel as arguments. The verdicts: tests/test_verdicts_synthesis.py."""
 
 import numpy as np
 import pandas as pd
@@ -9,117 +10,8 @@ from pfrepro.claims import ClaimsRegistry
 from pfrepro.experiments import cmspf_ning2011 as CMS
 from pfrepro.experiments import gpff_zhang2016 as GPFF
 from pfrepro.experiments import synthesis as S
+from pfrepro.verdicts import synthesis as V
 from pfrepro.filters import ExtendedKalmanFilter, GaussianParticleFlowFilter
-
-
-def fake(err: dict, cost: dict, seconds: dict | None = None, ref="ref", families=None, papers=None, bound=None):
-    """A BenchResult from given per-run errors and costs (no filtering)."""
-    families = families or {}
-    papers = papers or {}
-    methods = [S.Method(n, families.get(n, "PF" if n.startswith("PF") else n), None, papers.get(n))
-               for n in err if n != ref]
-    bench = S.Benchmark("fake", "fake", "none", None, 10, methods, S.Method(ref, "reference", None, bound=bound),
-                        "test")
-    counts = pd.DataFrame({"model evals / step": pd.Series(cost, dtype=float), "likelihoods / step": 0.0})
-    secs = pd.Series(seconds if seconds is not None else {n: c * 1e-6 for n, c in cost.items()}, dtype=float)
-    return S.BenchResult(bench, pd.DataFrame(err), counts, secs)
-
-
-RUNS = 50
-RNG = np.random.default_rng(0)
-BASE = 1.0 + 0.1 * RNG.random(RUNS)
-
-
-def test_pf_at_cost_interpolates_per_run_in_log_cost():
-    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "M": 3 * BASE, "ref": BASE}
-    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "M": math.sqrt(20 * 200)})
-    v, where = S.pf_at_cost(r, math.sqrt(20 * 200))
-    assert where == "inside"
-    np.testing.assert_allclose(v, 3 * BASE)          # halfway in log cost: mean of 4 and 2
-    v, where = S.pf_at_cost(r, 20.0)
-    assert where == "inside"
-    np.testing.assert_allclose(v, 4 * BASE)
-    # linear in cost would give a different number: the test fails for the wrong formula
-    w_lin = (math.sqrt(4000) - 20) / 180
-    assert not np.allclose(v.mean(), (1 - w_lin) * 4 * BASE.mean() + w_lin * 2 * BASE.mean())
-
-
-def test_equal_budget_sign_units_and_tie():
-    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "good": 1.5 * BASE, "bad": 3.5 * BASE,
-           "same": 3 * BASE + 1e-3 * RNG.standard_normal(RUNS), "ref": BASE}
-    cost = {"PF(10)": 20, "PF(100)": 200, "good": math.sqrt(4000), "bad": math.sqrt(4000), "same": math.sqrt(4000)}
-    r = fake(err, cost)
-    g = S.equal_budget(r, "good")
-    assert g["holds"] is True
-    assert g["d"] == pytest.approx((3 - 1.5) * BASE.mean() / BASE.mean())   # in units of the optimum's MSE
-    assert S.equal_budget(r, "bad")["holds"] is False
-    assert S.equal_budget(r, "same")["holds"] is None
-    assert S._word(S.equal_budget(r, "same")) == "equal (tie)"
-
-
-def test_off_frontier_keeps_only_what_survives_the_cost_mismatch():
-    # frontier strongly improving with cost: not flat at either end
-    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "cheap_bad": 5 * BASE, "cheap_good": 1.5 * BASE,
-           "dear_good": 1.0 * BASE, "dear_bad": 3 * BASE, "ref": BASE}
-    cost = {"PF(10)": 20, "PF(100)": 200, "cheap_bad": 4, "cheap_good": 4, "dear_good": 2000, "dear_bad": 2000}
-    r = fake(err, cost)
-    assert S.equal_budget(r, "cheap_good")["holds"] is True      # beats a dearer PF: better at equal cost too
-    assert S.equal_budget(r, "cheap_bad")["holds"] is None       # loses to a dearer PF: undecided
-    assert S._word(S.equal_budget(r, "cheap_bad")) == "undecided (off frontier)"
-    assert S.equal_budget(r, "dear_bad")["holds"] is False       # loses to a cheaper PF: worse
-    assert S.equal_budget(r, "dear_good")["holds"] is None       # beats a cheaper PF: undecided
-
-
-def test_no_extrapolation_beyond_a_flat_looking_frontier_end():
-    """The old "flat end" rule let the dearest PF stand in up to 10x its cost when its last two points
-    did not differ; on BOT the PF kept improving beyond. Now a dearer method that beats it is undecided."""
-    noise = 0.01 * RNG.standard_normal(RUNS)
-    err = {"PF(100)": 2 * BASE, "PF(300)": 2 * BASE + noise, "dear_good": BASE, "ref": BASE}
-    r = fake(err, {"PF(100)": 200, "PF(300)": 600, "dear_good": 600 * 1.1}, families={"dear_good": "G"})
-    e = S.equal_budget(r, "dear_good")
-    assert e["where"] == "above" and e["holds"] is None
-    assert S._word(e) == "undecided (off frontier)"
-
-
-def test_ranking_is_family_wise_and_symmetric():
-    # a < b < c, each adjacent pair within noise, but a and c clearly apart: c is beaten by a only
-    n = 400
-    rng = np.random.default_rng(1)
-    base = 1 + rng.random(n)
-    noise = 0.4 * rng.standard_normal(n)
-    e = {"a": base, "b": base + 0.02 + noise - noise.mean(), "c": base + 0.04, "ref": base}   # z(b - a) = 1
-    r = fake(e, {"a": 1, "b": 1, "c": 1}, families={"a": "A", "b": "B", "c": "C"})
-    rk = S.ranking(r)
-    assert list(rk.index) == ["a", "b", "c"]
-    assert rk.loc["a", "rank"] == 1 and rk.loc["b", "rank"] == 1 and rk.loc["b", "tie"] == "= a"
-    assert rk.loc["c", "rank"] == 2 and rk.loc["c", "tie"] == "= b"     # beaten by a (only)
-    # a difference at z = 2.2 alone is significant; among many pairs Holm no longer calls it so
-    dd = 0.2 * rng.standard_normal(n)
-    dd = dd - dd.mean() + 2.2 * dd.std(ddof=1) / np.sqrt(n)
-    d = {"x": base, "y": base + dd}
-    small = S.ranking(fake({**d, "ref": base}, {"x": 1, "y": 1}, families={"x": "X", "y": "Y"}))
-    assert small.loc["y", "rank"] == 2
-    zs = {}
-    for i in range(6):   # six more methods, noisy and centred between x and y: no pair of them is significant
-        z = 3.0 * rng.standard_normal(n)
-        zs[f"z{i}"] = base + dd.mean() / 2 + z - z.mean()
-    many = {**d, **zs, "ref": base}
-    big = S.ranking(fake(many, {k: 1 for k in many if k != "ref"}, families={k: k for k in many}))
-    assert (big["rank"] == 1).all() and "x" in big.loc["y", "tie"]
-
-
-def test_ranking_lists_diverged_last():
-    e = {"a": BASE, "x": np.r_[np.nan, BASE[1:]], "ref": BASE}
-    rk = S.ranking(fake(e, {"a": 1, "x": 1}, families={"a": "A", "x": "X"}))
-    assert list(rk.index) == ["a", "x"] and np.isnan(rk.loc["x", "rank"])
-    assert "diverged (1 run)" in rk.loc["x", "tie"]
-
-
-def test_distance_to_a_bound_reference():
-    e = {"a": 3 * BASE, "ref": np.full(RUNS, 0.5)}
-    dt = S.distance_table(fake(e, {"a": 1}, families={"a": "A"}, bound=0.5))
-    assert dt.loc["a", "MSE / opt."] == pytest.approx(6 * BASE.mean())
-    assert dt.loc["a", "SE"] == pytest.approx(3 * BASE.std(ddof=1) / 0.5 / math.sqrt(RUNS))
 
 
 def test_benchmarks_reuse_the_chapters_builders():
@@ -151,22 +43,6 @@ def test_run_is_independent_of_the_batch_and_counts_are_per_step():
     assert np.all(r4.err["Grid (exact)"] <= r4.err["PF(10)"] * 5)   # sanity: the exact filter is not off
 
 
-def test_record_claims_readings():
-    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "M": 1.2 * BASE, "ref": BASE}
-    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "M": 60}, seconds={"PF(10)": 1e-5, "PF(100)": 2e-5, "M": 1e-3},
-             families={"M": "CMS-PF"}, papers={"M": "cmspf_ning2011"})
-    reg = ClaimsRegistry("synthesis")
-    rows = S.record_claims(reg, {"fake": r})
-    assert len(rows) == 1
-    c = reg.claims[0]
-    assert c.claim_id == "fake-m"
-    # better by count (inside the frontier) -> reproduced; by time it is far above the PF's range and
-    # the frontier is not flat (undecided), which is context in the note, not part of the verdict
-    assert c.basis == "count" and not c.readings
-    assert c.verdict == "reproduced"
-    assert "at equal count" in c.note and "time" not in c.note   # claims are identical between builds
-
-
 def test_synthesis_is_a_claim_source_but_not_a_paper(tmp_path):
     from pfrepro import bookinfo, published
 
@@ -184,20 +60,12 @@ def test_synthesis_is_a_claim_source_but_not_a_paper(tmp_path):
                                                                        "synthesis": "book/70_s"}
 
 
-def test_efficient_frontier_drops_dominated_points():
-    err = {"PF(10)": 4 * BASE, "PF(30)": 3 * BASE, "PF(100)": 2 * BASE, "ref": BASE}
-    r = fake(err, {"PF(10)": 20, "PF(30)": 60, "PF(100)": 200},
-             seconds={"PF(10)": 2e-5, "PF(30)": 1e-5, "PF(100)": 3e-5})
-    assert S.efficient_frontier(r, "count") == ["PF(10)", "PF(30)", "PF(100)"]
-    assert S.efficient_frontier(r, "time") == ["PF(30)", "PF(100)"]   # PF(10): slower and worse than PF(30)
-
-
 def test_run_all_in_a_pool_equals_serial():
     from pfrepro.montecarlo import process_pool
 
-    serial = S.run_all(("ung_ning",), runs=3, time_it=False)
+    serial = S.run_benchmarks(("ung_ning",), runs=3, time_it=False)
     with process_pool(2) as pool:
-        par = S.run_all(("ung_ning",), runs=3, executor=pool, time_it=False)
+        par = S.run_benchmarks(("ung_ning",), runs=3, executor=pool, time_it=False)
     pd.testing.assert_frame_equal(serial["ung_ning"].err, par["ung_ning"].err)
     pd.testing.assert_frame_equal(serial["ung_ning"].counts, par["ung_ning"].counts)
 
@@ -222,76 +90,36 @@ def test_imm_benchmark_from_the_imm_chapters_record(tmp_path):
     assert r.counts.loc["IMM-EKF", "model evals / step"] == 3 * 4                # f, F, h, H per mode
     assert r.ref == f"IMMPF({IMM.SCENARIO['N_fig5']})"
     np.testing.assert_array_equal(r.err[f"IMMPF({n})"], rec["mse/IMMPF(500)"])
-    reg = ClaimsRegistry("synthesis")
-    rows = S.record_claims(reg, {"imm_zhou": r})
-    assert list(rows["method"]) == [f"IMMPFOR({n})"]
+    reg = V.record_claims(ClaimsRegistry("synthesis"), {"imm_zhou": r})
+    assert [c.claim_id for c in reg.claims] == [f"imm_zhou-immpfor-{n}"]
     assert reg.claims[0].basis == "count" and reg.claims[0].verdict in ("reproduced", "not reproduced",
                                                                           "inconclusive")
 
 
-def test_bot_claim_is_decided_under_both_prior_readings():
-    """A BOT claim holds only if it holds with the printed (offset) prior and with the centred one."""
-    from pfrepro.choices import as_choice_map
-    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "G": 1.2 * BASE, "ref": BASE}
-    cost = {"PF(10)": 20, "PF(100)": 200, "G": 60}
-    off = fake(err, cost, families={"G": "GPFF"}, papers={"G": "gpff_zhang2016"})
-    cen = fake({**err, "G": 5 * BASE}, cost, families={"G": "GPFF"}, papers={"G": "gpff_zhang2016"})
-    reg = ClaimsRegistry("synthesis", choices=S.CHOICES)
-    rows = S.record_claims(reg, {"bot": off, "bot_centred": cen})
-    assert list(rows["benchmark"]) == ["bot"]                       # the centred row is a reading, not a claim
-    c = reg.claims[0]
-    assert c.readings == {"bot_prior=offset": True, "bot_prior=centred": False} and c.depends_on == ["bot_prior"]
-    assert c.verdict == "inconclusive" and "centred prior" in c.note
-    assert as_choice_map(S.CHOICES)["bot_prior"].status == "reading"
+def test_run_all_seeds_travel_as_arguments():
+    """Two base seeds give other truths (every number moves) and the same claims; SEEDS is left alone."""
+    seeds_before = dict(S.SEEDS)
+    keys = ("ung_li", "ung_ning")
+    a = S.run_all(runs=2, seeds=1, keys=keys, time_it=False)
+    b = S.run_all(runs=2, seeds=2, keys=keys, time_it=False)
+    assert S.SEEDS == seeds_before
+    assert list(a) == list(keys) and a.settings["seeds"]["ung_zhang"] == 1 and b.settings["seeds"]["ung_zhang"] == 2
+    assert a.settings["seeds"]["ung_li"] == 2 and a["ung_li"].bench.seed == 2
+    for k in keys:
+        assert a[k].err.shape == b[k].err.shape == (2, a[k].err.shape[1])
+        assert not np.any(np.isclose(a[k].err.to_numpy(), b[k].err.to_numpy(), rtol=1e-12, atol=0))
+    ra = V.record_claims(ClaimsRegistry(S.PAPER, choices=S.CHOICES), a)
+    rb = V.record_claims(ClaimsRegistry(S.PAPER, choices=S.CHOICES), b)
+    assert [c.claim_id for c in ra.claims] == [c.claim_id for c in rb.claims] and len(ra.claims) == 6
+    # a benchmark run alone with seed s is the same benchmark inside run_all with that seed
+    one = S.run_benchmark(S.build("ung_ning", a.settings["seeds"]), runs=2, time_it=False)
+    pd.testing.assert_frame_equal(one.err, a["ung_ning"].err)
+    with pytest.raises(ValueError, match="unknown benchmark"):
+        S.run_all(runs=2, keys=("nope",))
 
 
-def test_plural():
-    assert S.plural(1, "claim") == "1 claim" and S.plural(3, "claim") == "3 claims"
-    assert S.plural(1, "is", "are") == "1 is" and S.plural(0, "is", "are") == "0 are"
-
-
-# -- today's methods (issue 22) --------------------------------------------------------------------
-def test_todays_methods_are_their_own_family_and_leave_the_papers_verdicts_alone():
-    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "M": 1.2 * BASE, "T1": 1.1 * BASE, "ref": BASE}
-    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "M": 60, "T1": 60}, papers={"M": "gpff_zhang2016"})
-    before = S.verdicts({"fake": fake({k: v for k, v in err.items() if k != "T1"},
-                                      {"PF(10)": 20, "PF(100)": 200, "M": 60}, papers={"M": "gpff_zhang2016"})})
-    r.bench.methods[[m.name for m in r.bench.methods].index("T1")].today = True
-    papers, today = S.verdicts({"fake": r}), S.verdicts({"fake": r}, today=True)
-    assert list(papers["method"]) == ["M"] and list(today["method"]) == ["T1"]
-    pd.testing.assert_frame_equal(papers, before)
-
-
-def test_what_to_use_is_the_cheapest_of_rank_one():
-    rng = np.random.default_rng(5)
-    noise = lambda s: s * rng.standard_normal(RUNS)          # noqa: E731
-    err = {"PF(10)": 3 * BASE, "PF(100)": BASE + noise(1e-3), "cheap": BASE + noise(1e-3),
-           "bad": 2 * BASE, "ref": BASE}
-    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "cheap": 50, "bad": 5}, families={"cheap": "C", "bad": "B"},
-             papers={"bad": "gpff_zhang2016"})
-    r.bench.methods[[m.name for m in r.bench.methods].index("cheap")].today = True
-    w = S.what_to_use({"ung_zhang": r})
-    row = w.iloc[0]
-    assert row["use"] == "cheap" and "PF(100)" in row["also rank 1"]
-    assert row["best paper's method"].startswith("bad (rank") and row["best of today's"].startswith("cheap (rank 1")
-
-
-def test_bot_reference_convergence_rule():
-    """Estimates at N with independent errors of variance c/N: the rule estimates the largest N's excess
-    c/N_max from d² at the middle N and checks the 1/N law's ratio."""
-    rng = np.random.default_rng(3)
-    runs, T = 40, 200
-    truth = rng.standard_normal((runs, T, 4))
-    post = truth + 0.5 * rng.standard_normal((runs, T, 4))   # the posterior mean: MSE 0.25
-    c = 2.0
-    x = {N: post + math.sqrt(c / N) * rng.standard_normal((runs, T, 4)) for N in (500, 2000, 8000)}
-    err = {"PF(100)": np.full(runs, 1.0), "EKF": np.full(runs, 0.5), "PCRB": np.full(runs, 0.1)}
-    r = fake(err, {"PF(100)": 200, "EKF": 4}, ref="PCRB", families={"EKF": "EKF"})
-    out = S.bot_reference_tables({"x_true": truth, "x": x}, r)
-    assert out["excess"] == pytest.approx(c / 8000, rel=0.05)
-    assert out["law_ratio"][0] == pytest.approx(out["law_ratio"][1], rel=0.05)
-    assert out["converged"] and out["excess_share"] < 0.01
-    assert out["methods"].loc["EKF", "MSE / ref."] == pytest.approx(0.5 / (0.25 + c / 8000), rel=0.02)
-    # a filter still far from the posterior mean is not taken as the reference
-    x_bad = {N: post + math.sqrt(400 / N) * rng.standard_normal((runs, T, 4)) for N in (500, 2000, 8000)}
-    assert not S.bot_reference_tables({"x_true": truth, "x": x_bad}, r)["converged"]
+def test_run_all_runs_replaces_every_count():
+    r = S.run_all(runs=1, keys=("ung_ning",), time_it=False)
+    assert r.settings["runs"] == 1 and r.settings["runs_of"] == {"ung_ning": 1}
+    assert r.flow_ref is None and np.isnan(r.pcrb_x0_known)     # the bearings-only runs only with "bot"
+    assert dict(r) == r.benchmarks and len(r) == 1

@@ -498,7 +498,9 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
     if not eq:
         first = "No paper's method was compared with the plain baseline at equal cost"
     elif not better:
-        rest = (f"all {n} comparisons find the paper's method worse" if worse == n else
+        rest = ("the one comparison finds the paper's method worse" if worse == n == 1 else
+                f"all {n} comparisons find the paper's method worse" if worse == n else
+                "the one comparison does not decide" if n == 1 else
                 f"none of the {n} comparisons decides either way" if worse == 0 else
                 f"{worse} of the {n} comparisons find the paper's method worse, the other {n - worse} do not decide")
         first = f"No method proposed in the papers is better than {base} at the same number of model evaluations: {rest}"

@@ -1,0 +1,452 @@
+"""Verdicts of the synthesis (pfrepro.verdicts.synthesis) on small fixtures with known outcomes: the
+equal-budget rule (interpolation, off-frontier, Holm family), rankings with ties, the claims (readings,
+ties, diverged runs, Li 2012's ordering), what to use, the takeaway and the chapter's prose."""
+import copy
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from pfrepro.claims import ClaimsRegistry
+from pfrepro.experiments import synthesis as S
+from pfrepro.prose import Md
+from pfrepro.verdicts import synthesis as V
+
+CHAPTER = Path(__file__).resolve().parents[1] / "book" / "70_synthesis.md"
+
+
+def fake(err: dict, cost: dict, seconds: dict | None = None, ref="ref", families=None, papers=None, bound=None):
+    """A BenchResult from given per-run errors and costs (no filtering)."""
+    families = families or {}
+    papers = papers or {}
+    methods = [S.Method(n, families.get(n, "PF" if n.startswith("PF") else n), None, papers.get(n))
+               for n in err if n != ref]
+    bench = S.Benchmark("fake", "fake", "none", None, 10, methods, S.Method(ref, "reference", None, bound=bound),
+                        "test")
+    counts = pd.DataFrame({"model evals / step": pd.Series(cost, dtype=float), "likelihoods / step": 0.0})
+    secs = pd.Series(seconds if seconds is not None else {n: c * 1e-6 for n, c in cost.items()}, dtype=float)
+    return S.BenchResult(bench, pd.DataFrame(err), counts, secs)
+
+
+RUNS = 50
+RNG = np.random.default_rng(0)
+BASE = 1.0 + 0.1 * RNG.random(RUNS)
+
+
+def test_pf_at_cost_interpolates_per_run_in_log_cost():
+    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "M": 3 * BASE, "ref": BASE}
+    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "M": math.sqrt(20 * 200)})
+    v, where = V.pf_at_cost(r, math.sqrt(20 * 200))
+    assert where == "inside"
+    np.testing.assert_allclose(v, 3 * BASE)          # halfway in log cost: mean of 4 and 2
+    v, where = V.pf_at_cost(r, 20.0)
+    assert where == "inside"
+    np.testing.assert_allclose(v, 4 * BASE)
+    # linear in cost would give a different number: the test fails for the wrong formula
+    w_lin = (math.sqrt(4000) - 20) / 180
+    assert not np.allclose(v.mean(), (1 - w_lin) * 4 * BASE.mean() + w_lin * 2 * BASE.mean())
+
+
+def test_equal_budget_sign_units_and_tie():
+    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "good": 1.5 * BASE, "bad": 3.5 * BASE,
+           "same": 3 * BASE + 1e-3 * RNG.standard_normal(RUNS), "ref": BASE}
+    cost = {"PF(10)": 20, "PF(100)": 200, "good": math.sqrt(4000), "bad": math.sqrt(4000), "same": math.sqrt(4000)}
+    r = fake(err, cost)
+    g = V.equal_budget(r, "good")
+    assert g["holds"] is True
+    assert g["d"] == pytest.approx((3 - 1.5) * BASE.mean() / BASE.mean())   # in units of the optimum's MSE
+    assert V.equal_budget(r, "bad")["holds"] is False
+    assert V.equal_budget(r, "same")["holds"] is None
+    assert V._word(V.equal_budget(r, "same")) == "equal (tie)"
+
+
+def test_off_frontier_keeps_only_what_survives_the_cost_mismatch():
+    # frontier strongly improving with cost: not flat at either end
+    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "cheap_bad": 5 * BASE, "cheap_good": 1.5 * BASE,
+           "dear_good": 1.0 * BASE, "dear_bad": 3 * BASE, "ref": BASE}
+    cost = {"PF(10)": 20, "PF(100)": 200, "cheap_bad": 4, "cheap_good": 4, "dear_good": 2000, "dear_bad": 2000}
+    r = fake(err, cost)
+    assert V.equal_budget(r, "cheap_good")["holds"] is True      # beats a dearer PF: better at equal cost too
+    assert V.equal_budget(r, "cheap_bad")["holds"] is None       # loses to a dearer PF: undecided
+    assert V._word(V.equal_budget(r, "cheap_bad")) == "undecided (off frontier)"
+    assert V.equal_budget(r, "dear_bad")["holds"] is False       # loses to a cheaper PF: worse
+    assert V.equal_budget(r, "dear_good")["holds"] is None       # beats a cheaper PF: undecided
+
+
+def test_no_extrapolation_beyond_a_flat_looking_frontier_end():
+    """The old "flat end" rule let the dearest PF stand in up to 10x its cost when its last two points
+    did not differ; on BOT the PF kept improving beyond. Now a dearer method that beats it is undecided."""
+    noise = 0.01 * RNG.standard_normal(RUNS)
+    err = {"PF(100)": 2 * BASE, "PF(300)": 2 * BASE + noise, "dear_good": BASE, "ref": BASE}
+    r = fake(err, {"PF(100)": 200, "PF(300)": 600, "dear_good": 600 * 1.1}, families={"dear_good": "G"})
+    e = V.equal_budget(r, "dear_good")
+    assert e["where"] == "above" and e["holds"] is None
+    assert V._word(e) == "undecided (off frontier)"
+
+
+def test_ranking_is_family_wise_and_symmetric():
+    # a < b < c, each adjacent pair within noise, but a and c clearly apart: c is beaten by a only
+    n = 400
+    rng = np.random.default_rng(1)
+    base = 1 + rng.random(n)
+    noise = 0.4 * rng.standard_normal(n)
+    e = {"a": base, "b": base + 0.02 + noise - noise.mean(), "c": base + 0.04, "ref": base}   # z(b - a) = 1
+    r = fake(e, {"a": 1, "b": 1, "c": 1}, families={"a": "A", "b": "B", "c": "C"})
+    rk = V.ranking(r)
+    assert list(rk.index) == ["a", "b", "c"]
+    assert rk.loc["a", "rank"] == 1 and rk.loc["b", "rank"] == 1 and rk.loc["b", "tie"] == "= a"
+    assert rk.loc["c", "rank"] == 2 and rk.loc["c", "tie"] == "= b"     # beaten by a (only)
+    # a difference at z = 2.2 alone is significant; among many pairs Holm no longer calls it so
+    dd = 0.2 * rng.standard_normal(n)
+    dd = dd - dd.mean() + 2.2 * dd.std(ddof=1) / np.sqrt(n)
+    d = {"x": base, "y": base + dd}
+    small = V.ranking(fake({**d, "ref": base}, {"x": 1, "y": 1}, families={"x": "X", "y": "Y"}))
+    assert small.loc["y", "rank"] == 2
+    zs = {}
+    for i in range(6):   # six more methods, noisy and centred between x and y: no pair of them is significant
+        z = 3.0 * rng.standard_normal(n)
+        zs[f"z{i}"] = base + dd.mean() / 2 + z - z.mean()
+    many = {**d, **zs, "ref": base}
+    big = V.ranking(fake(many, {k: 1 for k in many if k != "ref"}, families={k: k for k in many}))
+    assert (big["rank"] == 1).all() and "x" in big.loc["y", "tie"]
+
+
+def test_ranking_lists_diverged_last():
+    e = {"a": BASE, "x": np.r_[np.nan, BASE[1:]], "ref": BASE}
+    rk = V.ranking(fake(e, {"a": 1, "x": 1}, families={"a": "A", "x": "X"}))
+    assert list(rk.index) == ["a", "x"] and np.isnan(rk.loc["x", "rank"])
+    assert "diverged (1 run)" in rk.loc["x", "tie"]
+
+
+def test_distance_to_a_bound_reference():
+    e = {"a": 3 * BASE, "ref": np.full(RUNS, 0.5)}
+    dt = S.distance_table(fake(e, {"a": 1}, families={"a": "A"}, bound=0.5))
+    assert dt.loc["a", "MSE / opt."] == pytest.approx(6 * BASE.mean())
+    assert dt.loc["a", "SE"] == pytest.approx(3 * BASE.std(ddof=1) / 0.5 / math.sqrt(RUNS))
+
+
+def test_efficient_frontier_drops_dominated_points():
+    err = {"PF(10)": 4 * BASE, "PF(30)": 3 * BASE, "PF(100)": 2 * BASE, "ref": BASE}
+    r = fake(err, {"PF(10)": 20, "PF(30)": 60, "PF(100)": 200},
+             seconds={"PF(10)": 2e-5, "PF(30)": 1e-5, "PF(100)": 3e-5})
+    assert V.efficient_frontier(r, "count") == ["PF(10)", "PF(30)", "PF(100)"]
+    assert V.efficient_frontier(r, "time") == ["PF(30)", "PF(100)"]   # PF(10): slower and worse than PF(30)
+
+
+def test_record_claims_readings():
+    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "M": 1.2 * BASE, "ref": BASE}
+    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "M": 60}, seconds={"PF(10)": 1e-5, "PF(100)": 2e-5, "M": 1e-3},
+             families={"M": "CMS-PF"}, papers={"M": "cmspf_ning2011"})
+    reg = ClaimsRegistry("synthesis")
+    assert V.record_claims(reg, {"fake": r}) is reg
+    assert len(reg.claims) == 1
+    c = reg.claims[0]
+    assert c.claim_id == "fake-m"
+    # better by count (inside the frontier) -> reproduced; by time it is far above the PF's range and
+    # the frontier is not flat (undecided), which is context in the note, not part of the verdict
+    assert c.basis == "count" and not c.readings
+    assert c.verdict == "reproduced"
+    assert "at equal count" in c.note and "time" not in c.note   # claims are identical between builds
+
+
+def test_bot_claim_is_decided_under_both_prior_readings():
+    """A BOT claim holds only if it holds with the printed (offset) prior and with the centred one."""
+    from pfrepro.choices import as_choice_map
+    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "G": 1.2 * BASE, "ref": BASE}
+    cost = {"PF(10)": 20, "PF(100)": 200, "G": 60}
+    off = fake(err, cost, families={"G": "GPFF"}, papers={"G": "gpff_zhang2016"})
+    cen = fake({**err, "G": 5 * BASE}, cost, families={"G": "GPFF"}, papers={"G": "gpff_zhang2016"})
+    reg = V.record_claims(ClaimsRegistry("synthesis", choices=S.CHOICES), {"bot": off, "bot_centred": cen})
+    assert [c.claim_id for c in reg.claims] == ["bot-g"]            # the centred row is a reading, not a claim
+    c = reg.claims[0]
+    assert c.readings == {"bot_prior=offset": True, "bot_prior=centred": False} and c.depends_on == ["bot_prior"]
+    assert c.verdict == "inconclusive" and f"centred prior (m0 = x0, {RUNS} runs)" in c.note
+    assert as_choice_map(S.CHOICES)["bot_prior"].status == "reading"
+
+
+def test_todays_methods_are_their_own_family_and_leave_the_papers_verdicts_alone():
+    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "M": 1.2 * BASE, "T1": 1.1 * BASE, "ref": BASE}
+    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "M": 60, "T1": 60}, papers={"M": "gpff_zhang2016"})
+    before = V.verdict_table({"fake": fake({k: v for k, v in err.items() if k != "T1"},
+                                      {"PF(10)": 20, "PF(100)": 200, "M": 60}, papers={"M": "gpff_zhang2016"})})
+    r.bench.methods[[m.name for m in r.bench.methods].index("T1")].today = True
+    papers, today = V.verdict_table({"fake": r}), V.verdict_table({"fake": r}, today=True)
+    assert list(papers["method"]) == ["M"] and list(today["method"]) == ["T1"]
+    pd.testing.assert_frame_equal(papers, before)
+
+
+def test_what_to_use_is_the_cheapest_of_rank_one():
+    rng = np.random.default_rng(5)
+    noise = lambda s: s * rng.standard_normal(RUNS)          # noqa: E731
+    err = {"PF(10)": 3 * BASE, "PF(100)": BASE + noise(1e-3), "cheap": BASE + noise(1e-3),
+           "bad": 2 * BASE, "ref": BASE}
+    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "cheap": 50, "bad": 5}, families={"cheap": "C", "bad": "B"},
+             papers={"bad": "gpff_zhang2016"})
+    r.bench.methods[[m.name for m in r.bench.methods].index("cheap")].today = True
+    w = V.what_to_use({"ung_zhang": r})
+    row = w.iloc[0]
+    assert row["use"] == "cheap" and "PF(100)" in row["also rank 1"]
+    assert row["best paper's method"].startswith("bad (rank") and row["best of today's"].startswith("cheap (rank 1")
+
+
+def test_bot_reference_convergence_rule():
+    """Estimates at N with independent errors of variance c/N: the rule estimates the largest N's excess
+    c/N_max from d² at the middle N and checks the 1/N law's ratio."""
+    rng = np.random.default_rng(3)
+    runs, T = 40, 200
+    truth = rng.standard_normal((runs, T, 4))
+    post = truth + 0.5 * rng.standard_normal((runs, T, 4))   # the posterior mean: MSE 0.25
+    c = 2.0
+    x = {N: post + math.sqrt(c / N) * rng.standard_normal((runs, T, 4)) for N in (500, 2000, 8000)}
+    err = {"PF(100)": np.full(runs, 1.0), "EKF": np.full(runs, 0.5), "PCRB": np.full(runs, 0.1)}
+    r = fake(err, {"PF(100)": 200, "EKF": 4}, ref="PCRB", families={"EKF": "EKF"})
+    out = V.bot_reference_tables({"x_true": truth, "x": x}, r)
+    assert out["excess"] == pytest.approx(c / 8000, rel=0.05)
+    assert out["law_ratio"][0] == pytest.approx(out["law_ratio"][1], rel=0.05)
+    assert out["converged"] and out["excess_share"] < 0.01
+    assert out["methods"].loc["EKF", "MSE / ref."] == pytest.approx(0.5 / (0.25 + c / 8000), rel=0.02)
+    # a filter still far from the posterior mean is not taken as the reference
+    x_bad = {N: post + math.sqrt(400 / N) * rng.standard_normal((runs, T, 4)) for N in (500, 2000, 8000)}
+    assert not V.bot_reference_tables({"x_true": truth, "x": x_bad}, r)["converged"]
+
+
+# -- claims on fixtures with known outcomes ------------------------------------------------------
+PF2 = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE}        # a frontier that improves with cost
+PF2_COST = {"PF(10)": 20, "PF(100)": 200}
+
+
+def paper_fixture(m_err, cost=60, paper="gpff_zhang2016", name="G", **extra):
+    """A benchmark with the PF frontier, one paper's method ``name`` and the reference."""
+    err = {**PF2, name: m_err, **extra, "ref": BASE}
+    costs = {**PF2_COST, name: cost, **{k: 200 for k in extra}}
+    return fake(err, costs, families={name: "GPFF", **{k: k for k in extra}},
+                papers={name: paper, **{k: paper for k in extra}})
+
+
+def claims_of(results, choices=S.CHOICES):
+    reg = V.record_claims(ClaimsRegistry("synthesis", choices=choices), results)
+    return {c.claim_id: c for c in reg.claims}
+
+
+@pytest.mark.parametrize("offset, centred, expected", [
+    (1.2, 1.1, "reproduced"),          # better under both readings
+    (1.2, 5.0, "inconclusive"),        # better under one, worse under the other
+    (5.0, 5.0, "not reproduced"),      # worse under both
+])
+def test_a_bot_reading_flips_the_verdict(offset, centred, expected):
+    c = claims_of({"bot": paper_fixture(offset * BASE), "bot_centred": paper_fixture(centred * BASE)})["bot-g"]
+    assert c.verdict == expected
+    assert c.readings == {"bot_prior=offset": offset < 3, "bot_prior=centred": centred < 3}
+
+
+def test_without_the_centred_reading_a_bot_claim_is_decided_on_the_offset_runs():
+    c = claims_of({"bot": paper_fixture(1.2 * BASE)})["bot-g"]
+    assert c.verdict == "reproduced" and not c.readings and "centred" not in c.note
+
+
+
+
+def test_a_diverged_run_makes_the_claim_not_reproduced():
+    err = 1.2 * BASE.copy()
+    err[3] = np.nan
+    r = paper_fixture(err)
+    vt = V.verdict_table({"ung_zhang": r})
+    assert vt.loc[0, "by count"] == "diverged" and vt.loc[0, "holds count"] is False
+    c = claims_of({"ung_zhang": r})["ung_zhang-g"]
+    assert c.verdict == "not reproduced" and c.note.startswith("diverged")
+
+
+def test_a_loss_to_a_dearer_pf_is_inconclusive_not_worse():
+    c = claims_of({"ung_zhang": paper_fixture(5 * BASE, cost=4)})["ung_zhang-g"]   # cheaper than PF(10)
+    assert c.verdict == "inconclusive" and "undecided (off frontier)" in c.note
+
+
+def _shifted(z, rng_seed=11):
+    """PF(100)'s per-run errors minus a difference with mean z standard errors (the method better)."""
+    noise = np.random.default_rng(rng_seed).standard_normal(RUNS)
+    delta = noise - noise.mean() + z * noise.std(ddof=1) / math.sqrt(RUNS)
+    return 2 * BASE - 0.01 * delta
+
+
+def test_a_tie_is_inconclusive():
+    # at the cost of PF(100) exactly, better by one standard error only: a tie
+    c = claims_of({"ung_zhang": paper_fixture(_shifted(1.0), cost=200)})["ung_zhang-g"]
+    assert c.verdict == "inconclusive" and "z = 1.00 (equal (tie); Holm" in c.note
+
+
+def test_holm_over_the_family_turns_a_lone_win_into_a_tie():
+    """z = 2.5 alone is significant (p = 0.012); in a family of six comparisons Holm's first threshold
+    is 0.05 / 6 = 0.0083, so the same difference is a tie and the claim inconclusive."""
+    alone = claims_of({"ung_zhang": paper_fixture(_shifted(2.5), cost=200)})["ung_zhang-g"]
+    assert alone.verdict == "reproduced" and "z = 2.50" in alone.note
+    ties = {f"T{i}": _shifted(0.0, rng_seed=i) for i in range(5)}     # equal to the PF at their cost: p = 1
+    family = claims_of({"ung_zhang": paper_fixture(_shifted(2.5), cost=200, **ties)})
+    assert len(family) == 6
+    assert family["ung_zhang-g"].verdict == "inconclusive" and "(equal (tie); Holm" in family["ung_zhang-g"].note
+
+
+@pytest.mark.parametrize("ekf, expected", [(2.0, "reproduced"), (0.5, "not reproduced"), (1.0, "inconclusive")])
+def test_li_claim_pf_against_the_ekf(ekf, expected):
+    noise = 0.01 * np.random.default_rng(3).standard_normal(RUNS)
+    err = {"EKF": ekf * BASE + noise, "PF(1000)": BASE.copy(), "ref": BASE}
+    r = fake(err, {"EKF": 4, "PF(1000)": 2000})
+    c = claims_of({"ung_li": r})[V.LI_CLAIM]
+    assert c.verdict == expected
+    assert c.diff == pytest.approx(float(np.mean((err["EKF"] - BASE) / BASE.mean())))
+
+
+# -- the takeaway -------------------------------------------------------------------------------------
+def _reg(results):
+    return V.record_claims(ClaimsRegistry("synthesis", choices=S.CHOICES), results)
+
+
+def test_takeaway_says_whether_any_papers_method_won():
+    worse = {"ung_zhang": paper_fixture(5 * BASE, cost=200)}
+    t = V.takeaway(_reg(worse), worse)
+    assert t.startswith("No method proposed in the papers is better than the plain baseline")
+    assert "the one comparison finds the paper's method worse" in t
+    better = {"ung_zhang": paper_fixture(1.2 * BASE, cost=200)}
+    assert V.takeaway(_reg(better), better).startswith("Every method proposed in the papers is better")
+    mixed = {"ung_zhang": paper_fixture(1.2 * BASE, cost=200), "ung_ning": paper_fixture(5 * BASE, cost=200)}
+    assert V.takeaway(_reg(mixed), mixed).startswith("Of the methods proposed in the papers, only G (ung_zhang) is "
+                                                     "better than")
+
+
+def test_takeaway_names_what_to_use_per_problem():
+    # the method G wins on one setting, PF(100) is the cheapest of rank 1 on the other
+    a = paper_fixture(0.5 * BASE, cost=60)
+    b = paper_fixture(5 * BASE, cost=60)
+    t = V.takeaway(_reg({"ung_zhang": a, "ung_ning": b}), {"ung_zhang": a, "ung_ning": b})
+    assert t.endswith("What to use, the cheapest method that no other is shown to beat: G on the GPFF setting and "
+                      "PF(100) on the CMS-PF setting of the scalar growth model.")
+    t = V.takeaway(_reg({"ung_zhang": a, "ung_ning": a, "bot": b}), {"ung_zhang": a, "ung_ning": a, "bot": b})
+    assert t.endswith("G on the scalar growth model and PF(100) for bearings-only tracking with the prior as printed.")
+
+
+# -- the chapter's phrases --------------------------------------------------------------------------
+def test_phrases_follow_the_numbers():
+    vt = pd.DataFrame({"benchmark": ["ung_zhang", "ung_li", "bot"], "method": ["A", "B", "C"],
+                       "paper": ["p", "p", "p"], "by count": ["worse", "better", "better"],
+                       "by time": ["worse", "equal (tie)", "better"]})
+    assert V.below_line_sentence(vt) == "Below that line at its cost (better than the PF at equal count): B on ung_li."
+    assert V.below_line_sentence(vt.iloc[[0, 2]]).startswith("No proposed method lies below that line")
+    assert V.time_agrees_phrase(vt) == "differs from the count for B on ung_li"
+    assert V.time_agrees_phrase(vt.iloc[[0, 2]]).startswith("gives the same answer as the count")
+    assert "beyond the PF's range" in V.time_range_phrase(1.5) and "inside" in V.time_range_phrase(0.9)
+    assert all(isinstance(x, Md) for x in (V.below_line_sentence(vt), V.time_range_phrase(1.0)))
+    improving = fake({**PF2, "EKF": 0.5 * BASE, "ref": BASE}, {**PF2_COST, "EKF": 4}, families={"EKF": "EKF"})
+    assert V.frontier_improves_phrase(improving) == "it improves significantly from PF(10) to PF(100)"
+    assert V.gaussian_phrase(improving, "PF(100)") == "here the Gaussian filters, not the PF, are the ones to beat"
+    flat = fake({"PF(10)": 2 * BASE, "PF(100)": 2 * BASE, "EKF": 3 * BASE, "ref": BASE}, {**PF2_COST, "EKF": 4},
+                families={"EKF": "EKF"})
+    assert V.frontier_improves_phrase(flat).startswith("and it does not improve significantly from PF(10) to PF(100)")
+    assert V.gaussian_phrase(flat, "PF(100)") == "the EKF is not better than the best PF here"
+    brt = {"n_max": 8000, "excess_share": 0.012, "converged": True}
+    assert V.reference_sentence(brt).startswith("PFPF-EDH(8000) is taken as the reference") and "1.2 %" in \
+        V.reference_sentence(brt)
+    assert "has not converged" in V.reference_sentence({**brt, "excess_share": 0.3, "converged": False})
+
+
+def test_summary_counts_every_comparison_of_a_method():
+    res = {"ung_zhang": paper_fixture(5 * BASE, cost=200), "ung_ning": paper_fixture(1.2 * BASE, cost=200)}
+    sm = V.summary_table(res).set_index("method (paper)")
+    row = sm.loc["GPFF (Zhang et al. 2016)"]
+    assert row["comparisons"] == 2 and row["worse"] == 1 and row["better"] == 1
+    assert row["at equal count"] == "better on some benchmarks or readings and not on others"
+    assert sm.loc["DPF (Hou & Yin 2008)", "at equal count"] == "not run"
+    assert V.overall(V.verdict_table({"ung_zhang": paper_fixture(5 * BASE, cost=200)}), "gpff_zhang2016") == \
+        "worse than the baseline at equal budget wherever it ran"
+
+
+# -- on results of the experiments' own shape (every benchmark and method, synthetic numbers) ------
+def _cost_of(name: str) -> float:
+    """A model-evaluation count growing with the particle number in the method's name."""
+    m = re.search(r"\((\d+)(?:\+(\d+))?", name)
+    if name.startswith("SMC²"):
+        return 14000.0
+    if m is None:
+        return {"EKF": 4.0, "UKF": 10.0, "IMM-EKF": 12.0, "IMM-UKF": 30.0}.get(name, 103.0)
+    n = int(m.group(1))
+    return 5.0 * n + 1 if m.group(2) else (6.0 * n if name.startswith("IMMPF") else 2.0 * n)
+
+
+def synthetic_results(runs: int = 6, seed: int = 0) -> S.SynthesisResults:
+    """A SynthesisResults with every benchmark and method of the chapter (built by the experiments'
+    own builders) and random per-run errors: the structure of run_all's output in well under a second."""
+    rng = np.random.default_rng(seed)
+    benches = {k: S.build(k, pcrb_runs=2) for k in S.BENCHMARKS}
+    benches["imm_zhou"] = S.build_imm(600)
+    out = {}
+    for k, b in benches.items():
+        names = [m.name for m in b.methods]
+        err = pd.DataFrame({n: 1.0 + rng.random(runs) for n in names})
+        for m in b.methods:    # the baseline improves with its cost (its frontier spans every configuration)
+            if m.family == b.baseline:
+                err[m.name] = 1.0 + 5.0 / math.sqrt(_cost_of(m.name)) + 0.1 * rng.random(runs)
+        err[b.reference.name] = (
+            b.reference.bound if b.reference.bound is not None else 0.5 + 0.1 * rng.random(runs))
+        counts = pd.DataFrame({"model evals / step": {n: _cost_of(n) for n in names + [b.reference.name]},
+                               "likelihoods / step": 0.0})
+        seconds = pd.Series({m.name: 1e-6 * _cost_of(m.name) for m in b.methods if m.timed}, dtype=float)
+        ess1 = {m.name: rng.random(runs) * m.filt.n_particles for m in b.methods
+                if isinstance(m.filt, S.BootstrapParticleFilter)}
+        out[k] = S.BenchResult(b, err, counts, seconds, None, ess1)
+    x_true = rng.standard_normal((runs, 200, 4))
+    post = x_true + 0.5 * rng.standard_normal(x_true.shape)       # a posterior mean, and estimates around it
+    flow = {"x_true": x_true, "x": {N: post + math.sqrt(2 / N) * rng.standard_normal(x_true.shape)
+                                    for N in S.BOT_FLOW_REF_N}}
+    return S.SynthesisResults(out, flow, 0.2, {"runs": runs, "runs_of": {k: runs for k in out}, "flow_ref_runs": runs,
+                                               "pcrb_runs": 2, "seeds": dict(S.SEEDS)})
+
+
+@pytest.fixture(scope="module")
+def synthetic():
+    R = synthetic_results()
+    return R, V.record_claims(ClaimsRegistry(S.PAPER, choices=S.CHOICES), R)
+
+
+def test_every_claim_and_every_glued_value_from_results_of_run_alls_shape(synthetic):
+    R, reg = synthetic
+    ids = [c.claim_id for c in reg.claims]
+    assert ids == ["ung_zhang-gpff-eq43-unif", "ung_zhang-gpff-eq43-exp", "ung_zhang-gpff-eq41-unif",
+                   "ung_zhang-cms-pf-100", "ung_li-gpff-eq43-unif", "ung_li-cms-pf-100", "ung_ning-gpff-eq43-unif",
+                   "ung_ning-cms-pf-100", "ung_ning-cms-pf-200", "theta_hou-dpf-250-250", "theta_hou-dpf-500-500",
+                   "bot-gpff-eq41-unif", "bot-gpff-eq41-exp", "imm_zhou-immpfor-500", V.LI_CLAIM]
+    assert set(V.MAIN_CLAIMS) <= set(ids) and 3 <= len(V.MAIN_CLAIMS) <= 6
+    assert all(c.basis == "count" for c in reg.claims if c.claim_id != V.LI_CLAIM)
+    values = V.prose(reg, R)
+    src = CHAPTER.read_text(encoding="utf-8")
+    text = set(re.findall(r"\{glue:text\}`([A-Za-z0-9_]+)", src)) - {"syn_exec_seconds"}
+    md = set(re.findall(r"\{glue:md\}`([A-Za-z0-9_]+)", src))
+    assert not (text | md) - set(values), "glue keys of the chapter the prose does not give"
+    assert all(isinstance(values[k], Md) for k in md) and not any(isinstance(values[k], Md) for k in text)
+    assert values["syn_runs"] == 6 and values["syn_centred_runs"] == 6 and values["syn_ref_runs"] == 6
+    assert values["syn_n_claims"] == len(ids)
+    n = {v: sum(c.verdict == v for c in reg.claims) for v in ("reproduced", "not reproduced", "inconclusive")}
+    assert values["syn_claims_sentence"].startswith(f"Of {len(ids)} claims, {n['reproduced']} ")
+    assert values["syn_n_family"] == len(V.verdict_table(R)) and values["syn_n_family_today"] == len(
+        V.verdict_table(R, today=True))
+
+
+def test_the_takeaway_follows_a_change_of_result(synthetic):
+    R, reg = synthetic
+    t = V.takeaway(reg, R)
+    for phrase in ("scalar growth model", "bearings-only tracking", "static parameter", "manoeuvring target"):
+        assert phrase in t
+    # make the GPFF's MSE tiny on every run of the GPFF setting: it is now better than the PF at its count
+    # (inside the PF's range), the claim is reproduced, and the takeaway and the prose say so
+    R2 = copy.copy(R)
+    R2.benchmarks = dict(R.benchmarks)
+    r = copy.copy(R["ung_zhang"])
+    r.err = r.err.copy()
+    r.err["GPFF eq43 unif."] = 1e-3 * r.err[r.ref] * np.linspace(1, 1.1, len(r.err))
+    R2.benchmarks["ung_zhang"] = r
+    reg2 = V.record_claims(ClaimsRegistry(S.PAPER, choices=S.CHOICES), R2)
+    before = {c.claim_id: c.verdict for c in reg.claims}["ung_zhang-gpff-eq43-unif"]
+    assert before != "reproduced"
+    assert {c.claim_id: c.verdict for c in reg2.claims}["ung_zhang-gpff-eq43-unif"] == "reproduced"
+    assert "GPFF eq43 unif. (ung_zhang)" in V.takeaway(reg2, R2) and "GPFF eq43 unif." not in t
+    assert "GPFF eq43 unif. on ung_zhang" in V.prose(reg2, R2)["syn_s_below"]
