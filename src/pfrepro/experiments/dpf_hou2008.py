@@ -5,7 +5,7 @@ fixed by the paper, swept, or a reading run beside the main one);
 the chapter ``book/50_dpf.md`` calls :func:`run_all` (through :meth:`pfrepro.papers.Paper.run`)
 and plots. Seeds are picked once (:data:`SEEDS`) and travel as arguments: every function that
 draws takes ``seed=None`` (the book's seed, looked up when it is called) and ``runs=None``.
-The claims are decided in :mod:`pfrepro.verdicts.dpf_hou2008`.
+The claims are decided in ``pfrepro.verdicts.dpf_hou2008``.
 
 Randomness: the truth of run i comes from ``truth_streams(seed, runs)`` and filter ``name``'s
 draws from ``filter_streams(seed, name, runs)`` (per-run streams keyed by name), so run i's
@@ -32,7 +32,8 @@ from ..choices import FIXED, READING, SWEEP, FreeChoice, choices_table
 from ..stats import CommonRunsError, paired_difference
 from ..montecarlo import run_monte_carlo, truth_streams
 
-__all__ = ["PAPER", "SEEDS", "SEED_51", "SEED_52", "Hou2008Results", "run_all", "scaled_settings", "S51", "S52", "Q52", "CHOICES", "assumptions_table", "model_51",
+__all__ = ["PAPER", "SEEDS", "SEED_51", "SEED_52", "Run", "Hou2008Results", "run_all", "scaled_settings", "STEPS",
+           "RUN_COUNTS", "S51", "S52", "Q52", "CHOICES", "assumptions_table", "model_51",
            "model_52", "simulate_51", "simulate_52", "dpf_51", "dekf_51", "liu_west_51", "grid_51",
            "run_51", "run_fig5", "run_dpf_sensitivity", "run_dekf_sensitivity",
            "run_52", "run_52_readings", "run_51_theta", "run_51_extra", "rmse_eq14", "rmse_usual", "mean_se",
@@ -695,7 +696,7 @@ def convergence_time(theta_hat, truth, band):
 
 
 # --------------------------------------------------------------------------- everything the chapter runs
-#: the run counts of the chapter, by setting: the keys :func:`scaled_settings` replaces
+#: the run counts of the chapter (settings dict, key), the ones :func:`scaled_settings` replaces
 RUN_COUNTS = (("S51", "runs"), ("S51", "grid_runs"), ("S51", "sens_runs"),
               ("S52", "runs"), ("S52", "q_runs"), ("S52", "literal_runs"))
 
@@ -724,30 +725,40 @@ class Hou2008Results:
 
     Attributes
     ----------
-    s51, s52 : dict
-        The settings used (:data:`S51`, :data:`S52` with the run counts of :func:`scaled_settings`).
+    s51 : dict
+        The sec 5.1 settings used (:data:`S51` with the run counts of :func:`scaled_settings`).
+    s52 : dict
+        The same for sec 5.2 (:data:`S52`).
     seeds : dict
         The seeds used, ``{"sec51": ..., "sec52": ...}``.
-    r51 : Run
+    r51
         Sec 5.1 main runs (:func:`run_51`): DPF, DEKF, Liu-West and the exact reference.
     f5 : dict
-        Fig. 5, ``{guess: Run}`` (:func:`run_fig5`).
-    sens, dekf_sens : Run
-        The DPF sweep (weight readings, caps) and the DEKF sweep (parameter noise).
-    r52, r52_lit : Run
-        Sec 5.2 main runs (feet) and the literal (metric) reading.
+        Fig. 5, one run set per initial guess (:func:`run_fig5`).
+    sens
+        The DPF sweep: weight readings and caps (:func:`run_dpf_sensitivity`).
+    dekf_sens
+        The DEKF sweep: parameter noise (:func:`run_dekf_sensitivity`).
+    r52
+        Sec 5.2 main runs, in feet (:func:`run_52`).
+    r52_lit
+        Sec 5.2 under the literal (metric) reading.
     th51 : dict
-        ``{θ: Run}``, the true-θ readings of sec 5.1.
-    x51 : Run
-        The Gaussian-law DPF and Liu-West at δ = 0.95 on the sec 5.1 truths.
+        The true-θ readings of sec 5.1, by θ (:func:`run_51_theta`).
+    x51
+        The Gaussian-law DPF and Liu-West at δ = 0.95 on the sec 5.1 truths (:func:`run_51_extra`).
     rd52 : dict
-        ``{(choice, value): Run}``, the sec 5.2 readings (:func:`run_52_readings`).
-    tr_ft, tr_lit : numpy.ndarray
-        Noise-free re-entry truth in feet and under the literal reading (metres).
-    crb_ft, crb_lit : numpy.ndarray
-        Cramér-Rao bound sd of θ over time, both readings.
+        The sec 5.2 readings, by (choice, value) (:func:`run_52_readings`).
+    tr_ft : numpy.ndarray
+        Noise-free re-entry truth in feet.
+    tr_lit : numpy.ndarray
+        The same under the literal reading (metres).
+    crb_ft : numpy.ndarray
+        Cramér-Rao bound sd of θ over time, feet (:func:`crb_theta_52`).
+    crb_lit : numpy.ndarray
+        The same under the literal reading.
     integ : pandas.DataFrame
-        The integration-error sweep (:func:`integration_error_52`).
+        The integration-error sweep (``integration_error_52``).
     pub : pandas.DataFrame
         The paper's sec 5.1 numbers (``published.table``).
     seconds : dict

@@ -1,7 +1,7 @@
 """Figures and tables of Hou & Yin (2008), dual particle filter (chapter ``book/50_dpf.md``).
 
 The experiments are :mod:`pfrepro.experiments.dpf_hou2008` (``run_all``) and the claims
-:mod:`pfrepro.verdicts.dpf_hou2008`; this module only draws their results: the paper's figures
+``pfrepro.verdicts.dpf_hou2008``; this module only draws their results: the paper's figures
 and table for the command line (:func:`tables`, :func:`figures`) and every figure and table the
 chapter shows (:func:`chapter_figures` and the ``*_table`` functions).
 """
@@ -350,7 +350,7 @@ def errata_table(ratio_3d: float, literal_spread: float) -> pd.DataFrame:
 
 
 def readings_51_table(results) -> pd.DataFrame:
-    """Sec 5.1 under every reading (:func:`pfrepro.verdicts.dpf_hou2008.readings_51`): medians of single-run
+    """Sec 5.1 under every reading (``pfrepro.verdicts.dpf_hou2008.readings_51``): medians of single-run
     eq-(14) RMSEs ("in": the published value inside our central 95 %), failures, paired z, and the paper."""
     from ..verdicts import dpf_hou2008 as V
 
@@ -394,7 +394,7 @@ def dekf_sensitivity_display(sd) -> pd.DataFrame:
 
 def law_table(results) -> pd.DataFrame:
     """Beta against Gaussian parameter draws (sec 3.2, Fig. 2), one row per law: RMSEs, convergence step,
-    draws outside the range and ESS (:func:`pfrepro.verdicts.dpf_hou2008.beta_vs_gaussian`)."""
+    draws outside the range and ESS (``pfrepro.verdicts.dpf_hou2008.beta_vs_gaussian``)."""
     from ..verdicts import dpf_hou2008 as V
 
     R = results
@@ -411,7 +411,7 @@ def law_table(results) -> pd.DataFrame:
 
 def coverage_display(results) -> pd.DataFrame:
     """Coverage of the true θ at T (± se), averaged over k > 10, and interval width, per method, on the exact
-    reference's runs and on all runs, with the failures (:func:`pfrepro.verdicts.dpf_hou2008.coverage_frame`)."""
+    reference's runs and on all runs, with the failures (``pfrepro.verdicts.dpf_hou2008.coverage_frame``)."""
     from ..verdicts import dpf_hou2008 as V
 
     cov_tab = V.coverage_frame(results)
@@ -435,7 +435,7 @@ def table_52_display(results) -> pd.DataFrame:
 
 
 def readings_52_table(results) -> pd.DataFrame:
-    """Sec 5.2 under every reading (:func:`pfrepro.verdicts.dpf_hou2008.readings_52`): failures, errors at T
+    """Sec 5.2 under every reading (``pfrepro.verdicts.dpf_hou2008.readings_52``): failures, errors at T
     and the paired z of every ordering."""
     from ..verdicts import dpf_hou2008 as V
 

@@ -368,7 +368,9 @@ def record_claims(reg: ClaimsRegistry, results) -> ClaimsRegistry:
             p_ = PUB51[(who, lab)]
             rv = {k: v for k, v in tagged(R51, deps, lambda st: st[(who, lab)][:2], MAIN_TAG51, NO_CAP).items()
                   if not k.startswith(f"T51={T}")}
-            reg.add(f"s51_rmse_{lab}_{who.lower()}", f"Sec 5.1: eq-(14) RMSE of {'θ' if lab == 'theta' else 'x'} for {who} (one run)",
+            sym = "θ" if lab == "theta" else "x"
+            tuning = "weight and cap" if who == "DPF" else "DEKF tuning"
+            reg.add(f"s51_rmse_{lab}_{who.lower()}", f"Sec 5.1: eq-(14) RMSE of {sym} for {who} (one run)",
                     published=p_, published_text=published.printed(PAPER, "Sec 5.1", f"RMSE {lab}", who),
                     reproduced=med, se=half, rel_tol=None, diff=m51[("order", lab)][0],
                     diff_se=m51[("order", lab)][1], depends_on=list(deps), reading_values=rv,
@@ -377,10 +379,11 @@ def record_claims(reg: ClaimsRegistry, results) -> ClaimsRegistry:
                     note=f"paper: one run; ours: median of {S51['runs']} single runs (T = {T}, θ = 0.5), inside = within the "
                          f"central 95 % [{lo_q:.4g}, {hi_q:.4g}] (± = one run's SE on that side); published at the "
                          f"{pct[(who, 'x' if lab == 'x' else 'θ')]:.0f}th percentile; fallback: DPF < DEKF paired; "
-                         f"decided under T = 50, θ = 0.2 / 0.7 and the {'weight and cap' if who == 'DPF' else 'DEKF tuning'} readings")
+                         f"decided under T = 50, θ = 0.2 / 0.7 and the {tuning} readings")
     for lab in ("x", "theta"):
         deps = ("T51", "theta51", "weight", "cap", "dekf")
-        reg.add(f"s51_dpf_beats_dekf_{lab}", f"Sec 5.1 / Fig. 4: DPF estimates {'θ' if lab == 'theta' else 'x'} more accurately than DEKF",
+        sym = "θ" if lab == "theta" else "x"
+        reg.add(f"s51_dpf_beats_dekf_{lab}", f"Sec 5.1 / Fig. 4: DPF estimates {sym} more accurately than DEKF",
                 diff=m51[("order", lab)][0], diff_se=m51[("order", lab)][1], depends_on=list(deps),
                 readings=tagged(R51, deps, lambda st: ordering_holds(*st[("order", lab)]), MAIN_TAG51, NO_CAP),
                 source="Sec 5.1, Fig. 4", note="paired per-run usual RMSE, DEKF - DPF, under every reading of the table "
@@ -391,16 +394,18 @@ def record_claims(reg: ClaimsRegistry, results) -> ClaimsRegistry:
             diff=d_spread, diff_se=se_spread, depends_on=["T51"],
             readings=over("T51", {T: ordering_holds(d_spread, se_spread), 50: ordering_holds(*sp50)}),
             source="Fig. 5, abstract",
-            note=f"per-run spread of theta RMSE over guesses 0.2/0.5/0.7, DEKF - DPF, {S51['runs']} runs; T = 50: z = {z_of(sp50):.1f}")
+            note=f"per-run spread of theta RMSE over guesses 0.2/0.5/0.7, DEKF - DPF, {S51['runs']} runs; "
+                 f"T = 50: z = {z_of(sp50):.1f}")
 
     imp = impoverishment(R)
+    lw_sd = np.exp(np.median(0.5 * np.log(r51.results["Liu-West"].diagnostics["theta_var"][:nr, -1]
+                                          / exd["theta_var"][:, -1])))
     reg.add("no_parameter_impoverishment", "Abstract / sec 2: the sufficient-statistics parameter filter avoids "
             "parameter-particle impoverishment", diff=imp[("T51", T)][0], diff_se=imp[("T51", T)][1],
             depends_on=["T51", "weight", "cap"],
             readings={f"{ch}={val}": ordering_holds(*v) for (ch, val), v in imp.items()}, source="Abstract, sec 2",
             note=f"log of DPF posterior sd over exact posterior sd at T, {nr} runs (holds if > 0: not narrower than the "
-                 f"truth allows; readings on the first {ns}); Liu-West median sd ratio "
-                 f"{np.exp(np.median(0.5 * np.log(r51.results['Liu-West'].diagnostics['theta_var'][:nr, -1] / exd['theta_var'][:, -1]))):.2f}")
+                 f"truth allows; readings on the first {ns}); Liu-West median sd ratio {lw_sd:.2f}")
 
     cc = {T: cap_coverage(R, -1), 50: cap_coverage(R, 49)}
     reg.add("cap_keeps_flexible", "Sec 5.2: capping alpha, beta keeps the Beta from over-concentrating (flexible)",
@@ -422,8 +427,9 @@ def record_claims(reg: ClaimsRegistry, results) -> ClaimsRegistry:
                             "(vs a Gaussian)", "Abstract, sec 6"),
                            ("conv", "Sec 1: the Beta law speeds up the parameter's convergence (vs a Gaussian)",
                             "Sec 1 (ref [13])")):
-        reg.add(f"beta_{'avoids_outside_draws' if key == 'outside' else 'sampling_efficiency' if key == 'ess' else 'speeds_convergence'}",
-                text, diff=law[key][0], diff_se=law[key][1], depends_on=["T51"],
+        claim_id = {"outside": "beta_avoids_outside_draws", "ess": "beta_sampling_efficiency",
+                    "conv": "beta_speeds_convergence"}[key]
+        reg.add(claim_id, text, diff=law[key][0], diff_se=law[key][1], depends_on=["T51"],
                 readings=over("T51", {Tk: ordering_holds(*LAW[Tk][key]) for Tk in S51["horizons"]}), source=src,
                 note={"outside": "share of parameter draws outside the range, Gaussian - Beta, per run",
                       "ess": "mean ESS of the parameter weights, Beta - Gaussian, per run",
@@ -612,7 +618,8 @@ def prose(reg: ClaimsRegistry, results) -> dict:
     out["dpf_lik_dpf"] = r51.results["DPF"].diagnostics["likelihood_evaluations_per_step"]
     out["dpf_lik_lw"] = r51.results["Liu-West"].diagnostics["likelihood_evaluations_per_step"]
     out["dpf_lost_mass"] = float(exd["lost_mass"].max())
-    out["dpf_sd_ratio"] = float(np.median(np.sqrt(r51.results["DPF"].diagnostics["theta_var"][:nr, -1] / exd["theta_var"][:, -1])))
+    out["dpf_sd_ratio"] = float(np.median(np.sqrt(r51.results["DPF"].diagnostics["theta_var"][:nr, -1]
+                                                  / exd["theta_var"][:, -1])))
     out["dpf_lw_sd_ratio"] = float(np.median(np.sqrt(r51.results["Liu-West"].diagnostics["theta_var"][:nr, -1]
                                                      / exd["theta_var"][:, -1])))
     lw_vs = liu_west_vs_dpf(R)
