@@ -26,7 +26,9 @@ def test_registry_names_are_unique_and_resolve():
         assert keys[p.key] is p
         for a in p.aliases:
             assert papers.get_paper(a.upper()) is p          # case-insensitive
-        assert p.tables and p.figures and callable(p.figures_module.reproduce)
+        assert p.tables and p.figures
+        F = p.figures_module      # a moved paper: tables(results) and figures(results); else reproduce
+        assert (callable(F.tables) and callable(F.figures)) if p.verdicts_module else callable(F.reproduce)
         assert p.citation and p.citation != p.key             # from pfrepro.published.PAPERS
     with pytest.raises(KeyError, match="choose from"):
         papers.get_paper("nosuchpaper")
@@ -216,7 +218,7 @@ def test_list_shows_dpf_and_immpf(capsys, tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("name, key, files", [
-    ("dpf", "dpf_hou2008", ("rmse_table.csv", "fig4.png", "fig5.png", "figs_7_9.png")),
+    # dpf: its claims are the chapter's (tests/test_verdicts_dpf_hou2008.py runs it)
     ("immpf", "immpfor_zhou2017", ("table1.csv", "fig1.png", "fig2.png", "fig3.png", "fig4.png", "fig5.png")),
 ])
 def test_run_new_papers_on_one_run(name, key, files, tmp_path, capsys):
@@ -229,24 +231,6 @@ def test_run_new_papers_on_one_run(name, key, files, tmp_path, capsys):
     claims = json.loads((tmp_path / "claims" / f"{key}.json").read_text())
     assert len(claims) == 4 and all(c["published"] is not None for c in claims)
     assert "verdicts of the 4 table-cell claims" in out
-
-
-def test_dpf_reproduce_uses_the_chapter_experiment_and_restores_settings():
-    """The DPF table is the experiment module's rmse_table_51 on the same (scaled) run, and the
-    temporary run count and seeds are put back afterwards."""
-    from pfrepro.experiments import dpf_hou2008 as E
-    from pfrepro.figures import dpf_hou2008 as F
-
-    before = (dict(E.S51), E.SEED_51, E.SEED_52)
-    with F._scale(2, 11):
-        assert E.S51["runs"] == 2 and E.S51["grid_runs"] == 2 and E.SEED_51 == 11
-        r51 = E.run_51()
-    assert (dict(E.S51), E.SEED_51, E.SEED_52) == before
-    tab, t_all, t_grid = F.rmse_table(r51)
-    direct = E.rmse_table_51(r51, ["DPF", "DEKF", "Liu-West"])
-    assert t_all["eq14 x"].to_numpy() == pytest.approx(direct["eq14 x"].to_numpy(), rel=1e-12)
-    assert list(tab.index)[-1] == "paper (1 run)" and "exact (2 runs)" in tab.index
-    assert tab.loc["DPF", "eq14 x"] == F.pm(t_all.loc["DPF", "eq14 x"], t_all.loc["DPF", "eq14 x se"], 3)
 
 
 def test_immpf_table1_frame_matches_the_experiment():

@@ -551,14 +551,16 @@ def test_choices_cover_the_chapter_and_statuses_are_valid():
     assert not E.model_52().has_process_noise
 
 
-def test_dpf_chapter_pairs_only_through_the_run_set_check():
-    """Every paired comparison of the chapter goes through E.paired (which refuses unequal run sets),
-    never through claims.paired_difference on bare arrays."""
-    from pathlib import Path
+def test_dpf_claims_pair_only_through_the_run_set_check():
+    """Every paired comparison of the chapter's claims (pfrepro.verdicts.dpf_hou2008) goes through
+    E.paired (which refuses unequal run sets), never through paired_difference on bare arrays."""
+    import inspect
 
-    src = (Path(__file__).resolve().parents[1] / "book" / "50_dpf.md").read_text(encoding="utf-8")
+    from pfrepro.verdicts import dpf_hou2008 as V
+
+    src = inspect.getsource(V)
     assert "paired_difference(" not in src
-    assert src.count("paired(") > 10
+    assert src.count("E.paired(") > 10
 
 
 # -- mutation-testing survivors (issue 21): diagnostics of Liu-West, the dual EKF's checks ------

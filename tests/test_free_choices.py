@@ -102,6 +102,17 @@ def test_every_claims_registry_is_given_its_chapter_choices(chapter):
     if chapter in NOT_YET:
         pytest.xfail("chapter not yet converted to the free-choice rule")
     src = (BOOK / chapter).read_text(encoding="utf-8")
+    moved = re.search(r'get_paper\("(\w+)"\)\.run\(', src)
+    if moved:   # the registry is Paper.run's, made with the experiment module's CHOICES
+        from pfrepro.papers import get_paper
+
+        import inspect
+
+        paper = get_paper(moved.group(1))
+        assert "ClaimsRegistry(" not in src, f"{chapter}: a second registry beside Paper.run's"
+        assert paper.experiments_module.CHOICES
+        assert "ClaimsRegistry(self.key, choices=E.CHOICES)" in inspect.getsource(type(paper).run)
+        return
     calls = re.findall(r"ClaimsRegistry\(([^)]*)\)", src)
     assert calls, f"{chapter} records no claims"
     assert all("choices=" in c for c in calls), f"{chapter}: ClaimsRegistry(...) without choices="

@@ -2,7 +2,10 @@
 
 Every unstated setting is fixed here, before any run, with its reason and its status (``CHOICES``:
 fixed by the paper, swept, or a reading run beside the main one);
-the chapter ``book/50_dpf.md`` only calls these functions and plots. Seeds are picked once.
+the chapter ``book/50_dpf.md`` calls :func:`run_all` (through :meth:`pfrepro.papers.Paper.run`)
+and plots. Seeds are picked once (:data:`SEEDS`) and travel as arguments: every function that
+draws takes ``seed=None`` (the book's seed, looked up when it is called) and ``runs=None``.
+The claims are decided in ``pfrepro.verdicts.dpf_hou2008``.
 
 Randomness: the truth of run i comes from ``truth_streams(seed, runs)`` and filter ``name``'s
 draws from ``filter_streams(seed, name, runs)`` (per-run streams keyed by name), so run i's
@@ -11,6 +14,8 @@ truths (paired comparisons).
 """
 from __future__ import annotations
 
+import functools
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,7 +32,8 @@ from ..choices import FIXED, READING, SWEEP, FreeChoice, choices_table
 from ..stats import CommonRunsError, paired_difference
 from ..montecarlo import run_monte_carlo, truth_streams
 
-__all__ = ["PAPER", "SEED_51", "SEED_52", "S51", "S52", "Q52", "CHOICES", "assumptions_table", "model_51",
+__all__ = ["PAPER", "SEEDS", "SEED_51", "SEED_52", "Run", "Hou2008Results", "run_all", "scaled_settings", "STEPS",
+           "RUN_COUNTS", "S51", "S52", "Q52", "CHOICES", "assumptions_table", "model_51",
            "model_52", "simulate_51", "simulate_52", "dpf_51", "dekf_51", "liu_west_51", "grid_51",
            "run_51", "run_fig5", "run_dpf_sensitivity", "run_dekf_sensitivity",
            "run_52", "run_52_readings", "run_51_theta", "run_51_extra", "rmse_eq14", "rmse_usual", "mean_se",
@@ -35,9 +41,12 @@ __all__ = ["PAPER", "SEED_51", "SEED_52", "S51", "S52", "Q52", "CHOICES", "assum
            "errors_52", "table_52", "convergence_time", "first_runs", "merge"]
 
 PAPER = "dpf_hou2008"
-#: seeds, picked once (the paper's year + section); never changed
-SEED_51 = 200851
-SEED_52 = 200852
+#: the book's seeds, picked once (the paper's year + section); never changed (``run_all(seeds=...)``
+#: runs others without touching this dict)
+SEEDS = {"sec51": 200851, "sec52": 200852}
+#: the same seeds by name, for other modules (the "today" comparison, the synthesis)
+SEED_51 = SEEDS["sec51"]
+SEED_52 = SEEDS["sec52"]
 
 #: Sec 5.1 settings
 S51 = dict(
@@ -200,10 +209,16 @@ def model_51(theta_true=None) -> UNGMTheta:
     return UNGMTheta(theta_true=S51["theta_true"] if theta_true is None else theta_true, bounds=S51["bounds"])
 
 
-def simulate_51(runs=None, theta_true=None):
-    """Run i's truth of sec 5.1 from ``truth_streams(SEED_51)``'s stream i (first ``runs`` runs)."""
+def _seed(section: str, seed=None) -> int:
+    """``seed``, or the book's seed of ``section`` ("sec51", "sec52"), looked up when called."""
+    return SEEDS[section] if seed is None else int(seed)
+
+
+def simulate_51(runs=None, theta_true=None, seed=None):
+    """Run i's truth of sec 5.1 from ``truth_streams(seed)``'s stream i (first ``runs`` runs; the
+    book's seed ``SEEDS["sec51"]`` by default)."""
     runs = S51["runs"] if runs is None else runs
-    return model_51(theta_true).simulate(S51["T"], runs, truth_streams(SEED_51, runs))
+    return model_51(theta_true).simulate(S51["T"], runs, truth_streams(_seed("sec51", seed), runs))
 
 
 def dpf_51(model=None, **over):
@@ -264,20 +279,24 @@ def _run(filters: dict, sim, seed, executor=None, runs_of: dict | None = None) -
     return Run(sim=sim, results={k: res[k] for k in filters}, seconds=sec, filters=filters)
 
 
-def run_51(executor=None) -> Run:
-    """Sec 5.1 at paper scale: DPF, DEKF, Liu-West (equal likelihood count) and the exact θ posterior."""
+def run_51(executor=None, runs=None, grid_runs=None, seed=None) -> Run:
+    """Sec 5.1 at paper scale: DPF, DEKF, Liu-West (equal likelihood count) and the exact θ posterior
+    (on the first ``grid_runs`` runs, at most ``runs``)."""
+    runs = S51["runs"] if runs is None else runs
+    grid_runs = min(S51["grid_runs"] if grid_runs is None else grid_runs, runs)
     m = model_51()
-    sim = simulate_51()
+    sim = simulate_51(runs, seed=seed)
     filters = {"DPF": dpf_51(m), "DEKF": dekf_51(m), "Liu-West": liu_west_51(m), "exact": grid_51(m)}
-    return _run(filters, sim, SEED_51, executor, runs_of={"exact": S51["grid_runs"]})
+    return _run(filters, sim, _seed("sec51", seed), executor, runs_of={"exact": grid_runs})
 
 
-def run_fig5(main: Run | None = None, executor=None) -> dict:
+def run_fig5(main: Run | None = None, executor=None, runs=None, seed=None) -> dict:
     """Fig. 5: DPF and DEKF with initial guesses 0.2 / 0.5 / 0.7 on all runs, with the same truths and
     the same filter streams for every guess (common random numbers). ``main`` (a :func:`run_51`
-    result, whose guess is 0.5) is reused for 0.5: it is the same computation. Returns {guess: Run}."""
+    result, whose guess is 0.5, run with the same ``seed``) is reused for 0.5 and gives the truths:
+    it is the same computation. Returns {guess: Run}."""
     m = model_51()
-    sim = simulate_51() if main is None else main.sim
+    sim = simulate_51(runs, seed=seed) if main is None else main.sim
     out = {}
     for g0 in S51["guesses"]:
         if main is not None and g0 == S51["theta0"]:
@@ -285,50 +304,52 @@ def run_fig5(main: Run | None = None, executor=None) -> dict:
             out[g0] = Run(sim=sim, results={k: main.results[k] for k in keep},
                           seconds={k: main.seconds[k] for k in keep}, filters={k: main.filters[k] for k in keep})
         else:
-            out[g0] = _run({"DPF": dpf_51(m, theta0=g0), "DEKF": dekf_51(m, theta0=g0)}, sim, SEED_51, executor)
+            out[g0] = _run({"DPF": dpf_51(m, theta0=g0), "DEKF": dekf_51(m, theta0=g0)}, sim,
+                           _seed("sec51", seed), executor)
     return out
 
 
-def run_dpf_sensitivity(executor=None) -> Run:
-    """One sweep on the first ``sens_runs`` runs: the three readings of the parameter weight
-    (cap N_θ) and the Beta caps (predictive weight). "DPF" is the working setting; every variant
+def run_dpf_sensitivity(executor=None, runs=None, seed=None) -> Run:
+    """One sweep on the first ``runs`` (default ``sens_runs``) runs: the three readings of the parameter
+    weight (cap N_θ) and the Beta caps (predictive weight). "DPF" is the working setting; every variant
     uses its own named stream."""
     m = model_51()
-    sim = simulate_51(S51["sens_runs"])
+    sim = simulate_51(S51["sens_runs"] if runs is None else runs, seed=seed)
     filters = {"DPF": dpf_51(m), "plugin weight": dpf_51(m, weight="plugin"),
                "literal weight": dpf_51(m, weight="literal")}
     for c in S51["caps"]:
         if c != S51["cap"]:
             filters[f"cap {c:g}" if c else "no cap"] = dpf_51(m, cap=c)
-    return _run(filters, sim, SEED_51, executor)
+    return _run(filters, sim, _seed("sec51", seed), executor)
 
 
-def run_dekf_sensitivity(executor=None) -> Run:
+def run_dekf_sensitivity(executor=None, runs=None, seed=None) -> Run:
     """The DEKF's parameter noise q_0 (0, 10⁻⁴, 10⁻³, 10⁻² P_θ0) and the unprojected DEKF, on all runs."""
     m = model_51()
-    sim = simulate_51()
+    sim = simulate_51(runs, seed=seed)
     filters = {f"q0 = {q:g} P0": dekf_51(m, q_rel=q) for q in S51["dekf_q_rels"]}
     filters["unprojected"] = dekf_51(m, clip=False)
-    return _run(filters, sim, SEED_51, executor)
+    return _run(filters, sim, _seed("sec51", seed), executor)
 
 
-def run_51_theta(theta_true, executor=None) -> Run:
-    """The reading ``theta51``: DPF and DEKF on the first ``sens_runs`` runs with true θ = ``theta_true``
-    (same seeds and stream names as the main runs)."""
+def run_51_theta(theta_true, executor=None, runs=None, seed=None) -> Run:
+    """The reading ``theta51``: DPF and DEKF on the first ``runs`` (default ``sens_runs``) runs with true
+    θ = ``theta_true`` (same seeds and stream names as the main runs)."""
     m = model_51(theta_true)
-    sim = simulate_51(S51["sens_runs"], theta_true)
-    return _run({"DPF": dpf_51(m), "DEKF": dekf_51(m)}, sim, SEED_51, executor)
+    sim = simulate_51(S51["sens_runs"] if runs is None else runs, theta_true, seed=seed)
+    return _run({"DPF": dpf_51(m), "DEKF": dekf_51(m)}, sim, _seed("sec51", seed), executor)
 
 
-def run_51_extra(executor=None) -> Run:
+def run_51_extra(executor=None, runs=None, lw_runs=None, seed=None) -> Run:
     """Sec 5.1 comparisons beyond the main set, on the main truths: the DPF with a Gaussian parameter law
-    (sec 3.2, Fig. 2; all runs, equal N) and Liu-West at δ = 0.95 (the reading ``liu_west``, first
-    ``sens_runs`` runs). Own stream names."""
+    (sec 3.2, Fig. 2; all ``runs`` runs, equal N) and Liu-West at δ = 0.95 (the reading ``liu_west``,
+    first ``lw_runs`` runs, default ``sens_runs``, at most ``runs``). Own stream names."""
     m = model_51()
-    sim = simulate_51()
+    sim = simulate_51(runs, seed=seed)
+    lw_runs = min(S51["sens_runs"] if lw_runs is None else lw_runs, sim.y.shape[0])
     return _run({"DPF Gaussian θ": dpf_51(m, theta_law="gaussian"),
                  "Liu-West δ=0.95": liu_west_51(m, delta=S52["lw_deltas"][1])},
-                sim, SEED_51, executor, runs_of={"Liu-West δ=0.95": S51["sens_runs"]})
+                sim, _seed("sec51", seed), executor, runs_of={"Liu-West δ=0.95": lw_runs})
 
 
 # --------------------------------------------------------------------------- 5.2
@@ -339,14 +360,16 @@ def model_52(reading="feet", substeps=None, Q=None) -> Reentry:
     return Reentry(reading=reading, n_substeps=S52["filter_substeps"] if substeps is None else substeps, Q=Q)
 
 
-def simulate_52(runs=None, reading="feet"):
-    """Run i's noise-free re-entry truth (64 RK4 substeps) and its range measurements, from ``truth_streams``."""
+def simulate_52(runs=None, reading="feet", seed=None):
+    """Run i's noise-free re-entry truth (64 RK4 substeps) and its range measurements, from
+    ``truth_streams(seed)`` (the book's ``SEEDS["sec52"]`` by default)."""
     runs = S52["runs"] if runs is None else runs
-    return model_52(reading, S52["truth_substeps"]).simulate(S52["T"], runs, truth_streams(SEED_52, runs))
+    return model_52(reading, S52["truth_substeps"]).simulate(S52["T"], runs,
+                                                            truth_streams(_seed("sec52", seed), runs))
 
 
 def run_52(reading="feet", runs=None, executor=None, Q=None, names=("DPF", "DEKF", "Liu-West"),
-           weight="predictive", delta=None, roughening=None) -> Run:
+           weight="predictive", delta=None, roughening=None, seed=None) -> Run:
     """Sec 5.2: DPF (2000 + 2000 particles), DEKF and Liu-West (2000 joint particles) on the re-entry problem.
 
     The truth is always the classic noise-free trajectory (``simulate_52``); ``Q`` (a key of
@@ -356,7 +379,7 @@ def run_52(reading="feet", runs=None, executor=None, Q=None, names=("DPF", "DEKF
     """
     runs = (S52["runs"] if reading == "feet" else S52["literal_runs"]) if runs is None else runs
     m = model_52(reading, Q=Q)
-    sim = simulate_52(runs, reading)
+    sim = simulate_52(runs, reading, seed=seed)
     make = {
         "DPF": lambda: DualParticleFilter(m, S52["n_x"], S52["n_theta"], cap=S52["cap"], theta0=S52["theta0"],
                                           roughening=S52["roughening"] if roughening is None else roughening,
@@ -365,28 +388,34 @@ def run_52(reading="feet", runs=None, executor=None, Q=None, names=("DPF", "DEKF
         # joint (not dual) reference at the DPF's likelihood count: 2 x 2000 = 2000 + 2000
         "Liu-West": lambda: LiuWestFilter(m, S52["n_x"], delta=S51["lw_delta"] if delta is None else delta),
     }
-    return _run({n: make[n]() for n in names}, sim, SEED_52, executor)
+    return _run({n: make[n]() for n in names}, sim, _seed("sec52", seed), executor)
 
 
-def run_52_readings(executor=None) -> dict:
-    """Every extra reading of sec 5.2 on the first ``q_runs`` runs: ``{(choice, value): Run}`` for the
-    filters' process noise (``Q52``: small, printed; all three filters), the plug-in weight and
-    roughening K = 0.1 (DPF), Liu-West at δ = 0.95."""
-    n = S52["q_runs"]
-    out = {("Q52", q): run_52(runs=n, executor=executor, Q=q) for q in ("small", "printed")}
-    out[("weight", "plugin")] = run_52(runs=n, executor=executor, names=("DPF",), weight="plugin")
+def run_52_readings(executor=None, runs=None, seed=None) -> dict:
+    """Every extra reading of sec 5.2 on the first ``runs`` (default ``q_runs``) runs:
+    ``{(choice, value): Run}`` for the filters' process noise (``Q52``: small, printed; all three
+    filters), the plug-in weight and roughening K = 0.1 (DPF), Liu-West at δ = 0.95."""
+    n = S52["q_runs"] if runs is None else runs
+    out = {("Q52", q): run_52(runs=n, executor=executor, Q=q, seed=seed) for q in ("small", "printed")}
+    out[("weight", "plugin")] = run_52(runs=n, executor=executor, names=("DPF",), weight="plugin", seed=seed)
     out[("roughening", S52["roughenings"][1])] = run_52(runs=n, executor=executor, names=("DPF",),
-                                                        roughening=S52["roughenings"][1])
+                                                        roughening=S52["roughenings"][1], seed=seed)
     out[("liu_west", S52["lw_deltas"][1])] = run_52(runs=n, executor=executor, names=("Liu-West",),
-                                                    delta=S52["lw_deltas"][1])
+                                                    delta=S52["lw_deltas"][1], seed=seed)
     return out
 
 
 def crb_theta_52(reading="feet", T=None):
     """Cramér–Rao bound sd of θ over time for the noise-free truth (θ, x_0 unknown; Fisher information
-    from the sensitivities of the range to (x_0, θ), by the variational equations)."""
+    from the sensitivities of the range to (x_0, θ), by the variational equations). Deterministic:
+    computed once per process for the same settings (a copy is returned)."""
     T = S52["T"] if T is None else T
-    m = model_52(reading, S52["truth_substeps"])
+    return _crb_theta_52(reading, int(T), S52["truth_substeps"]).copy()
+
+
+@functools.lru_cache(maxsize=8)
+def _crb_theta_52(reading, T, substeps):
+    m = model_52(reading, substeps)
     x = m.x0[None].copy()
     th = m.theta_true[None].copy()
     J = np.zeros((1, 2, 3))
@@ -498,17 +527,23 @@ def per_run_rmse_52(run: Run, name: str, window=None):
 
 
 def integration_error_52(substeps=(2, 4, 8, 16, 64)):
-    """Max |x_k(n substeps) − x_k(1024 substeps)| over the 60 s truth trajectory, per substep count."""
+    """Max |x_k(n substeps) − x_k(1024 substeps)| over the 60 s truth trajectory, per substep count.
+    Deterministic: computed once per process for the same settings (a copy is returned)."""
+    return _integration_error_52(tuple(substeps), S52["T"]).copy()
+
+
+@functools.lru_cache(maxsize=4)
+def _integration_error_52(substeps, T):
     ref_m = model_52("feet", 1024)
     x_ref = [ref_m.x0[None]]
-    for k in range(1, S52["T"] + 1):
+    for k in range(1, T + 1):
         x_ref.append(ref_m.f(x_ref[-1], k, ref_m.theta_true[None]))
     x_ref = np.concatenate(x_ref)
     out = {}
     for n in substeps:
         m = model_52("feet", n)
         x = [m.x0[None]]
-        for k in range(1, S52["T"] + 1):
+        for k in range(1, T + 1):
             x.append(m.f(x[-1], k, m.theta_true[None]))
         d = np.abs(np.concatenate(x) - x_ref)
         out[n] = (float(d[:, 0].max()), float(d[:, 1].max()))
@@ -658,3 +693,176 @@ def convergence_time(theta_hat, truth, band):
     # last step that is outside the band; converged from the step after it
     out_idx = np.where(~ok, np.arange(1, T + 1), 0).max(axis=1)
     return out_idx + 1.0
+
+
+# --------------------------------------------------------------------------- everything the chapter runs
+#: the run counts of the chapter (settings dict, key), the ones :func:`scaled_settings` replaces
+RUN_COUNTS = (("S51", "runs"), ("S51", "grid_runs"), ("S51", "sens_runs"),
+              ("S52", "runs"), ("S52", "q_runs"), ("S52", "literal_runs"))
+
+
+def scaled_settings(runs=None) -> tuple[dict, dict]:
+    """Copies of :data:`S51` and :data:`S52` with every Monte Carlo run count replaced by ``runs``.
+
+    ``runs=None`` keeps the chapter's counts (100 runs in sec 5.1, the exact reference on 40 and the
+    sweeps and readings on 30; 50 in sec 5.2, every reading too, the literal reading on 10). An int
+    replaces all six counts of :data:`RUN_COUNTS` (main runs, exact reference, sweeps and readings),
+    so that ``runs=2`` is a quick run of every experiment; at least 2 (the paired comparisons need
+    two runs). The module's own dicts are never changed.
+    """
+    s51, s52 = dict(S51), dict(S52)
+    if runs is not None:
+        if isinstance(runs, bool) or int(runs) != runs or runs < 2:
+            raise ValueError(f"runs must be an integer >= 2 (paired comparisons need two runs), got {runs!r}")
+        for which, key in RUN_COUNTS:
+            (s51 if which == "S51" else s52)[key] = int(runs)
+    return s51, s52
+
+
+@dataclass
+class Hou2008Results:
+    """Everything the chapter's claims, prose, tables and figures need, from :func:`run_all`.
+
+    Attributes
+    ----------
+    s51 : dict
+        The sec 5.1 settings used (:data:`S51` with the run counts of :func:`scaled_settings`).
+    s52 : dict
+        The same for sec 5.2 (:data:`S52`).
+    seeds : dict
+        The seeds used, ``{"sec51": ..., "sec52": ...}``.
+    r51
+        Sec 5.1 main runs (:func:`run_51`): DPF, DEKF, Liu-West and the exact reference.
+    f5 : dict
+        Fig. 5, one run set per initial guess (:func:`run_fig5`).
+    sens
+        The DPF sweep: weight readings and caps (:func:`run_dpf_sensitivity`).
+    dekf_sens
+        The DEKF sweep: parameter noise (:func:`run_dekf_sensitivity`).
+    r52
+        Sec 5.2 main runs, in feet (:func:`run_52`).
+    r52_lit
+        Sec 5.2 under the literal (metric) reading.
+    th51 : dict
+        The true-θ readings of sec 5.1, by θ (:func:`run_51_theta`).
+    x51
+        The Gaussian-law DPF and Liu-West at δ = 0.95 on the sec 5.1 truths (:func:`run_51_extra`).
+    rd52 : dict
+        The sec 5.2 readings, by (choice, value) (:func:`run_52_readings`).
+    tr_ft : numpy.ndarray
+        Noise-free re-entry truth in feet.
+    tr_lit : numpy.ndarray
+        The same under the literal reading (metres).
+    crb_ft : numpy.ndarray
+        Cramér-Rao bound sd of θ over time, feet (:func:`crb_theta_52`).
+    crb_lit : numpy.ndarray
+        The same under the literal reading.
+    integ : pandas.DataFrame
+        The integration-error sweep (``integration_error_52``).
+    pub : pandas.DataFrame
+        The paper's sec 5.1 numbers (``published.table``).
+    seconds : dict
+        Wall time of the main 5.1 and 5.2 runs and of the readings (context only, never in a claim).
+    """
+
+    s51: dict
+    s52: dict
+    seeds: dict
+    r51: Run
+    f5: dict
+    sens: Run
+    dekf_sens: Run
+    r52: Run
+    r52_lit: Run
+    th51: dict
+    x51: Run
+    rd52: dict
+    tr_ft: np.ndarray
+    tr_lit: np.ndarray
+    crb_ft: np.ndarray
+    crb_lit: np.ndarray
+    integ: pd.DataFrame
+    pub: pd.DataFrame
+    seconds: dict = field(default_factory=dict)
+
+    @property
+    def settings(self) -> dict:
+        """The run counts and seeds used (printed by ``pfrepro run``)."""
+        return {"runs (5.1)": self.s51["runs"], "runs (exact reference)": self.r51.results["exact"].x.shape[0],
+                "runs (5.1 sweeps and readings)": self.s51["sens_runs"], "runs (5.2)": self.s52["runs"],
+                "runs (5.2 readings)": self.s52["q_runs"], "runs (5.2 literal)": self.s52["literal_runs"],
+                "seed (5.1)": self.seeds["sec51"], "seed (5.2)": self.seeds["sec52"]}
+
+
+#: the labels :func:`run_all` passes to ``steps`` (one per experiment, in order)
+STEPS = ("Sec 5.1, main runs", "Fig. 5, initial guesses", "Sec 5.1, DPF sweep", "Sec 5.1, DEKF sweep",
+         "Sec 5.2, main runs", "Sec 5.2, literal reading", "Sec 5.1, true-θ readings",
+         "Sec 5.1, Gaussian law and Liu-West δ", "Sec 5.2, readings", "Sec 5.2, truth, bound, integration")
+
+
+def run_all(runs=None, seeds=None, executor=None, steps=None) -> Hou2008Results:
+    """Every experiment, reading and sweep of the chapter (secs 5.1 and 5.2 and beyond).
+
+    Parameters
+    ----------
+    runs : int, optional
+        ``None``: the chapter's run counts; an int (>= 2) replaces every Monte Carlo run count
+        (:func:`scaled_settings`).
+    seeds : None, int or dict, optional
+        ``None``: the book's :data:`SEEDS`; an int: ``seeds`` for sec 5.1 and ``seeds + 1`` for
+        sec 5.2; a dict: some entries (:func:`pfrepro.papers.resolve_seeds`).
+    executor : concurrent.futures.Executor, optional
+        Passed to every Monte Carlo call (same numbers as the serial call).
+    steps : callable, optional
+        ``steps(label)`` is called before each experiment (:data:`STEPS`).
+
+    Returns
+    -------
+    Hou2008Results
+        The runs, the deterministic re-entry computations and the wall times.
+    """
+    from .. import published
+    from ..papers import resolve_seeds
+
+    seeds = resolve_seeds(SEEDS, seeds)
+    s51, s52 = scaled_settings(runs)
+    a, b = seeds["sec51"], seeds["sec52"]
+    labels = iter(STEPS)
+
+    def say():
+        if steps is not None:
+            steps(next(labels))
+
+    say()
+    t0 = time.perf_counter()
+    r51 = run_51(executor, runs=s51["runs"], grid_runs=s51["grid_runs"], seed=a)
+    t_51 = time.perf_counter() - t0
+    say()
+    f5 = run_fig5(r51, executor=executor, seed=a)
+    say()
+    sens = run_dpf_sensitivity(executor, runs=s51["sens_runs"], seed=a)
+    say()
+    dekf_sens = run_dekf_sensitivity(executor, runs=s51["runs"], seed=a)
+    say()
+    t0 = time.perf_counter()
+    r52 = run_52(runs=s52["runs"], executor=executor, seed=b)
+    t_52 = time.perf_counter() - t0
+    say()
+    r52_lit = run_52("literal", runs=s52["literal_runs"], executor=executor, seed=b)
+    # the readings beyond the main one (fewer runs, stated in the chapter)
+    t0 = time.perf_counter()
+    say()
+    th51 = {th: run_51_theta(th, executor, runs=s51["sens_runs"], seed=a) for th in s51["thetas"][1:]}
+    say()
+    x51 = run_51_extra(executor, runs=s51["runs"], lw_runs=s51["sens_runs"], seed=a)
+    say()
+    rd52 = run_52_readings(executor, runs=s52["q_runs"], seed=b)
+    t_readings = time.perf_counter() - t0
+    say()
+    out = Hou2008Results(
+        s51=s51, s52=s52, seeds=seeds, r51=r51, f5=f5, sens=sens, dekf_sens=dekf_sens, r52=r52, r52_lit=r52_lit,
+        th51=th51, x51=x51, rd52=rd52, tr_ft=truth_trajectory_52("feet"), tr_lit=truth_trajectory_52("literal"),
+        crb_ft=crb_theta_52("feet"), crb_lit=crb_theta_52("literal"), integ=integration_error_52(),
+        pub=published.table(PAPER, "Sec 5.1"),
+        seconds={"5.1": t_51, "5.2": t_52, "readings": t_readings})
+    return out

@@ -1,12 +1,11 @@
 """Figures and tables of Hou & Yin (2008), dual particle filter (chapter ``book/50_dpf.md``).
 
-The experiments are :mod:`pfrepro.experiments.dpf_hou2008`; this module only draws their
-results (Fig. 4, Fig. 5, Figs. 7-9, the sec 5.1 RMSE table) and bundles them for the command
-line (:func:`reproduce`).
+The experiments are :mod:`pfrepro.experiments.dpf_hou2008` (``run_all``) and the claims
+``pfrepro.verdicts.dpf_hou2008``; this module only draws their results: the paper's figures
+and table for the command line (:func:`tables`, :func:`figures`) and every figure and table the
+chapter shows (:func:`chapter_figures` and the ``*_table`` functions).
 """
 from __future__ import annotations
-
-import contextlib
 
 import matplotlib.ticker
 import numpy as np
@@ -16,14 +15,16 @@ from ..experiments import dpf_hou2008 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
 
-__all__ = ["pm", "rmse_table", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "legend_below", "reproduce", "TABLES",
-           "FIGURES", "N_STEPS", "paper_row_51", "sweeps_51", "integration_error"]
+__all__ = ["pm", "rmse_table", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "fig_exact", "legend_below", "tables",
+           "figures", "chapter_figures", "TABLES", "FIGURES", "N_STEPS", "paper_row_51", "sweeps_51",
+           "integration_error", "errata_table", "readings_51_table", "sensitivity_display", "dekf_sensitivity_display",
+           "law_table", "coverage_display", "table_52_display", "readings_52_table"]
 
-#: what :func:`reproduce` makes
+#: the tables and figures of the paper :func:`tables` and :func:`figures` make (``pfrepro run``)
 TABLES = ("RMSE table",)
 FIGURES = ("Fig. 4", "Fig. 5", "Figs. 7-9")
-#: experiments :func:`reproduce` runs (for a progress bar)
-N_STEPS = 3
+#: experiments ``run_all`` runs (its ``steps`` calls, for a progress bar)
+N_STEPS = len(E.STEPS)
 #: the filters of the sec 5.1 RMSE table
 NAMES_51 = ("DPF", "DEKF", "Liu-West")
 
@@ -283,54 +284,169 @@ def integration_error(integ, used=None):
     return fig
 
 
-@contextlib.contextmanager
-def _scale(runs, seed):
-    """Temporarily ``runs`` runs (exact reference on at most as many) and seeds ``seed``, ``seed + 1``."""
-    saved = dict(E.S51), (E.SEED_51, E.SEED_52)
-    try:
-        if runs is not None:
-            E.S51["runs"] = int(runs)
-            E.S51["grid_runs"] = min(E.S51["grid_runs"], int(runs))
-        if seed is not None:
-            E.SEED_51, E.SEED_52 = int(seed), int(seed) + 1
-        yield
-    finally:
-        E.S51.clear(); E.S51.update(saved[0])
-        E.SEED_51, E.SEED_52 = saved[1]
+def fig_exact(r51, runs=None):
+    """Sec 5.1 against the exact posterior: (a) RMS distance of each method's θ estimate to the exact
+    posterior mean, (b) coverage of the true θ by each method's 95 % interval, over the exact
+    reference's runs (``runs``, default all of them: common runs only)."""
+    exd = r51.results["exact"].diagnostics
+    nr = r51.results["exact"].x.shape[0] if runs is None else runs
+    kk = np.arange(1, r51.sim.x.shape[1])
+    fig, axs = new_figure(1, 2, figsize=(7, 2.8))
+    for name, c, ls in (("DPF", method_color("DPF"), "-"), ("DEKF", method_color("DEKF"), "--"),
+                        ("Liu-West", method_color("Liu-West"), ":")):
+        d = r51.results[name].diagnostics["theta"][:nr] - exd["theta"][:nr]
+        axs[0].plot(kk, np.sqrt(np.mean(d**2, 0)), color=c, ls=ls, label=name.replace("-", "–"))
+    axs[0].set_yscale("log"); axs[0].set_xlabel("k"); axs[0].set_ylabel("RMS distance to exact E[θ | z_1:k]")
+    axs[0].set_title("(a)", fontsize=8)
+    for name, c, ls in (("exact", "k", "-"), ("DPF", method_color("DPF"), "-"), ("DEKF", method_color("DEKF"), "--"),
+                        ("Liu-West", method_color("Liu-West"), ":")):
+        q = E.theta_interval(r51, name)
+        cov = E.coverage(q[0, :nr], q[2, :nr], E.S51["theta_true"]).mean(0)   # the common runs only
+        axs[1].plot(kk, cov, color=c, ls=ls, label=name.replace("-", "–"))
+    axs[1].axhline(0.95, color="0.5", lw=0.6); axs[1].set_ylim(0, 1.02); axs[1].set_xlabel("k")
+    axs[1].set_ylabel("coverage of true θ by 95 % interval"); axs[1].set_title("(b)", fontsize=8)
+    legend_below(fig, axs, ncol=4, fontsize=8)
+    return fig
 
 
-def reproduce(runs: int | None = None, seed: int | None = None, executor=None, steps=None):
-    """The sec 5.1 RMSE table, Figs. 4-5 and Figs. 7-9 (paper scale: 100 and 50 runs).
+def tables(results) -> dict:
+    """The paper's table (``pfrepro run``): the sec 5.1 RMSE table (:func:`rmse_table`)."""
+    return {"RMSE table": rmse_table(results.r51, results.pub)[0]}
 
-    Calls the chapter's experiment functions (:func:`~pfrepro.experiments.dpf_hou2008.run_51`,
-    :func:`~pfrepro.experiments.dpf_hou2008.run_fig5`, :func:`~pfrepro.experiments.dpf_hou2008.run_52`).
-    ``runs`` replaces both run counts (the exact reference runs on at most 40 of them);
-    ``seed`` replaces the fixed seeds by ``seed`` (5.1) and ``seed + 1`` (5.2). Returns a
-    :class:`pfrepro.papers.Reproduction`; its claims are the four published RMSE cells
-    against our mean eq-(14) RMSE (the chapter judges them on the spread of single runs).
-    """
-    from ..papers import Reproduction, call_with_executor, cell_claims
 
-    step = steps or (lambda label: None)
-    with _scale(runs, seed):
-        runs51, runs52, grid = E.S51["runs"], E.S52["runs"] if runs is None else int(runs), E.S51["grid_runs"]
-        seeds = (E.SEED_51, E.SEED_52)
-        step(f"Sec 5.1, Fig. 4 ({runs51} runs)")
-        r51 = call_with_executor(E.run_51, executor=executor)
-        step(f"Fig. 5, initial guesses ({runs51} runs)")
-        f5 = call_with_executor(E.run_fig5, r51, executor=executor)
-        step(f"Sec 5.2, Figs. 7-9 ({runs52} runs)")
-        r52 = call_with_executor(E.run_52, "feet", runs=runs, executor=executor)
-    tab, t_all, _ = rmse_table(r51)
-    from .. import published
+def figures(results) -> dict:
+    """The paper's figures (``pfrepro run``): Fig. 4, Fig. 5 and Figs. 7-9 from ``run_all``'s results."""
+    return {"Fig. 4": fig4(results.r51), "Fig. 5": fig5(results.f5), "Figs. 7-9": figs_7_9(results.r52, results.crb_ft)}
 
-    pub = published.table(E.PAPER, "Sec 5.1")
-    cells = pd.DataFrame([{"filter": n, "quantity": q, "published": float(pub.loc[key, n]),
-                           "ours": float(t_all.loc[n, f"eq14 {q}"]), "se": float(t_all.loc[n, f"eq14 {q} se"])}
-                          for q, key in (("x", "RMSE x"), ("θ", "RMSE theta")) for n in ("DPF", "DEKF")])
-    claims = cell_claims(E.PAPER, cells, lambda r: f"cli-rmse-{r['quantity'].replace('θ', 'theta')}-{r['filter'].lower()}",
-                         lambda r: f"{r['filter']} eq-(14) RMSE of {r['quantity']} (sec 5.1)", "Sec 5.1")
-    figures = {"Fig. 4": fig4(r51), "Fig. 5": fig5(f5), "Figs. 7-9": figs_7_9(r52)}
-    return Reproduction(E.PAPER, tables={"RMSE table": tab}, figures=figures, claims=claims,
-                        settings={"runs (5.1)": runs51, "runs (exact reference)": grid, "runs (5.2)": runs52,
-                                  "seed (5.1)": seeds[0], "seed (5.2)": seeds[1]})
+
+def chapter_figures(results) -> dict:
+    """Every figure of the chapter, by its glue key (the paper's Figs. 2, 4-9, the sweeps, the exact
+    posterior and the integration error)."""
+    R = results
+    st, sd = E.sensitivity_table(R.sens), E.sensitivity_table(R.dekf_sens)
+    return {"dpf_fig4": fig4(R.r51, 0), "dpf_fig5": fig5(R.f5, 0), "dpf_sweeps51": sweeps_51(st, sd),
+            "dpf_fig2": fig2(R.x51.results["DPF Gaussian θ"].diagnostics["outside"].mean(0)),
+            "dpf_fig_exact": fig_exact(R.r51, R.s51["grid_runs"]), "dpf_fig6": fig6(R.tr_ft, R.tr_lit),
+            "dpf_fig789": figs_7_9(R.r52, R.crb_ft), "dpf_integration": integration_error(R.integ)}
+
+
+def errata_table(ratio_3d: float, literal_spread: float) -> pd.DataFrame:
+    """The misprints of the paper and their corrections, with the evidence (``ratio_3d``: step 3(d) as
+    printed over the weighted variance; ``literal_spread``: the literal weight's spread over θ, both
+    from the chapter's equation checks)."""
+    return pd.DataFrame([
+        ("step 2(b)", "p(z_{1:k} | x̃_k, θ)", "p(z_k | x̃_k, θ)", "bootstrap weight; the past is already in w_{k-1}"),
+        ("step 3(d)", "σ² = Σ w θ (θ̂ − θ)²", "σ² = Σ w (θ̂ − θ)²",
+         f"checks above: the printed form is {ratio_3d:.2f} × the variance"),
+        ("step 3(e)", "r_i", "r_l", "the lower end of the range"),
+        ("eq (11), last line", "p(z_k | θ, x̂_k)", "p(z_k | θ, E[x_k | θ, z_1:k-1])",
+         f"checks above: the literal weight's spread over θ is {literal_spread:.1f}"),
+        ("eq (16)", "−θ x₂ e^{−γ x₁}", "−θ x₂² e^{−γ x₁}", "Athans et al. (1968); drag ∝ speed²"),
+        ("sec 5.2 units", "91.5 km, 6.1 km/s, 30.5 km", "3·10⁵ ft, 2·10⁴ ft/s, 10⁵ ft", "γ, var v and θ are foot values"),
+        ("eqs (15)-(16)", "w ~ N(0, 10⁶), N(0, 4·10⁶)", "a reading, not a proven misprint: P₀ = diag(10⁶, 4·10⁶), Q = 0 (main)",
+         "the classic problem's initial covariance; the printed values as the filters' Q, and a small Q, are run as readings "
+         "(sec 5.2): the conclusions that change with it are marked there"),
+    ], columns=["where", "printed", "corrected", "evidence"])
+
+
+def readings_51_table(results) -> pd.DataFrame:
+    """Sec 5.1 under every reading (``pfrepro.verdicts.dpf_hou2008.readings_51``): medians of single-run
+    eq-(14) RMSEs ("in": the published value inside our central 95 %), failures, paired z, and the paper."""
+    from ..verdicts import dpf_hou2008 as V
+
+    R51, pub = V.readings_51(results), V.published_51(results)
+
+    def cell(st, who, lab):
+        med, half, (lo_q, hi_q) = st[(who, lab)]
+        inside = lo_q <= pub[(who, lab)] <= hi_q
+        return f"{med:.{3 if lab == 'x' else 4}f}{' in' if inside else ''}"
+
+    tab = pd.DataFrame([{
+        "reading": "main (T = 100, θ = 0.5)" if ch == "main" else f"{ch} = {val}", "runs": st["runs"],
+        "failures DPF / DEKF": f"{st['fail'][0]} / {st['fail'][1]}",
+        "DPF x": cell(st, "DPF", "x"), "DEKF x": cell(st, "DEKF", "x"),
+        "DPF θ": cell(st, "DPF", "theta"), "DEKF θ": cell(st, "DEKF", "theta"),
+        "z (x)": f"{V.z_of(st[('order', 'x')]):.1f}", "z (θ)": f"{V.z_of(st[('order', 'theta')]):.1f}"}
+        for (ch, val), st in R51.items()])
+    tab.loc[len(tab)] = ["paper (1 run)", 1, "—", f"{pub[('DPF', 'x')]:.3f}", f"{pub[('DEKF', 'x')]:.3f}",
+                         f"{pub[('DPF', 'theta')]:.5f}", f"{pub[('DEKF', 'theta')]:.5f}", "—", "—"]
+    return tab
+
+
+def sensitivity_display(st) -> pd.DataFrame:
+    """The DPF sweep as shown (``st``: ``sensitivity_table`` of the sweep): RMSEs ± se, coverage, α+β, cap and guards."""
+    return pd.DataFrame({"runs": st["runs"], "failures": st["failures"],
+                         "RMSE x": [pm(a, b, 2) for a, b in zip(st["RMSE x"], st["se x"])],
+                         "RMSE θ": [pm(a, b, 3) for a, b in zip(st["RMSE θ"], st["se θ"])],
+                         "cover. at T": st["coverage at T"].map("{:.2f}".format),
+                         "α+β at T": st["median α+β at T"].map("{:.0f}".format),
+                         "capped %": st["capped steps %"].map("{:.1f}".format),
+                         "guards %": st["guard steps %"].map("{:.1f}".format)}, index=st.index)
+
+
+def dekf_sensitivity_display(sd) -> pd.DataFrame:
+    """The DEKF sweep as shown (``sd``: ``sensitivity_table`` of the sweep): RMSEs ± se and coverage."""
+    return pd.DataFrame({"runs": sd["runs"], "failures": sd["failures"],
+                         "RMSE x": [pm(a, b, 2) for a, b in zip(sd["RMSE x"], sd["se x"])],
+                         "RMSE θ": [pm(a, b, 3) for a, b in zip(sd["RMSE θ"], sd["se θ"])],
+                         "cover. at T": sd["coverage at T"].map("{:.2f}".format)}, index=sd.index)
+
+
+def law_table(results) -> pd.DataFrame:
+    """Beta against Gaussian parameter draws (sec 3.2, Fig. 2), one row per law: RMSEs, convergence step,
+    draws outside the range and ESS (``pfrepro.verdicts.dpf_hou2008.beta_vs_gaussian``)."""
+    from ..verdicts import dpf_hou2008 as V
+
+    R = results
+    ct = V.beta_vs_gaussian(R)["ct"]
+    return pd.DataFrame([{
+        "law": lab, "runs": rr.results[n].x.shape[0], "failures": int(E.lost_51(rr, n).sum()),
+        "RMSE x": pm(*E.mean_se(E.rmse_51(rr, n, 0)), 2), "RMSE θ": pm(*E.mean_se(E.rmse_51(rr, n, 1)), 4),
+        "convergence step": pm(*E.mean_se(ct[n]), 1),
+        "draws outside (%)": f"{100 * rr.results[n].diagnostics['outside'].mean():.2f}",
+        "% outside at k = 1": f"{100 * rr.results[n].diagnostics['outside'][:, 0].mean():.1f}",
+        "mean ESS of θ draws": f"{rr.results[n].diagnostics['ess_theta'].mean():.0f}"}
+        for lab, n, rr in (("Beta (paper)", "DPF", R.r51), ("Gaussian, same moments", V.GA, R.x51))])
+
+
+def coverage_display(results) -> pd.DataFrame:
+    """Coverage of the true θ at T (± se), averaged over k > 10, and interval width, per method, on the exact
+    reference's runs and on all runs, with the failures (``pfrepro.verdicts.dpf_hou2008.coverage_frame``)."""
+    from ..verdicts import dpf_hou2008 as V
+
+    cov_tab = V.coverage_frame(results)
+    out = cov_tab.copy()
+    out["coverage at T"] = [pm(a, b, 2) for a, b in zip(cov_tab["coverage at T"], cov_tab["se"])]
+    out = out.drop(columns="se")
+    out["coverage k>10"] = out["coverage k>10"].map("{:.2f}".format)
+    out["mean width at T"] = out["mean width at T"].map("{:.3f}".format)
+    out.insert(1, "failures", [int(E.lost_51(results.r51, n.replace(" (all runs)", ""), int(cov_tab.loc[n, "runs"])).sum())
+                               for n in cov_tab.index])
+    return out
+
+
+def table_52_display(results) -> pd.DataFrame:
+    """The sec 5.2 table at T (main reading; ``pfrepro.experiments.dpf_hou2008.table_52``) as shown."""
+    out = E.table_52(results.r52)
+    out["θ (10⁻³/ft)"] = out["θ (10⁻³/ft)"].map("{:.3f}".format)
+    for c in ("altitude (ft)", "speed (ft/s)", "altitude, runs not lost (ft)"):
+        out[c] = out[c].map("{:.1f}".format)
+    return out.rename(columns=lambda c: c if c in ("runs", "failures") else c + " at T")
+
+
+def readings_52_table(results) -> pd.DataFrame:
+    """Sec 5.2 under every reading (``pfrepro.verdicts.dpf_hou2008.readings_52``): failures, errors at T
+    and the paired z of every ordering."""
+    from ..verdicts import dpf_hou2008 as V
+
+    def trio(st, col, fmt):
+        return " / ".join(fmt(st["table"].loc[n, col]) for n in V.N52)
+
+    return pd.DataFrame([{
+        "reading": V.reading_label_52(ch, val), "runs": st["runs"],
+        "failures DPF / DEKF / LW": trio(st, "failures", lambda v: f"{int(v)}"),
+        "altitude at T (ft)": trio(st, "altitude (ft)", lambda v: f"{v:.0f}"),
+        "θ at T (% of θ)": trio(st, "θ (10⁻³/ft)", lambda v: f"{100 * v:.1f}"),
+        "z DEKF−DPF: alt, speed, θ": ", ".join(f"{V.z_of(st[(k, 'all')]):.1f}" for k in ("alt", "vel", "th")),
+        "z 10–20 s": ", ".join(f"{V.z_of(st[(k, '10_20')]):.1f}" for k in ("alt", "vel", "th")),
+        "z LW−DPF θ": f"{V.z_of(st['lw']):.1f}"} for (ch, val), st in V.readings_52(results).items()])
