@@ -4,7 +4,7 @@ Adding a paper is one :class:`Paper` entry in :data:`PAPERS`. Each paper has thr
 
 * ``pfrepro.experiments.<key>`` runs the experiments, readings and sweeps:
   ``run_all(runs=None, seeds=None, executor=None, steps=None) -> results`` (``runs``/``seeds``
-  ``None`` mean the paper's own counts and the book's fixed seeds, :data:`SEEDS` of the module;
+  ``None`` mean the paper's own counts and the book's fixed seeds, ``SEEDS`` of the module;
   ``steps(label)`` is called before each experiment, for a progress display). The results
   object has a ``settings`` dict (the runs and seeds it used). The module's ``CHOICES`` are the
   chapter's free choices.
