@@ -20,6 +20,8 @@
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .. import prose as P
@@ -402,7 +404,8 @@ def _verdict_prose(reg, R) -> dict:
         out[f"li_ratio_m{w}"], out[f"li_ratio_m{w}_se"] = E.ratio_of_means(res[w].rmse("EKF"), res[w].rmse("PF"))
     v1, _ = _ratio_readings(res, _by_model(R.sens), 1, alternative_statistics())
     out["li_ratio_m1_max"] = max(v[0] for v in v1.values())
-    out["li_ratio_m1_z"] = (out["li_ratio_m1"] - RATIO_STRONG_MIN) / out["li_ratio_m1_se"]
+    d1, se1 = out["li_ratio_m1"] - RATIO_STRONG_MIN, out["li_ratio_m1_se"]
+    out["li_ratio_m1_z"] = d1 / se1 if se1 > 0 else math.copysign(math.inf, d1)   # standard errors from 7
     vt = _verdicts(reg)
     out["li_n_inconclusive"] = sum(v == "inconclusive" for v in vt.values())
     for name in ("EKF", "PF"):
