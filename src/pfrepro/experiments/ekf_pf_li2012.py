@@ -22,7 +22,7 @@ Everything here is a thin layer over the package: models from
 :func:`pfrepro.montecarlo.run_monte_carlo`. :func:`run_all` runs every experiment whose
 numbers feed a claim (Table 1 and figure runs, the sweeps and readings, the SIS runs, the
 seed spread, the cost counts) and returns :class:`Li2012Results`; the claims are decided by
-:mod:`pfrepro.verdicts.ekf_pf_li2012`, and the chapter ``book/30_ekf_pf.md`` (through
+``pfrepro.verdicts.ekf_pf_li2012``, and the chapter ``book/30_ekf_pf.md`` (through
 :meth:`pfrepro.papers.Paper.run`) and ``pfrepro run li2012`` both go through them. The
 wall-time measurements (:func:`cost_ratios`, :func:`rmse_and_cost_vs_n`, the times of
 :func:`cost_evidence`) decide nothing and run in the chapter, after the Monte Carlo work.
@@ -428,7 +428,7 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
     PF mean per-run RMSE with SE, the exact-posterior RMSE, the EKF/PF ratio, the paired
     per-run RMSE difference EKF - PF (``diff``, ``diff_se``), and the verdicts the claims
     rule gives for the two cells and for the model's ratio claim ("more than 7x" on model
-    1, "about the same" on model 2: :func:`pfrepro.verdicts.ekf_pf_li2012.ratio_diff`). The baseline (P0 = 2,
+    1, "about the same" on model 2: ``pfrepro.verdicts.ekf_pf_li2012.ratio_diff``). The baseline (P0 = 2,
     multinomial, eq-10 EKF) appears in each block.
 
     ``sis_runs > 0``: also the degeneracy statistics on the first ``sis_runs`` runs (common

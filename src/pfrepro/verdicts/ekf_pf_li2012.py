@@ -238,7 +238,7 @@ def takeaway(reg, results) -> str:
     gap_ekf = E.gap_to(results.res[1], "EKF")["relative"]
     if v["figs-pf-better"] in _HOLDS:
         first = (f"On the strongly nonlinear model the bootstrap PF with N = {E.N_PARTICLES} particles comes within "
-                 f"{gap_pf:.0%} of the best achievable RMSE (the exact posterior mean) while the EKF is "
+                 f"{gap_pf:.1%} of the best achievable RMSE (the exact posterior mean) while the EKF is "
                  f"{gap_ekf:.0%} above it")
         first += (f", and the EKF's error is {r1:.1f} times the PF's, as the paper says"
                   if v["ratio-7x"] in _HOLDS else
