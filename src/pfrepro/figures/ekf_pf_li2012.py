@@ -269,11 +269,11 @@ def seed_spread_plot(spread):
     for ax, w in zip(axes, (1, 2)):
         sub = spread[spread["model"] == E.MODEL_LABELS[w]]
         seeds = list(dict.fromkeys(sub["seed"]))
-        for j, (n, c) in enumerate((("EKF", "C3"), ("EKF-prev", "C1"))):
+        for j, (n, c) in enumerate((("EKF", method_color("EKF")), ("EKF-prev", SERIES_COLORS[1]))):
             q = sub[sub["filter"] == n]
             ax.errorbar(np.arange(len(q)) + 0.15 * (j - 0.5), q["mean"], 2 * q["se"], fmt="o", color=c,
                         capsize=2, label=E.FILTER_LABELS[n])
-        ax.axhline(pub.loc["EKF", E.MODEL_LABELS[w]], color="k", ls="--", label="published EKF (Table 1)")
+        ax.axhline(pub.loc["EKF", E.MODEL_LABELS[w]], color=REFERENCE_COLOR, ls="--", label="published EKF (Table 1)")
         ax.set_xticks(np.arange(len(seeds)), [str(v) for v in seeds], rotation=60, fontsize=8)
         ax.set_xlabel("seed of the 100-run set")
         ax.set_ylabel("mean per-run RMSE")
@@ -289,11 +289,11 @@ def nsweep_plot(nsweep: dict, res: dict):
     ``nsweep`` maps model -> :func:`~pfrepro.experiments.ekf_pf_li2012.rmse_and_cost_vs_n`, ``res``
     model -> the Table 1 MonteCarloResult."""
     fig, axes = new_figure(1, 3, figsize=(10.2, 3.8))
-    for w, c in zip((1, 2), ("C0", "C1")):
+    for w, c in zip((1, 2), SERIES_COLORS[:2]):
         d, ax = nsweep[w], axes[0 if w == 1 else 1]
         ax.errorbar(d.index, d["rmse"], 2 * d["se"], fmt="o-", color=c, capsize=3, label="PF (±2 se)")
-        ax.axhline(res[w].rmse("Exact").mean(), color="k", ls=":", lw=2, label="exact posterior mean")
-        ax.axhline(res[w].rmse("EKF").mean(), color="C3", ls="--", label="EKF")
+        ax.axhline(res[w].rmse("Exact").mean(), color=REFERENCE_COLOR, ls=":", lw=2, label="exact posterior mean")
+        ax.axhline(res[w].rmse("EKF").mean(), color=method_color("EKF"), ls="--", label="EKF")
         ax.set_xscale("log")
         ax.set_xlabel("particles N")
         ax.set_ylabel(f"mean per-run RMSE ({res[w].sim.runs} runs)")
