@@ -253,3 +253,33 @@ def test_new_figures_and_shown_table_small():
         plt.close(fig)
     shown = F.table1_shown(ex.table1(res))
     assert shown["published"].tolist() == ["30.1709", "3.9459", "1.1281", "1.0479"]
+
+
+def test_chapter_tables_and_figures_small():
+    """The tables and plots the chapter draws from run_all's results (and its timing cells)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from pfrepro.figures import ekf_pf_li2012 as F
+
+    sims = {w: ex.simulate(w, 3, 8) for w in (1, 2)}
+    res = {w: ex.run(w, 3, 8, ex.FILTERS, sim=sims[w], n_particles=60) for w in (1, 2)}
+    assert F.statistic_readings_table(res).shape == (4, 6)
+    assert F.gap_table(res).data.shape == (6, 6)   # (model, filter) x RMSE, se, exact, gap, gap se, relative
+    cnt = {w: ex.cost_evidence(w, sims[w], repeats=1, seed=8) for w in (1, 2)}
+    assert list(cnt[1].columns) == ["model evals / step", "count ratio", "time ratio", "time ratio min",
+                                    "time ratio max"]
+    assert cnt[1]["count ratio"].equals(ex.cost_count_table(1, sims[1], seed=8)["count ratio"])
+    assert "count ratio" in F.count_table(cnt).to_html()
+    cost = {w: ex.cost_ratios(w, sims[w], include=("EKF", "UKF", "PF"), repeats=1, seed=8) for w in (1, 2)}
+    assert F.cost_table(cost).shape == (3, 4)
+    sens = ex.sensitivity(sims, 8, P0_values=(2.0,), schemes=("multinomial",))
+    shown = F.sensitivity_shown(sens)
+    assert len(shown) == len(sens) and set(" ".join(shown["verdicts"]).split()) <= set("RQNI–")
+    ns = {w: ex.rmse_and_cost_vs_n(w, sims[w], 8, n_values=(20, 40), exact=res[w].rmse("Exact"), repeats=1)
+          for w in (1, 2)}
+    for fig in (F.seed_spread_plot(ex.ekf_seed_spread(seeds=(1, 2), runs=3)), F.nsweep_plot(ns, res)):
+        assert len(fig.axes) in (2, 3)
+        plt.close(fig)
