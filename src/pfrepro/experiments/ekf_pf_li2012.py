@@ -65,9 +65,9 @@ T = 60
 N_PARTICLES = 1000
 RUNS_TABLE = 100
 RUNS_FIGURES = 50
-#: the book's seeds, fixed before any result was seen, never changed: the Table 1 runs, the
+#: the book's seeds (fixed before any result was seen, never changed) of the Table 1 runs, the
 #: figure runs, and the first of the further seed sets of the EKF spread (:func:`spread_seeds`).
-#: Functions take their seed as an argument; :func:`run_all` resolves these (``pfrepro.papers.resolve_seeds``).
+#: Functions take their seed as an argument; :func:`run_all` resolves these (:func:`pfrepro.papers.resolve_seeds`).
 SEEDS = {"table": 2012, "figures": 2013, "spread": 2101}
 #: the book's Table 1 and figure seeds (``SEEDS["table"]``, ``SEEDS["figures"]``), for modules that
 #: rerun the chapter's truths (:mod:`pfrepro.experiments.today`)
@@ -333,7 +333,7 @@ def statistic_reading(res: MonteCarloResult, name: str, statistic: str) -> tuple
 
 def ratio_reading(res: MonteCarloResult, a: str, b: str, statistic: str) -> tuple[float, float]:
     """Ratio of filter ``a``'s to filter ``b``'s Table 1 value under one reading of the statistic,
-    with its standard error (delta method for the main reading, as :func:`ratio_of_means`;
+    with its standard error (delta method for the main reading, as :func:`~pfrepro.stats.ratio_of_means`;
     jackknife over runs, paired, for the others)."""
     ea, eb = _e2(res, a), _e2(res, b)
     if statistic == "mean_run_rmse":
@@ -738,9 +738,8 @@ def run_all(runs: int | None = None, seeds=None, executor=None, steps=None) -> L
     Parameters
     ----------
     runs : int, optional
-        ``None``: the paper's counts (Table 1 :data:`RUNS_TABLE`, figures :data:`RUNS_FIGURES`),
-        the SIS readings on :data:`SIS_RUNS` runs and :data:`RUNS_TABLE` runs per seed set of the
-        spread. An int (at least 2) replaces every one of these counts.
+        ``None``: the paper's counts (Table 1 ``RUNS_TABLE``, figures ``RUNS_FIGURES``), the SIS
+        readings on :data:`SIS_RUNS` runs and ``RUNS_TABLE`` runs per seed set of the spread. An int (at least 2) replaces every one of these counts.
     seeds : None, int or dict
         The seeds (:func:`pfrepro.papers.resolve_seeds` over :data:`SEEDS`).
     executor : concurrent.futures.Executor, optional

@@ -39,11 +39,12 @@ __all__ = ["RATIO_STRONG_MIN", "RATIO_WEAK_MAX", "COST_RATIO_MIN", "MAIN_CLAIMS"
 #: claim). Model 2: "about the same" means EKF/PF < 1.2, fixed before running (the
 #: published ratio is 1.08; the verdict is decided by the number itself when it matches).
 RATIO_STRONG_MIN = 7.0
+#: model 2's "about the same" is EKF/PF < 1.2 (see :data:`RATIO_STRONG_MIN`)
 RATIO_WEAK_MAX = 1.2
-#: "the PF's computation far exceeds the EKF's" (abstract, conclusion): at least 10 times the
-#: EKF's model evaluations per step
+#: "the PF's computation far exceeds the EKF's" (abstract, conclusion) read as at least 10 times
+#: the EKF's model evaluations per step
 COST_RATIO_MIN = 10
-#: the paper's main claims (abstract and conclusion): far better under strong nonlinearity (7x),
+#: the paper's main claims (abstract and conclusion), far better under strong nonlinearity (7x),
 #: markedly better tracking (Figs. 1-4), about the same under weak nonlinearity, much costlier
 MAIN_CLAIMS = ("ratio-7x", "figs-pf-better", "close-weak-nonlinearity", "pf-cost")
 #: the Table 1 cells, in the registry's order
