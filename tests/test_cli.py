@@ -107,8 +107,10 @@ def test_run_li2012_writes_tables_figures_claims(li_run):
         png = (out / f"fig{n}.png").read_bytes()
         assert png[:8] == b"\x89PNG\r\n\x1a\n"
     claims = json.loads((out / "claims" / "ekf_pf_li2012.json").read_text())
-    assert len(claims) == 4 and {c["claim_id"] for c in claims} == {
-        "table1-ekf-model1", "table1-pf-model1", "table1-ekf-model2", "table1-pf-model2"}
+    # the chapter's claims, all of them (pfrepro.verdicts.ekf_pf_li2012), not only the table cells
+    assert [c["claim_id"] for c in claims] == [
+        "table1-ekf-model1", "table1-pf-model1", "table1-ekf-model2", "table1-pf-model2", "ratio-7x",
+        "close-weak-nonlinearity", "figs-pf-better", "sis-degenerates", "resampling-limits-degeneracy", "pf-cost"]
 
 
 def test_run_uses_the_chapter_experiment(li_run):
@@ -125,7 +127,7 @@ def test_run_uses_the_chapter_experiment(li_run):
 def test_run_prints_the_verdict_summary(li_run):
     _, out = li_run
     text = (out / "stdout.txt").read_text()
-    assert "verdicts of the 4 table-cell claims" in text
+    assert "verdicts of the 10 claims (the chapter's claims" in text
     assert "table1-ekf-model1" in text and "seed (figures): 4" in text
 
 
@@ -138,10 +140,10 @@ def test_scorecard_formats(fmt, li_run, capsys):
         from io import StringIO
 
         df = pd.read_csv(StringIO(text))
-        assert len(df) == 4 and "verdict" in df.columns
+        assert len(df) == 10 and "verdict" in df.columns
     elif fmt == "json":
         rows = json.loads(text)
-        assert len(rows) == 4 and all("verdict" in r for r in rows)
+        assert len(rows) == 10 and all("verdict" in r for r in rows)
     else:
         assert "table1-pf-model2" in text and "verdict" in text
 

@@ -193,10 +193,12 @@ def test_statistic_readings_and_jackknife():
 
 
 def test_ratio_claims_test_the_papers_words():
-    assert ex.RATIO_STRONG_MIN == 7.0  # "more than 7 times" (sec 2)
-    assert ex.ratio_claim_holds(1, 4.2, 0.2) is False and ex.ratio_claim_holds(1, 7.7, 0.2) is True
-    assert ex.ratio_claim_holds(1, 7.1, 0.2) is None
-    assert ex.ratio_claim_holds(2, 1.11, 0.01) is True and ex.ratio_claim_holds(2, 1.5, 0.01) is False
+    from pfrepro.verdicts import ekf_pf_li2012 as V
+
+    assert V.RATIO_STRONG_MIN == 7.0  # "more than 7 times" (sec 2)
+    assert V.ratio_claim_holds(1, 4.2, 0.2) is False and V.ratio_claim_holds(1, 7.7, 0.2) is True
+    assert V.ratio_claim_holds(1, 7.1, 0.2) is None
+    assert V.ratio_claim_holds(2, 1.11, 0.01) is True and V.ratio_claim_holds(2, 1.5, 0.01) is False
 
 
 def test_sis_never_resamples_and_degenerates():
@@ -251,3 +253,33 @@ def test_new_figures_and_shown_table_small():
         plt.close(fig)
     shown = F.table1_shown(ex.table1(res))
     assert shown["published"].tolist() == ["30.1709", "3.9459", "1.1281", "1.0479"]
+
+
+def test_chapter_tables_and_figures_small():
+    """The tables and plots the chapter draws from run_all's results (and its timing cells)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from pfrepro.figures import ekf_pf_li2012 as F
+
+    sims = {w: ex.simulate(w, 3, 8) for w in (1, 2)}
+    res = {w: ex.run(w, 3, 8, ex.FILTERS, sim=sims[w], n_particles=60) for w in (1, 2)}
+    assert F.statistic_readings_table(res).shape == (4, 6)
+    assert F.gap_table(res).data.shape == (6, 6)   # (model, filter) x RMSE, se, exact, gap, gap se, relative
+    cnt = {w: ex.cost_evidence(w, sims[w], repeats=1, seed=8) for w in (1, 2)}
+    assert list(cnt[1].columns) == ["model evals / step", "count ratio", "time ratio", "time ratio min",
+                                    "time ratio max"]
+    assert cnt[1]["count ratio"].equals(ex.cost_count_table(1, sims[1], seed=8)["count ratio"])
+    assert "count ratio" in F.count_table(cnt).to_html()
+    cost = {w: ex.cost_ratios(w, sims[w], include=("EKF", "UKF", "PF"), repeats=1, seed=8) for w in (1, 2)}
+    assert F.cost_table(cost).shape == (3, 4)
+    sens = ex.sensitivity(sims, 8, P0_values=(2.0,), schemes=("multinomial",))
+    shown = F.sensitivity_shown(sens)
+    assert len(shown) == len(sens) and set(" ".join(shown["verdicts"]).split()) <= set("RQNI–")
+    ns = {w: ex.rmse_and_cost_vs_n(w, sims[w], 8, n_values=(20, 40), exact=res[w].rmse("Exact"), repeats=1)
+          for w in (1, 2)}
+    for fig in (F.seed_spread_plot(ex.ekf_seed_spread(seeds=(1, 2), runs=3)), F.nsweep_plot(ns, res)):
+        assert len(fig.axes) in (2, 3)
+        plt.close(fig)

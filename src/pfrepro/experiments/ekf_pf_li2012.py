@@ -19,19 +19,25 @@ Estimation*, 2006, ch. 15), which matches the paper's x_0 = 0.1 and cos(1.2(k-1)
 
 Everything here is a thin layer over the package: models from
 :class:`pfrepro.models.UNGM`, filters from :mod:`pfrepro.filters`, Monte Carlo from
-:func:`pfrepro.montecarlo.run_monte_carlo`. The chapter ``book/30_ekf_pf.md`` calls
-these functions and adds prose, tables and plots.
+:func:`pfrepro.montecarlo.run_monte_carlo`. :func:`run_all` runs every experiment whose
+numbers feed a claim (Table 1 and figure runs, the sweeps and readings, the SIS runs, the
+seed spread, the cost counts) and returns :class:`Li2012Results`; the claims are decided by
+``pfrepro.verdicts.ekf_pf_li2012``, and the chapter ``book/30_ekf_pf.md`` (through
+:meth:`pfrepro.papers.Paper.run`) and ``pfrepro run li2012`` both go through them. The
+wall-time measurements (:func:`cost_ratios`, :func:`rmse_and_cost_vs_n`, the times of
+:func:`cost_evidence`) decide nothing and run in the chapter, after the Monte Carlo work.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
 from .. import published
 from ..choices import FIXED, READING, SWEEP, FreeChoice
-from ..claims import ordering_holds, verdict
+from ..claims import verdict
 from ..filters import BootstrapParticleFilter, ExtendedKalmanFilter, GridFilter, UnscentedKalmanFilter
 from ..filters.ekf_variants import PreviousEstimateJacobianEKF
 from ..metrics import mc_summary, rmse, rmse_over_time
@@ -39,18 +45,19 @@ from ..models import UNGM
 from ..models.base import Simulation
 from ..montecarlo import MonteCarloResult, run_monte_carlo, time_filters, time_single_run, truth_streams
 from ..stats import ratio_of_means
+from ..papers import resolve_seeds
 from ..validation import check_positive_int
 
 __all__ = [
-    "PAPER", "T", "N_PARTICLES", "RUNS_TABLE", "RUNS_FIGURES", "SEED_TABLE", "SEED_FIGURES",
-    "P0_DEFAULT", "RESAMPLING_DEFAULT", "RATIO_STRONG_MIN", "RATIO_WEAK_MAX", "GRID_BOUNDS", "GRID_N", "P0_SWEEP", "RESAMPLING_SWEEP",
+    "PAPER", "T", "N_PARTICLES", "RUNS_TABLE", "RUNS_FIGURES", "SEEDS", "SEED_TABLE", "SEED_FIGURES",
+    "P0_DEFAULT", "RESAMPLING_DEFAULT", "GRID_BOUNDS", "GRID_N", "P0_SWEEP", "RESAMPLING_SWEEP",
     "N_SWEEP", "FILTER_LABELS", "MODEL_LABELS", "make_model", "make_filters", "simulate", "run",
     "table1", "gap_to", "per_time_rmse", "statistic_readings", "sensitivity",
     "rmse_and_cost_vs_n", "cost_ratios", "jacobian_check", "literal_eq11_ekf",
     "eq9_linearisation_check", "resampling_after_estimate_effect", "published_table1",
-    "cost_evidence", "ratio_claim_holds", "CHOICES", "STATISTICS", "STATISTIC_LABELS", "statistic_reading", "ratio_reading",
-    "FEW_FRACTIONS", "SIS_RUNS", "ESS_WINDOW", "late_ess", "degeneracy", "SEEDS_SPREAD", "ekf_seed_spread",
-    "published_text"]
+    "cost_evidence", "cost_count_table", "CHOICES", "STATISTICS", "STATISTIC_LABELS", "statistic_reading", "ratio_reading",
+    "FEW_FRACTIONS", "SIS_RUNS", "ESS_WINDOW", "late_ess", "degeneracy", "N_SPREAD_SETS", "spread_seeds",
+    "ekf_seed_spread", "published_text", "FILTERS", "GRID_CONV_RUNS", "grid_convergence", "Li2012Results", "run_all"]
 
 PAPER = "ekf_pf_li2012"
 #: horizon (60 s at 1 s sampling), particles, Monte Carlo counts (sec 2, Table 1)
@@ -58,9 +65,16 @@ T = 60
 N_PARTICLES = 1000
 RUNS_TABLE = 100
 RUNS_FIGURES = 50
-#: seeds fixed before any result was seen; never changed
-SEED_TABLE = 2012
-SEED_FIGURES = 2013
+#: the book's seeds (fixed before any result was seen, never changed) of the Table 1 runs, the
+#: figure runs, and the first of the further seed sets of the EKF spread (:func:`spread_seeds`).
+#: Functions take their seed as an argument; :func:`run_all` resolves these (:func:`pfrepro.papers.resolve_seeds`).
+SEEDS = {"table": 2012, "figures": 2013, "spread": 2101}
+#: the book's Table 1 and figure seeds (``SEEDS["table"]``, ``SEEDS["figures"]``), for modules that
+#: rerun the chapter's truths (:mod:`pfrepro.experiments.today`)
+SEED_TABLE = SEEDS["table"]
+SEED_FIGURES = SEEDS["figures"]
+#: the filters of the Table 1 runs besides SIS (gap table, readings, cost)
+FILTERS = ("EKF", "UKF", "PF", "Exact")
 #: assumptions (not in the paper) -- filters' prior N(x0, P0) and resampling scheme
 P0_DEFAULT = 2.0
 RESAMPLING_DEFAULT = "multinomial"
@@ -73,13 +87,8 @@ RESAMPLING_SWEEP = ("multinomial", "systematic", "stratified", "residual")
 N_SWEEP = (50, 100, 200, 500, 1000, 2000, 5000)
 #: mass allowed to leave the grid before the grid reference is refused
 MAX_LOST_MASS = 1e-6
-#: tests of the two ratio claims. Model 1 — the paper's own words, "the EKF's RMSE is more
-#: than 7 times the PF's" (sec 2, with the printed PF/EKF swap corrected), decided on
-#: EKF/PF - 7 > 0 (an earlier version of this chapter tested a bar of 2, weaker than the
-#: claim). Model 2: "about the same" means EKF/PF < 1.2, fixed before running (the
-#: published ratio is 1.08; the verdict is decided by the number itself when it matches).
-RATIO_STRONG_MIN = 7.0
-RATIO_WEAK_MAX = 1.2
+#: runs of the grid-convergence check (the first runs of the Table 1 data)
+GRID_CONV_RUNS = 20
 #: readings of Table 1's "RMSE over 100 independent runs" (per-run formula at the end of sec 2)
 STATISTICS = ("mean_run_rmse", "pooled", "mean_time_rmse")
 STATISTIC_LABELS = {"mean_run_rmse": "mean over runs of the per-run RMSE",
@@ -93,8 +102,8 @@ ESS_WINDOW = (31, 60)
 #: runs of the SIS readings under the other priors P0 (the verdict is far from the bar)
 SIS_RUNS = 20
 #: seed sets for the spread of the Table 1 EKF means over independent 100-run sets, fixed
-#: before running: the Table 1 seed and ten more
-SEEDS_SPREAD = (SEED_TABLE,) + tuple(range(2101, 2111))
+#: before running: the Table 1 seed and ten more (:func:`spread_seeds`)
+N_SPREAD_SETS = 10
 
 #: The assumptions table — every value the paper leaves open, with its status
 #: (pfrepro.choices; CONTRIBUTING "Free choices").
@@ -324,7 +333,7 @@ def statistic_reading(res: MonteCarloResult, name: str, statistic: str) -> tuple
 
 def ratio_reading(res: MonteCarloResult, a: str, b: str, statistic: str) -> tuple[float, float]:
     """Ratio of filter ``a``'s to filter ``b``'s Table 1 value under one reading of the statistic,
-    with its standard error (delta method for the main reading, as :func:`ratio_of_means`;
+    with its standard error (delta method for the main reading, as :func:`~pfrepro.stats.ratio_of_means`;
     jackknife over runs, paired, for the others)."""
     ea, eb = _e2(res, a), _e2(res, b)
     if statistic == "mean_run_rmse":
@@ -386,13 +395,22 @@ def _spread_one(args):
     return rows
 
 
-def ekf_seed_spread(seeds=SEEDS_SPREAD, runs: int = RUNS_TABLE, names=("EKF", "EKF-prev"),
+def spread_seeds(seeds: dict | None = None) -> tuple:
+    """The seed sets of the EKF spread: the Table 1 seed, then ``N_SPREAD_SETS`` consecutive seeds
+    from ``seeds["spread"]`` (``seeds``: a dict like :data:`SEEDS`; ``None``: the book's)."""
+    seeds = SEEDS if seeds is None else seeds
+    return (int(seeds["table"]),) + tuple(range(int(seeds["spread"]), int(seeds["spread"]) + N_SPREAD_SETS))
+
+
+def ekf_seed_spread(seeds=None, runs: int = RUNS_TABLE, names=("EKF", "EKF-prev"),
                     executor=None) -> pd.DataFrame:
     """Mean per-run RMSE (and SE) of the deterministic EKFs on ``runs`` runs of each model for
-    every seed set in ``seeds`` (truths from ``truth_streams(seed, runs)``): how far the Table 1
-    EKF means move between independent 100-run sets (the EKF's per-run RMSE on model 1 is
-    heavy-tailed). The EKFs draw no random numbers, so this costs simulations and EKF runs only;
-    ``executor`` (optional) maps over (model, seed) pairs, with the same numbers as serially."""
+    every seed set in ``seeds`` (truths from ``truth_streams(seed, runs)``; ``None``: the book's,
+    :func:`spread_seeds`): how far the Table 1 EKF means move between independent 100-run sets
+    (the EKF's per-run RMSE on model 1 is heavy-tailed). The EKFs draw no random numbers, so this
+    costs simulations and EKF runs only; ``executor`` (optional) maps over (model, seed) pairs,
+    with the same numbers as serially."""
+    seeds = spread_seeds() if seeds is None else seeds
     jobs = [(w, int(seed), int(runs), tuple(names)) for w in (1, 2) for seed in seeds]
     results = executor.map(_spread_one, jobs) if executor is not None else map(_spread_one, jobs)
     return pd.DataFrame([row for rows in results for row in rows])
@@ -401,17 +419,6 @@ def ekf_seed_spread(seeds=SEEDS_SPREAD, runs: int = RUNS_TABLE, names=("EKF", "E
 # --------------------------------------------------------------------------------------
 # sensitivity to the unstated choices
 # --------------------------------------------------------------------------------------
-def _ratio_diff(which: int, r: float) -> float:
-    return r - RATIO_STRONG_MIN if _check_which(which) == 1 else RATIO_WEAK_MAX - r
-
-
-def ratio_claim_holds(which: int, r: float, r_se: float):
-    """The ratio claim's statement on model ``which``, decided on ``r`` and its SE: model 1
-    "EKF/PF more than 7" (``r - RATIO_STRONG_MIN > 0``), model 2 "about the same"
-    (``RATIO_WEAK_MAX - r > 0``); True / False / None (undecided at 2 SE)."""
-    return ordering_holds(_ratio_diff(which, r), r_se)
-
-
 def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING_SWEEP,
                 ekf_variants=("EKF", "EKF-prev"), sis_runs: int = 0, executor=None) -> pd.DataFrame:
     """Table 1 cells and verdicts under every reasonable choice the paper leaves open.
@@ -421,7 +428,7 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
     PF mean per-run RMSE with SE, the exact-posterior RMSE, the EKF/PF ratio, the paired
     per-run RMSE difference EKF - PF (``diff``, ``diff_se``), and the verdicts the claims
     rule gives for the two cells and for the model's ratio claim ("more than 7x" on model
-    1, "about the same" on model 2: :func:`ratio_claim_holds`). The baseline (P0 = 2,
+    1, "about the same" on model 2: ``pfrepro.verdicts.ekf_pf_li2012.ratio_diff``). The baseline (P0 = 2,
     multinomial, eq-10 EKF) appears in each block.
 
     ``sis_runs > 0``: also the degeneracy statistics on the first ``sis_runs`` runs (common
@@ -429,6 +436,8 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
     SIS) and the PF's ESS averaged over ``ESS_WINDOW`` (``SIS_ess``, ``PF_ess`` with SEs)
     and their paired difference PF - SIS (``ess_gain``, ``ess_gain_se``).
     """
+    from ..verdicts.ekf_pf_li2012 import ratio_diff   # the ratio claims' statements live with the claims
+
     pub = published_table1()
     rows = []
     sis_late = {}
@@ -445,7 +454,7 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
                "exact": float(res.rmse("Exact").mean()) if "Exact" in res.results else float("nan"),
                "EKF/PF": r, "EKF/PF_se": r_se, "diff": d, "diff_se": d_se,
                "verdict_EKF": verdict(pe, e.mean, e.se), "verdict_PF": verdict(pp, p.mean, p.se),
-               "verdict_ratio": verdict(pe / pp, r, r_se, diff=_ratio_diff(which, r), diff_se=r_se)}
+               "verdict_ratio": verdict(pe / pp, r, r_se, diff=ratio_diff(which, r), diff_se=r_se)}
         if sis is not None:
             pf_late = late_ess(res, "PF")[:sis_runs]
             ps, ss, g = mc_summary(pf_late), mc_summary(sis), mc_summary(pf_late - sis)
@@ -489,16 +498,17 @@ def _batch_seconds(filt, y, seed: int, min_total: float = 0.5, max_repeats: int 
     return float(np.median(times))
 
 
-def cost_ratios(which: int, sim: Simulation, *, include=("EKF", "UKF", "PF", "Exact"), repeats: int = 7,
-                seed: int = SEED_TABLE) -> pd.DataFrame:
+def cost_ratios(which: int, sim: Simulation, *, include=FILTERS, repeats: int = 7,
+                seed: int | None = None) -> pd.DataFrame:
     """Per-run wall time of each filter relative to the EKF, measured here in one session.
 
     ``single_run``: median time on the first run alone (``time_single_run``), ``repeats``
     interleaved across the filters so machine load affects all alike. ``amortised``: the
     median time of the batched call on all ``sim.runs`` runs divided by the number of runs,
     which removes the fixed per-step interpreter overhead that dominates a one-run EKF and
-    so measures the arithmetic.
+    so measures the arithmetic. ``seed``: the filters' streams (``None``: the book's Table 1 seed).
     """
+    seed = SEEDS["table"] if seed is None else int(seed)
     check_positive_int(repeats, "repeats")
     if "EKF" not in include:
         raise ValueError("cost ratios are relative to the EKF: include must contain 'EKF'")
@@ -614,23 +624,160 @@ def resampling_after_estimate_effect(res: MonteCarloResult, n_particles: int = N
     return {"added_var": post_var / n_particles, "relative_to_mse": post_var / n_particles / mse_exact}
 
 
-def cost_evidence(which: int, sim: Simulation, *, include=("EKF", "UKF", "PF", "Exact"), repeats: int = 7,
-                  seed: int = SEED_TABLE) -> pd.DataFrame:
-    """Deterministic cost counts of each filter on run 1 (:func:`pfrepro.cost.cost_counts`:
-    states drawn, likelihoods, f/h evaluations and Jacobians, per time step) beside its
-    single-run wall time as a ratio to the EKF, median and [min, max] over ``repeats``
-    interleaved repeats (:func:`pfrepro.cost.time_repeats`). The count decides the cost
-    claim; the time is context."""
-    from ..cost import cost_counts, time_repeats, time_summary
+def cost_count_table(which: int, sim: Simulation, *, include=FILTERS, seed: int | None = None) -> pd.DataFrame:
+    """Deterministic cost counts of each filter on run 1 (:func:`pfrepro.cost.cost_counts`: states
+    drawn, likelihoods, f/h evaluations and Jacobians), per time step and as a ratio to the EKF's:
+    what the cost claim is decided on (no clock involved). ``seed``: the filters' streams
+    (``None``: the book's Table 1 seed)."""
+    from ..cost import cost_counts
 
-    check_positive_int(repeats, "repeats")
+    seed = SEEDS["table"] if seed is None else int(seed)
     if "EKF" not in include:
         raise ValueError("cost evidence is relative to the EKF: include must contain 'EKF'")
     filters = make_filters(make_model(which), include)
     y1 = sim.y[:1]
-    counts = cost_counts(filters, y1, rng_seed=seed)
-    times = time_summary(time_repeats(filters, y1, seed, repeats), reference="EKF")
-    evals = counts["model_evaluations"] / y1.shape[1]
-    return pd.DataFrame({"model evals / step": evals, "count ratio": evals / evals["EKF"],
-                         "time ratio": times["ratio median"], "time ratio min": times["ratio min"],
-                         "time ratio max": times["ratio max"]}).rename_axis("filter")
+    evals = cost_counts(filters, y1, rng_seed=seed)["model_evaluations"] / y1.shape[1]
+    return pd.DataFrame({"model evals / step": evals, "count ratio": evals / evals["EKF"]}).rename_axis("filter")
+
+
+def cost_evidence(which: int, sim: Simulation, *, include=FILTERS, repeats: int = 7,
+                  seed: int | None = None) -> pd.DataFrame:
+    """:func:`cost_count_table` beside each filter's single-run wall time as a ratio to the EKF,
+    median and [min, max] over ``repeats`` interleaved repeats (:func:`pfrepro.cost.time_repeats`).
+    The count decides the cost claim; the time is context. ``seed``: the filters' streams
+    (``None``: the book's Table 1 seed)."""
+    from ..cost import time_repeats, time_summary
+
+    seed = SEEDS["table"] if seed is None else int(seed)
+    check_positive_int(repeats, "repeats")
+    counts = cost_count_table(which, sim, include=include, seed=seed)
+    times = time_summary(time_repeats(make_filters(make_model(which), include), sim.y[:1], seed, repeats),
+                         reference="EKF")
+    return counts.assign(**{"time ratio": times["ratio median"], "time ratio min": times["ratio min"],
+                            "time ratio max": times["ratio max"]})
+
+
+def grid_convergence(sims: dict, runs: int = GRID_CONV_RUNS) -> float:
+    """Largest change of the exact (grid) posterior means when the grid spacing is halved, on the
+    first ``runs`` runs of each simulation in ``sims`` (model number -> Simulation): the grid error
+    of the accuracy reference."""
+    conv = 0.0
+    for w, sim in sims.items():
+        m = make_model(w)
+        a = GridFilter(m, bounds=GRID_BOUNDS, n_grid=GRID_N).filter(sim.y[:runs]).x
+        b = GridFilter(m, bounds=GRID_BOUNDS, n_grid=2 * GRID_N - 1).filter(sim.y[:runs]).x
+        conv = max(conv, float(np.max(np.abs(a - b))))
+    return conv
+
+
+# --------------------------------------------------------------------------------------
+# everything the claims need, in one call
+# --------------------------------------------------------------------------------------
+@dataclass
+class Li2012Results:
+    """Every experiment of the chapter whose numbers feed a claim or the text around it.
+
+    Attributes
+    ----------
+    runs : dict
+        Monte Carlo run counts used: ``table`` (Table 1, sec 2), ``figures`` (Figs. 1-4), ``sis``
+        (SIS under the other priors) and ``spread`` (each seed set of the EKF spread).
+    seeds : dict
+        The seeds used (keys of :data:`SEEDS`).
+    sims : dict
+        Model number -> the Table 1 :class:`~pfrepro.models.base.Simulation`.
+    res : dict
+        Model number -> the Table 1 :class:`~pfrepro.montecarlo.MonteCarloResult` (EKF, UKF, PF,
+        exact grid filter and SIS on the same data).
+    figs : dict
+        Model number -> the figure runs (EKF, PF, exact).
+    sens : pandas.DataFrame
+        :func:`sensitivity` on the Table 1 data, with the SIS columns.
+    deg : dict
+        Model number -> :func:`degeneracy` of the Table 1 runs (sec 1.3.2).
+    spread : pandas.DataFrame
+        :func:`ekf_seed_spread` over :func:`spread_seeds`.
+    cnt : dict
+        Model number -> :func:`cost_count_table` (deterministic counts of model evaluations; no
+        wall time is measured here).
+    grid_conv : float
+        :func:`grid_convergence` on the Table 1 data.
+    """
+
+    runs: dict
+    seeds: dict
+    sims: dict
+    res: dict
+    figs: dict
+    sens: pd.DataFrame
+    deg: dict
+    spread: pd.DataFrame
+    cnt: dict
+    grid_conv: float
+
+    @property
+    def settings(self) -> dict:
+        """The runs and seeds used, as ``pfrepro run`` prints them."""
+        return {"runs (Table 1)": self.runs["table"], "runs (figures)": self.runs["figures"],
+                "runs (SIS readings)": self.runs["sis"], "runs (seed spread)": self.runs["spread"],
+                "seed (Table 1)": self.seeds["table"], "seed (figures)": self.seeds["figures"],
+                "seeds (spread)": ", ".join(str(s) for s in spread_seeds(self.seeds))}
+
+    def today_given(self) -> dict:
+        """The chapter's own per-run MSEs of the PF and the exact filter on model 1 (Table 1 runs),
+        for :func:`pfrepro.experiments.today.against_today` (not rerun there)."""
+        from ..metrics import mse
+
+        r = self.res[1]
+        return {f"PF({N_PARTICLES})": mse(r.x_true, r.results["PF"].x), "exact": mse(r.x_true, r.results["Exact"].x)}
+
+
+def run_all(runs: int | None = None, seeds=None, executor=None, steps=None) -> Li2012Results:
+    """Run every experiment of the chapter that feeds a claim: :class:`Li2012Results`.
+
+    Parameters
+    ----------
+    runs : int, optional
+        ``None``: the paper's counts (Table 1 ``RUNS_TABLE``, figures ``RUNS_FIGURES``), the SIS
+        readings on :data:`SIS_RUNS` runs and ``RUNS_TABLE`` runs per seed set of the spread. An int (at least 2) replaces every one of these counts.
+    seeds : None, int or dict
+        The seeds (:func:`pfrepro.papers.resolve_seeds` over :data:`SEEDS`).
+    executor : concurrent.futures.Executor, optional
+        Runs the Monte Carlo work (same numbers as serially).
+    steps : callable, optional
+        ``steps(label)`` is called before each experiment (a progress display).
+
+    Returns
+    -------
+    Li2012Results
+        The Table 1 and figure runs (sec 2), the sensitivity sweeps and readings, the SIS runs
+        (sec 1.3.2), the EKF seed spread, the cost counts and the grid check.
+    """
+    seeds = resolve_seeds(SEEDS, seeds)
+    if runs is None:
+        counts = {"table": RUNS_TABLE, "figures": RUNS_FIGURES, "sis": SIS_RUNS, "spread": RUNS_TABLE}
+    else:
+        runs = check_positive_int(runs, "runs")
+        if runs < 2:
+            raise ValueError(f"the claims need standard errors over at least 2 runs, got runs={runs}")
+        counts = dict.fromkeys(("table", "figures", "sis", "spread"), runs)
+    step = steps or (lambda label: None)
+    sims, res, figs = {}, {}, {}
+    for w in (1, 2):
+        step(f"Table 1, {MODEL_LABELS[w].lower()} ({counts['table']} runs)")
+        sims[w] = simulate(w, counts["table"], seeds["table"])
+        # SIS (the PF without resampling) on the same data and its own stream: sec 1.3.2's degeneracy
+        res[w] = run(w, counts["table"], seeds["table"], FILTERS + ("SIS",), sim=sims[w], executor=executor)
+    for w in (1, 2):
+        step(f"Figs. {2 * w - 1}-{2 * w}, {MODEL_LABELS[w].lower()} ({counts['figures']} runs)")
+        figs[w] = run(w, counts["figures"], seeds["figures"], ("EKF", "PF", "Exact"), executor=executor)
+    step("grid convergence")
+    conv = grid_convergence(sims)
+    step("sensitivity: priors, resampling schemes, EKF linearisation, SIS")
+    sens = sensitivity(sims, seeds["table"], sis_runs=counts["sis"], executor=executor)
+    step("EKF means over independent seed sets")
+    spread = ekf_seed_spread(spread_seeds(seeds), runs=counts["spread"], executor=executor)
+    step("cost counts")
+    cnt = {w: cost_count_table(w, sims[w], include=FILTERS, seed=seeds["table"]) for w in (1, 2)}
+    return Li2012Results(runs=counts, seeds=seeds, sims=sims, res=res, figs=figs, sens=sens,
+                         deg={w: degeneracy(res[w]) for w in (1, 2)}, spread=spread, cnt=cnt, grid_conv=conv)

@@ -1,7 +1,8 @@
 """Figures and tables of Li, Li, Fang, Bai (2012), EKF vs PF (chapter ``book/30_ekf_pf.md``).
 
-The experiments are :mod:`pfrepro.experiments.ekf_pf_li2012`; this module only draws
-their results and bundles them for the command line (:func:`reproduce`).
+The experiments are :mod:`pfrepro.experiments.ekf_pf_li2012` (:func:`~pfrepro.experiments.ekf_pf_li2012.run_all`);
+this module only draws their results: the chapter's figures and tables, and the paper's
+(:func:`tables`, :func:`figures`) for the command line.
 """
 from __future__ import annotations
 
@@ -12,13 +13,15 @@ from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F40
 from . import new_figure
 
 __all__ = ["one_run_panel", "per_time_panel", "figs_1_3", "figs_2_4", "fig1", "fig2", "fig3", "fig4",
-           "table1_plot", "table1_shown", "ess_plot", "sweep_plot", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
+           "table1_plot", "table1_shown", "ess_plot", "sweep_plot", "statistic_readings_table", "gap_table",
+           "cost_table", "count_table", "sensitivity_shown", "seed_spread_plot", "nsweep_plot", "tables", "figures",
+           "TABLES", "FIGURES", "N_STEPS"]
 
-#: what :func:`reproduce` makes
+#: what :func:`tables` and :func:`figures` make
 TABLES = ("Table 1",)
 FIGURES = ("Fig. 1", "Fig. 2", "Fig. 3", "Fig. 4")
-#: experiments :func:`reproduce` runs (for a progress bar)
-N_STEPS = 4
+#: experiments :func:`~pfrepro.experiments.ekf_pf_li2012.run_all` runs (its ``steps`` calls, for a progress bar)
+N_STEPS = 8
 #: figure number -> (model, kind)
 _FIG = {1: (1, "run"), 2: (1, "rmse"), 3: (2, "run"), 4: (2, "rmse")}
 
@@ -188,32 +191,135 @@ def sweep_plot(sens):
     return fig
 
 
-def reproduce(runs: int | None = None, seed: int | None = None, executor=None, steps=None):
-    """Table 1 and Figs. 1-4 at the paper's scale (or ``runs`` runs, seeds ``seed``, ``seed + 1``).
+def statistic_readings_table(res: dict):
+    """The three readings of Table 1's statistic for every filter of the Table 1 runs, one column
+    block per model (:func:`~pfrepro.experiments.ekf_pf_li2012.statistic_readings`); ``res`` maps
+    model -> MonteCarloResult."""
+    import pandas as pd
 
-    Calls the chapter's experiment functions (:func:`pfrepro.experiments.ekf_pf_li2012.run`,
-    :func:`~pfrepro.experiments.ekf_pf_li2012.table1`) and this module's figure functions.
-    ``steps`` is an optional callback ``steps(label)`` called before each experiment
-    (the command line's progress bar). Returns a :class:`pfrepro.papers.Reproduction`.
-    """
-    from ..papers import Reproduction, call_with_executor, cell_claims
+    out = pd.concat({E.MODEL_LABELS[w]: E.statistic_readings(res[w], list(E.FILTERS)) for w in res}, axis=1)
+    out.index.name = "filter"
+    return out
 
-    step = steps or (lambda label: None)
-    runs_t = E.RUNS_TABLE if runs is None else runs
-    runs_f = E.RUNS_FIGURES if runs is None else runs
-    seed_t = E.SEED_TABLE if seed is None else int(seed)
-    seed_f = E.SEED_FIGURES if seed is None else int(seed) + 1
-    res, figs = {}, {}
-    for w in (1, 2):
-        step(f"Table 1, {E.MODEL_LABELS[w].lower()} ({runs_t} runs)")
-        res[w] = call_with_executor(E.run, w, runs_t, seed_t, ("EKF", "PF", "Exact"), executor=executor)
-    for w in (1, 2):
-        step(f"Figs. {w * 2 - 1}-{w * 2}, {E.MODEL_LABELS[w].lower()} ({runs_f} runs)")
-        figs[w] = call_with_executor(E.run, w, runs_f, seed_f, ("EKF", "PF", "Exact"), executor=executor)
-    t1 = E.table1(res)
-    claims = cell_claims(E.PAPER, t1, lambda r: f"table1-{r['filter'].lower()}-model{r['model'][-1]}",
-                         lambda r: f"{r['filter']} RMSE on {r['model'].lower()} (Table 1)", "Table 1")
-    figures = {"Fig. 1": fig1(figs), "Fig. 2": fig2(figs), "Fig. 3": fig3(figs), "Fig. 4": fig4(figs)}
-    return Reproduction(E.PAPER, tables={"Table 1": t1}, figures=figures, claims=claims,
-                        settings={"runs (Table 1)": runs_t, "runs (figures)": runs_f,
-                                  "seed (Table 1)": seed_t, "seed (figures)": seed_f})
+
+def gap_table(res: dict):
+    """Each filter's mean per-run RMSE and its paired gap to the exact posterior mean, per model
+    (:func:`~pfrepro.experiments.ekf_pf_li2012.gap_to`), styled; ``res`` maps model -> MonteCarloResult."""
+    import pandas as pd
+
+    from ..metrics import mc_summary
+
+    rows = []
+    for w in res:
+        for name in ("EKF", "UKF", "PF"):
+            g, s = E.gap_to(res[w], name), mc_summary(res[w].rmse(name))
+            rows.append({"model": E.MODEL_LABELS[w], "filter": name, "RMSE": s.mean, "se": s.se,
+                         "exact RMSE": float(res[w].rmse("Exact").mean()), "gap to exact": g["gap"],
+                         "gap se (paired)": g["se"], "gap relative (%)": 100 * g["relative"]})
+    tab = pd.DataFrame(rows).set_index(["model", "filter"])
+    return tab.style.format("{:.4f}").format("{:.1f}", subset=["gap relative (%)"])
+
+
+def cost_table(cost: dict):
+    """Single-run and amortised wall time of each filter relative to the EKF, per model
+    (:func:`~pfrepro.experiments.ekf_pf_li2012.cost_ratios`; context, never a claim)."""
+    import pandas as pd
+
+    return pd.concat({E.MODEL_LABELS[w]: cost[w][["single_run_ratio", "amortised_ratio"]] for w in cost}, axis=1)
+
+
+def count_table(cnt: dict):
+    """Model evaluations per step and their ratio to the EKF's (the cost claim's evidence), beside
+    the single-run time ratio (context), per model (:func:`~pfrepro.experiments.ekf_pf_li2012.cost_evidence`), styled."""
+    import pandas as pd
+
+    return pd.concat({E.MODEL_LABELS[w]: cnt[w] for w in cnt}).style.format(
+        {"model evals / step": "{:.0f}", "count ratio": "{:.4g}", "time ratio": "{:.2f}",
+         "time ratio min": "{:.2f}", "time ratio max": "{:.2f}"})
+
+
+#: one-letter verdicts of the sensitivity table (the chapter gives the legend)
+_LETTER = {"reproduced": "R", "qualitatively reproduced": "Q", "not reproduced": "N", "inconclusive": "I",
+           "not checkable": "–"}
+
+
+def sensitivity_shown(sens):
+    """The sensitivity table compact for the text column: "mean (SE)" cells and one-letter
+    verdicts of the EKF cell, the PF cell and the ratio claim (R, Q, N, I); ``sens`` is
+    :func:`~pfrepro.experiments.ekf_pf_li2012.sensitivity`'s frame."""
+    import pandas as pd
+
+    pm = lambda m, se: [f"{a:.3g} ({b:.2g})" for a, b in zip(m, se)]  # noqa: E731
+    short = {E.FILTER_LABELS["EKF"]: "B at x̂ₖ|ₖ₋₁ (eq 10)", E.FILTER_LABELS["EKF-prev"]: "B at x̂ₖ₋₁|ₖ₋₁ (code)",
+             "EKF linearisation": "EKF lin. point"}
+    return pd.DataFrame({
+        "EKF (SE)": pm(sens["EKF"], sens["EKF_se"]), "PF (SE)": pm(sens["PF"], sens["PF_se"]),
+        "exact": ["–" if np.isnan(v) else f"{v:.3g}" for v in sens["exact"]],
+        "EKF/PF (SE)": pm(sens["EKF/PF"], sens["EKF/PF_se"]),
+        "verdicts": [" ".join(_LETTER[v] for v in r) for r in sens[["verdict_EKF", "verdict_PF", "verdict_ratio"]].values],
+    }, index=pd.MultiIndex.from_frame(sens[["model", "setting", "value"]].astype(str).replace(short)))
+
+
+def seed_spread_plot(spread):
+    """The Table 1 EKF means over independent seed sets: eq (10) against the circulating code's
+    linearisation point (±2 se), with the published EKF value, one panel per model; ``spread`` is
+    :func:`~pfrepro.experiments.ekf_pf_li2012.ekf_seed_spread`'s frame."""
+    pub = E.published_table1()
+    fig, axes = new_figure(1, 2, figsize=(10.2, 3.6))
+    for ax, w in zip(axes, (1, 2)):
+        sub = spread[spread["model"] == E.MODEL_LABELS[w]]
+        seeds = list(dict.fromkeys(sub["seed"]))
+        for j, (n, c) in enumerate((("EKF", method_color("EKF")), ("EKF-prev", SERIES_COLORS[1]))):
+            q = sub[sub["filter"] == n]
+            ax.errorbar(np.arange(len(q)) + 0.15 * (j - 0.5), q["mean"], 2 * q["se"], fmt="o", color=c,
+                        capsize=2, label=E.FILTER_LABELS[n])
+        ax.axhline(pub.loc["EKF", E.MODEL_LABELS[w]], color=REFERENCE_COLOR, ls="--", label="published EKF (Table 1)")
+        ax.set_xticks(np.arange(len(seeds)), [str(v) for v in seeds], rotation=60, fontsize=8)
+        ax.set_xlabel("seed of the 100-run set")
+        ax.set_ylabel("mean per-run RMSE")
+        ax.set_title(E.MODEL_LABELS[w])
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def nsweep_plot(nsweep: dict, res: dict):
+    """The PF against the number of particles: mean per-run RMSE (±2 se) with the exact posterior's
+    and the EKF's RMSE per model, and the PF's cost relative to the EKF (single run and amortised).
+    ``nsweep`` maps model -> :func:`~pfrepro.experiments.ekf_pf_li2012.rmse_and_cost_vs_n`, ``res``
+    model -> the Table 1 MonteCarloResult."""
+    fig, axes = new_figure(1, 3, figsize=(10.2, 3.8))
+    for w, c in zip((1, 2), SERIES_COLORS[:2]):
+        d, ax = nsweep[w], axes[0 if w == 1 else 1]
+        ax.errorbar(d.index, d["rmse"], 2 * d["se"], fmt="o-", color=c, capsize=3, label="PF (±2 se)")
+        ax.axhline(res[w].rmse("Exact").mean(), color=REFERENCE_COLOR, ls=":", lw=2, label="exact posterior mean")
+        ax.axhline(res[w].rmse("EKF").mean(), color=method_color("EKF"), ls="--", label="EKF")
+        ax.set_xscale("log")
+        ax.set_xlabel("particles N")
+        ax.set_ylabel(f"mean per-run RMSE ({res[w].sim.runs} runs)")
+        ax.set_title(f"{E.MODEL_LABELS[w]}")
+        ax.legend(fontsize=8)
+        if w == 1:
+            ax.set_yscale("log")
+        axes[2].loglog(d.index, d["amortised_ratio"], "o-", color=c, label=f"{E.MODEL_LABELS[w]}, amortised")
+        axes[2].loglog(d.index, d["single_run_ratio"], "s--", color=c, label=f"{E.MODEL_LABELS[w]}, single run")
+    axes[2].set_xlabel("particles N")
+    axes[2].set_ylabel("PF time / EKF time per run")
+    axes[2].set_title("cost relative to the EKF")
+    axes[2].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def tables(results) -> dict:
+    """The paper's tables from :func:`pfrepro.experiments.ekf_pf_li2012.run_all`'s results:
+    ``{"Table 1": DataFrame}`` (:func:`~pfrepro.experiments.ekf_pf_li2012.table1`, ours beside the
+    published cells, with the exact posterior's RMSE on the same runs)."""
+    return {"Table 1": E.table1(results.res)}
+
+
+def figures(results) -> dict:
+    """The paper's figures from :func:`pfrepro.experiments.ekf_pf_li2012.run_all`'s results:
+    Figs. 1-4 (one run and the per-time RMSE of each model, on the figure runs)."""
+    return {"Fig. 1": fig1(results.figs), "Fig. 2": fig2(results.figs), "Fig. 3": fig3(results.figs),
+            "Fig. 4": fig4(results.figs)}
