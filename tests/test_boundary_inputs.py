@@ -276,7 +276,7 @@ def test_scorecard_on_a_corrupt_claims_file_is_one_line_and_exit_2(tmp_path, cap
 def test_run_with_an_empty_out_is_refused(capsys):
     from pfrepro import cli
 
-    assert cli.main(["run", "li2012", "--runs", "1", "--out", ""]) == 2
+    assert cli.main(["run", "li2012", "--runs", "2", "--out", ""]) == 2
     assert "--out" in capsys.readouterr().err
 
 

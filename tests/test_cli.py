@@ -157,7 +157,8 @@ def _bad_paths(tmp_path):
         ["frobnicate"],                                       # unknown command
         ["run"],                                              # no paper
         ["run", "nosuchpaper"],                               # unknown paper
-        ["run", "li2012", "--runs", "0"],                     # runs < 1
+        ["run", "li2012", "--runs", "0"],                     # runs < 2
+        ["run", "li2012", "--runs", "1"],                     # one run: no pairs to compare
         ["run", "li2012", "--runs", "-3"],
         ["run", "li2012", "--runs", "many"],
         ["run", "li2012", "--jobs", "0"],

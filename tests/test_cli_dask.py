@@ -83,7 +83,7 @@ def _one_line_error(capsys, argv):
 def test_unreachable_scheduler_is_one_line_within_the_timeout(capsys, tmp_path):
     address = f"tcp://127.0.0.1:{_free_port()}"          # nothing listens there
     t0 = time.perf_counter()
-    msg = _one_line_error(capsys, ["run", "li2012", "--runs", "1", "--scheduler", address,
+    msg = _one_line_error(capsys, ["run", "li2012", "--runs", "2", "--scheduler", address,
                                    "--connect-timeout", "1", "--out", str(tmp_path)])
     assert time.perf_counter() - t0 < 15                 # the 1 s timeout, not distributed's 30 s
     assert "no dask scheduler reachable" in msg and address in msg and "dask scheduler" in msg
@@ -100,14 +100,14 @@ def test_unreachable_scheduler_is_one_line_within_the_timeout(capsys, tmp_path):
     (["--scheduler", "tcp://127.0.0.1:8786", "--connect-timeout", "soon"], "--connect-timeout"),
 ])
 def test_bad_scheduler_arguments_exit_2_with_one_line(argv, words, capsys, tmp_path):
-    msg = _one_line_error(capsys, ["run", "li2012", "--runs", "1", *argv, "--out", str(tmp_path)])
+    msg = _one_line_error(capsys, ["run", "li2012", "--runs", "2", *argv, "--out", str(tmp_path)])
     assert words in msg
 
 
 def test_scheduler_without_workers_is_one_line(capsys, tmp_path):
     with distributed.LocalCluster(n_workers=0, processes=True, host="127.0.0.1",
                                   dashboard_address=":0") as c:
-        msg = _one_line_error(capsys, ["run", "li2012", "--runs", "1", "--scheduler", c.scheduler_address,
+        msg = _one_line_error(capsys, ["run", "li2012", "--runs", "2", "--scheduler", c.scheduler_address,
                                        "--connect-timeout", "1", "--out", str(tmp_path)])
     assert "has no worker" in msg and "dask worker" in msg
 
@@ -130,6 +130,6 @@ def test_worker_with_another_environment_is_refused(cluster, capsys, tmp_path, m
         return wrapped
 
     monkeypatch.setattr(cli, "_worker_environment_probe", here_differs)
-    msg = _one_line_error(capsys, ["run", "li2012", "--runs", "1", "--scheduler", cluster.scheduler_address,
+    msg = _one_line_error(capsys, ["run", "li2012", "--runs", "2", "--scheduler", cluster.scheduler_address,
                                    "--out", str(tmp_path)])
     assert "another environment" in msg and "pfrepro source" in msg and "pip install -e ." in msg

@@ -42,14 +42,14 @@ class _Parser(argparse.ArgumentParser):
         raise UsageError(message)
 
 
-def _positive_int(name):
+def _positive_int(name, low: int = 1, why: str = ""):
     def parse(text):
         try:
             v = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} must be an integer >= 1, got {text!r}") from None
-        if v < 1:
-            raise argparse.ArgumentTypeError(f"{name} must be >= 1, got {v}")
+            raise argparse.ArgumentTypeError(f"{name} must be an integer >= {low}, got {text!r}") from None
+        if v < low:
+            raise argparse.ArgumentTypeError(f"{name} must be >= {low}{why}, got {v}")
         return v
     return parse
 
@@ -84,8 +84,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser("list", help="papers, their tables and figures, and the claims of the last build")
     r = sub.add_parser("run", help="regenerate a paper's tables (CSV) and figures (PNG)")
     r.add_argument("paper", help="paper key or alias (see `pfrepro list`)")
-    r.add_argument("--runs", type=_positive_int("--runs"), default=None,
-                   help="Monte Carlo runs of every experiment (default: the paper's)")
+    r.add_argument("--runs", type=_positive_int("--runs", 2, " (the claims compare methods over pairs of runs)"),
+                   default=None, help="Monte Carlo runs of every experiment, >= 2 (default: the paper's)")
     r.add_argument("--seed", type=_seed, default=None, help="base seed (default: the book's fixed seeds)")
     r.add_argument("--jobs", type=_positive_int("--jobs"), default=None,
                    help="worker processes (default 1: one batched call per filter)")
