@@ -53,7 +53,9 @@ def test_no_function_binds_a_seed_at_import():
 
 def test_two_seeds_give_other_numbers_and_the_same_claims(run1):
     R1, reg1 = run1
-    R2, reg2 = get_paper("cmspf").run(runs=2, seeds=2)
+    labels = []
+    R2, reg2 = get_paper("cmspf").run(runs=2, seeds=2, steps=labels.append)
+    assert labels == list(E.STEPS)                        # the progress bar's N_STEPS is their number
     assert [c.claim_id for c in reg1.claims] == [c.claim_id for c in reg2.claims]
     assert R1.seeds == {k: 1 + i for i, k in enumerate(E.SEEDS)} and R2.seeds["table1"] == 2
     assert E.SEEDS["table1"] == 20111                     # the module's table is never changed

@@ -16,6 +16,7 @@ M = T = 50 steps.
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -32,7 +33,10 @@ __all__ = ["PAPER", "T", "SEEDS", "ASSUMPTIONS", "CHOICES", "CMS_READINGS", "T2_
            "table2_rmse", "mechanism", "trend_slopes", "SENSITIVITY_GRID", "T3_TAGS", "carrier_iterations", "set_stats", "model", "cms", "pf", "grid", "ekf", "ukf", "espf",
            "table1", "table2", "fig2_run", "fig3", "table3", "one_step", "fig6", "sensitivity",
            "consistency", "summarise", "TABLE1_N", "FIG3_N", "T3_READINGS", "cost_evidence_table2",
-           "cost_counts_fig3", "carrier_operations", "eta_sweep", "ess_per_run", "fig3_per_run"]
+           "cost_counts_fig3", "carrier_operations", "eta_sweep", "ess_per_run", "fig3_per_run",
+           "equation_checks", "table3_oracle", "run_all", "Ning2011Results", "STEPS", "CMS_TAGS", "SENS_KEY",
+           "T1_TAGS", "T2_MAIN", "T2_OTHER", "T2_OTHER_FILTERS", "T2_TAGS", "T3_LAB", "T3_MAIN", "T3_CMS_TAGS",
+           "T3_ORDER_TAGS", "F3_TAGS", "MECH_RUNS", "MECH_READINGS", "ESS_TAGS"]
 
 PAPER = "cmspf_ning2011"
 #: horizon M of sec 3.1
@@ -883,25 +887,67 @@ STEPS = ("equation checks", "Table 1", "Table 2", "Fig. 2", "Fig. 3", "Table 3",
          "Fig. 3 readings", "mechanism", "costs", "Figs. 4-5 readings", "Fig. 6 readings")
 
 
+@dataclass(eq=False)
 class Ning2011Results:
     """Everything the chapter's claims, prose, tables and figures need, from :func:`run_all`.
 
-    Attributes hold the experiments at the chapter's scale (``t1``, ``t1_q10``, ``t2``, ``t2_res``,
-    ``f2``, ``f3``, ``t3``, ``t3_res``, ``sens``, ``cons``, ``mech``, the cost counts, ...); the
-    readings (other values of the free choices) are read with :meth:`t1_reading`,
-    :meth:`t2_reading`, :meth:`t3_reading`, :meth:`f3_reading`, :meth:`f6_reading` and
-    :meth:`ess_reading`, keyed by (reading tag, runs). ``n`` holds the run counts used
-    (``t1``, ``t2``, ``t3``, ``fig3``, ``power``, ``reading``, ``sens``, ``cons``, ``mech``).
-    While :func:`run_all` builds the object a reading not yet run is run on first use; afterwards
-    a reading :func:`run_all` did not run raises ``KeyError`` (deciding a claim never runs an
-    experiment).
+    The experiments at the chapter's scale are attributes: ``checks`` (:func:`equation_checks`),
+    ``t1``/``t1_q10`` (Table 1 per run, sigma_w^2 = 1 and 10, with ``t1_grid``, ``t1_grid_q10`` and
+    ``t1_lost``), ``t2``/``t2_q10`` (Table 2 summaries) with ``t2_res``/``t2_q10_res`` (their Monte
+    Carlo results) and ``t2_times``, ``f2`` (Fig. 2), ``f3``, ``f3_grid``, ``f3_runs`` (Fig. 3),
+    ``t3``, ``t3_res``, ``t3_q10``, ``t3_oracle`` (Table 3 and the oracle), ``step_randn``,
+    ``step_chaos`` (Figs. 4-5), ``f6_base``, ``f6_maps`` (Fig. 6), ``sens``, ``sens_ref``,
+    ``sens_runs`` (the sensitivity sweep), ``cons``, ``cons_grid`` (the consistency check),
+    ``mech``, ``mech_randn`` (the mechanism), ``cost2``, ``cost3``, ``carrier_ops``,
+    ``carrier_its`` (the cost counts). The readings (other values of the free choices) are read
+    with :meth:`t1_reading`, :meth:`t2_reading`, :meth:`t3_reading`, :meth:`f3_reading`,
+    :meth:`f6_reading`, :meth:`ess_reading` and :meth:`t3_grid_reading`, keyed by (reading tag,
+    runs) in ``readings``. ``n`` holds the run counts used (``t1``, ``t2``, ``t3``, ``fig3``,
+    ``power``, ``reading``, ``sens``, ``f6``, ``cons``, ``mech``). While :func:`run_all` builds
+    the object a reading not yet run is run on first use; afterwards a reading :func:`run_all`
+    did not run raises ``KeyError`` (deciding a claim never runs an experiment).
     """
 
-    def __init__(self, runs, seeds: dict, n: dict):
-        self.runs, self.seeds, self.n = runs, dict(seeds), dict(n)
-        self.readings: dict = {}
-        self._executor = None
-        self._live = False
+    runs: int | None
+    seeds: dict
+    n: dict
+    checks: dict | None = None
+    t1: pd.DataFrame | None = None
+    t1_grid: np.ndarray | None = None
+    t1_lost: float | None = None
+    t1_q10: pd.DataFrame | None = None
+    t1_grid_q10: np.ndarray | None = None
+    t2: pd.DataFrame | None = None
+    t2_times: dict | None = None
+    t2_res: object = None
+    t2_q10: pd.DataFrame | None = None
+    t2_q10_res: object = None
+    f2: object = None
+    f3: pd.DataFrame | None = None
+    f3_grid: dict | None = None
+    f3_runs: pd.DataFrame | None = None
+    t3: pd.DataFrame | None = None
+    t3_res: object = None
+    t3_q10: pd.DataFrame | None = None
+    t3_oracle: pd.DataFrame | None = None
+    step_randn: dict | None = None
+    step_chaos: dict | None = None
+    f6_base: dict | None = None
+    f6_maps: dict | None = None
+    sens: pd.DataFrame | None = None
+    sens_ref: dict | None = None
+    sens_runs: dict | None = None
+    cons: pd.DataFrame | None = None
+    cons_grid: dict | None = None
+    mech: dict | None = None
+    mech_randn: dict | None = None
+    cost2: pd.DataFrame | None = None
+    cost3: pd.DataFrame | None = None
+    carrier_ops: dict | None = None
+    carrier_its: dict | None = None
+    readings: dict = field(default_factory=dict)
+    _executor: object = field(default=None, repr=False)
+    _live: bool = field(default=False, repr=False)
 
     @property
     def settings(self) -> dict:
@@ -1049,7 +1095,7 @@ def run_all(runs=None, seeds=None, executor=None, steps=None) -> Ning2011Results
     n = {"t1": n_(20), "t2": n_(50), "t3": n_(20), "fig3": n_(ASSUMPTIONS["runs_fig3"]), "power": n_(POWER_RUNS),
          "reading": n_(20), "sens": max(n_(50), 4), "f6": max(n_(20), 4), "cons": n_(50), "mech": n_(MECH_RUNS)}
     timing = {} if runs is None else {"timing_repeats": 1}   # wall time is context, never a claim
-    R = Ning2011Results(runs, seeds, n)
+    R = Ning2011Results(runs, dict(seeds), n)
     ex = executor
     step("equation checks")
     R.checks = equation_checks()

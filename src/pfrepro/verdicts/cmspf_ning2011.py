@@ -646,7 +646,7 @@ def takeaway(reg, R) -> str:
         first = ("On the paper's benchmark CMS-PF was not more accurate than a bootstrap PF with the same particles "
                  "under any reading we ran")
         first += ", nor at equal computation" if equal == "not reproduced" else ""
-        first += ": a plain (or regularised) PF is the better choice."
+        first += ": a plain bootstrap PF is the better choice."
     elif better == "reproduced":
         first = "CMS-PF beat the bootstrap PF at every particle number under every reading we ran"
         first += (", but not at equal computation (a PF with 2N particles does as well)."
