@@ -225,7 +225,7 @@ def test_list_shows_dpf_and_immpf(capsys, tmp_path, monkeypatch):
     ("immpf", "immpfor_zhou2017", ("table1.csv", "fig1.png", "fig2.png", "fig3.png", "fig4.png", "fig5.png")),
 ])
 def test_run_new_papers_on_one_run(name, key, files, tmp_path, capsys):
-    code, out, err = run_cli(["run", name, "--runs", "1", "--seed", "5", "--out", str(tmp_path)], capsys)
+    code, out, err = run_cli(["run", name, "--runs", "2", "--seed", "5", "--out", str(tmp_path)], capsys)
     assert code == 0, err
     for f in files:
         assert (tmp_path / f).stat().st_size > 0

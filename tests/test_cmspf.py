@@ -343,3 +343,14 @@ def test_offline_carrier_counts_map_iterations_outside_the_loop():
     assert o["offline"]["operations"] < o["online"]["operations"]
     r = E.carrier_operations(N=20, carrier="randn")
     assert r["offline"]["operations"] == r["online"]["operations"]
+
+
+def test_sensitivity_keys_are_the_cms_readings():
+    """Table 2's CMS-PF readings are read off the sensitivity sweep (E.SENS_KEY): the same readings,
+    and the same number of big/small pairs (n_big = 1 is 0.5 % of N = 200 in the sweep)."""
+    assert set(E.SENS_KEY) == set(E.CMS_TAGS)
+    m = E.model()
+    for t in E.CMS_TAGS:
+        par, v = E.SENS_KEY[t]
+        assert v in E.SENSITIVITY_GRID[par]
+        assert E.cms(m, 200, **E.CMS_TAGS[t]).n_big == E.cms(m, 200, **{par: v}).n_big

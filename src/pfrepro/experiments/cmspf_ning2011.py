@@ -15,6 +15,9 @@ M = T = 50 steps.
 """
 from __future__ import annotations
 
+import functools
+from dataclasses import dataclass, field
+
 import numpy as np
 import pandas as pd
 
@@ -30,7 +33,10 @@ __all__ = ["PAPER", "T", "SEEDS", "ASSUMPTIONS", "CHOICES", "CMS_READINGS", "T2_
            "table2_rmse", "mechanism", "trend_slopes", "SENSITIVITY_GRID", "T3_TAGS", "carrier_iterations", "set_stats", "model", "cms", "pf", "grid", "ekf", "ukf", "espf",
            "table1", "table2", "fig2_run", "fig3", "table3", "one_step", "fig6", "sensitivity",
            "consistency", "summarise", "TABLE1_N", "FIG3_N", "T3_READINGS", "cost_evidence_table2",
-           "cost_counts_fig3", "carrier_operations", "eta_sweep", "ess_per_run", "fig3_per_run"]
+           "cost_counts_fig3", "carrier_operations", "eta_sweep", "ess_per_run", "fig3_per_run",
+           "equation_checks", "table3_oracle", "run_all", "Ning2011Results", "STEPS", "CMS_TAGS", "SENS_KEY",
+           "T1_TAGS", "T2_MAIN", "T2_OTHER", "T2_OTHER_FILTERS", "T2_TAGS", "T3_LAB", "T3_MAIN", "T3_CMS_TAGS",
+           "T3_ORDER_TAGS", "F3_TAGS", "MECH_RUNS", "MECH_READINGS", "ESS_TAGS"]
 
 PAPER = "cmspf_ning2011"
 #: horizon M of sec 3.1
@@ -41,6 +47,12 @@ FIG3_N = (10, 25, 50, 75, 100, 200, 300, 400, 500, 600, 700, 800)
 #: one fixed seed per experiment (chosen once; never changed to move a number)
 SEEDS = {"table1": 20111, "table2": 20112, "fig2": 20113, "fig3": 20114, "table3": 20115,
          "figs45": 20116, "fig6": 20117, "sensitivity": 20118, "consistency": 20119, "mechanism": 20120}
+
+
+def _seed(seed, name: str) -> int:
+    """``seed``, or the book's fixed seed ``SEEDS[name]`` when it is None (looked up at call time:
+    :func:`run_all` passes every seed explicitly, so ``pfrepro run --seed`` reaches every experiment)."""
+    return SEEDS[name] if seed is None else int(seed)
 
 #: runs used where the paper's run count leaves an ordering undecided (stated up front in the
 #: chapter): run i is the same run at every count, so the first 20 of these are the paper-scale runs
@@ -259,13 +271,14 @@ class _CountingCarrier(ChaosCarrier):
         return super()._sequence(n, v)
 
 
-def carrier_operations(N: int | None = None, sigma_v: float = 1.0, seed=SEEDS["table2"], **over) -> dict:
+def carrier_operations(N: int | None = None, sigma_v: float = 1.0, seed=None, **over) -> dict:
     """Operations inside CMS-PF's filtering call on run 1 of Table 2, counted, for the carrier
     generated inside the call ("online") and passed in, computed beforehand ("offline", sec 2.1):
     model evaluations (:func:`pfrepro.cost.count_model_calls`: transitions + likelihoods) and
     chaotic-map iterations (a counting carrier), per time step. ``over``: CMS keywords (``init``,
     ``burn_in``, ...). Returns ``{"online": {...}, "offline": {...}, "offline before the loop": its}``
     with keys ``model evaluations``, ``map iterations``, ``operations`` (their sum) per step."""
+    seed = _seed(seed, "table2")
     from ..cost import count_model_calls
 
     N = ASSUMPTIONS["N_table2"] if N is None else N
@@ -288,7 +301,7 @@ def carrier_operations(N: int | None = None, sigma_v: float = 1.0, seed=SEEDS["t
 
 
 # -- Table 1 -------------------------------------------------------------------------------
-def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table1"], *,
+def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, seed=None, *,
            cms_over: dict | None = None, pf_resampling: str | None = None, extras: bool = True,
            filters=("PF", "CMS-PF"), executor=None):
     """Per-run RMSE of PF and CMS-PF (20 runs, each N), plus PF(2N) and the grid reference.
@@ -299,6 +312,7 @@ def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, see
     ``filters`` limits the run to PF or CMS-PF. Returns ``(per_run, grid_rmse, lost_mass)``:
     ``per_run`` has columns (N, filter); without extras the grid outputs are None.
     """
+    seed = _seed(seed, "table1")
     m = model(sigma_v, sigma_w2)
     sim = m.simulate(T, runs, truth_streams(seed, runs))
     cols = {}
@@ -324,7 +338,7 @@ def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, see
 
 
 # -- Table 2 -------------------------------------------------------------------------------
-def table2(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table2"],
+def table2(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=None, seed=None,
            timing_repeats: int = 7, *, executor=None):
     """RMSE over 50 runs and time per run of EKF, UKF, PF, ESPF, CMS-PF (+ references).
 
@@ -332,6 +346,7 @@ def table2(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=
     session; reported as a ratio to the PF. CMS-PF is timed with its carrier
     computed offline (as sec 2.1 proposes) and, separately, including it.
     """
+    seed = _seed(seed, "table2")
     N = ASSUMPTIONS["N_table2"] if N is None else N
     m = model(sigma_v, sigma_w2)
     fs = {"EKF": ekf(m), "UKF": ukf(m), "PF": pf(m, N), "ESPF": espf(m, N), "CMS-PF": cms(m, N),
@@ -355,12 +370,13 @@ def table2(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=
     return df, times, res
 
 
-def table2_rmse(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table2"], *,
+def table2_rmse(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=None, seed=None, *,
                 filters=("EKF", "UKF", "PF", "ESPF", "CMS-PF"), cms_over: dict | None = None,
                 pf_resampling: str | None = None, ukf_kappa: float | None = None, espf_kw: dict | None = None,
                 executor=None) -> pd.DataFrame:
     """Per-run RMSE of Table 2's filters (no timing) under other values of the free choices:
     the same truths and filter streams as :func:`table2` (columns = filters, rows = runs)."""
+    seed = _seed(seed, "table2")
     N = ASSUMPTIONS["N_table2"] if N is None else N
     m = model(sigma_v, sigma_w2)
     make = {"EKF": lambda: ekf(m), "UKF": lambda: ukf(m, ukf_kappa), "PF": lambda: pf(m, N, pf_resampling),
@@ -371,8 +387,9 @@ def table2_rmse(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigm
 
 
 # -- Fig. 2 --------------------------------------------------------------------------------
-def fig2_run(N: int = 200, sigma_v: float = 1.0, seed=SEEDS["fig2"]):
+def fig2_run(N: int = 200, sigma_v: float = 1.0, seed=None):
     """One run: truth, EKF and CMS-PF estimates (Fig. 2, sigma_v^2 = 1, N = 200)."""
+    seed = _seed(seed, "fig2")
     m = model(sigma_v)
     res = run_monte_carlo(m, {"EKF": ekf(m), "CMS-PF": cms(m, N), "PF": pf(m, N), "Grid (exact)": grid(m)},
                           T, 1, seed)
@@ -380,11 +397,12 @@ def fig2_run(N: int = 200, sigma_v: float = 1.0, seed=SEEDS["fig2"]):
 
 
 # -- Fig. 3 --------------------------------------------------------------------------------
-def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["fig3"], timing_repeats=9,
+def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=None, timing_repeats=9,
          *, executor=None, per_run: bool = False):
     """RMSE and time per run of CMS-PF (and PF) against N, sigma_v = 10.
 
     ``per_run=True`` adds a third output: CMS-PF's per-run RMSE (rows = runs, columns = N)."""
+    seed = _seed(seed, "fig3")
     runs = ASSUMPTIONS["runs_fig3"] if runs is None else runs
     m = model(sigma_v)
     sim = m.simulate(T, runs, truth_streams(seed, runs))
@@ -414,7 +432,7 @@ def fig3(Ns=FIG3_N, runs: int | None = None, sigma_v: float = 10.0, seed=SEEDS["
 TABLE3_COLUMNS = ("EKF", "UKF", "CMS1-PF", "CMSR1-PF", "CMS2-PF", "CMSR2-PF", "CMS3-PF", "CMSR3-PF")
 
 
-def table3(runs: int = 20, N: int | None = None, sigma_v: float = 10.0, sigma_w2=None, seed=SEEDS["table3"],
+def table3(runs: int = 20, N: int | None = None, sigma_v: float = 10.0, sigma_w2=None, seed=None,
            *, cms_over: dict | None = None, only_cms: bool = False, with_grid: bool = True,
            filters=None, ukf_kappa: float | None = None, executor=None):
     """Per-run RMSE, sigma_v = 10: EKF, UKF and CMS-PF with randn (1), eq-1 (2), eq-6 (3)
@@ -424,6 +442,7 @@ def table3(runs: int = 20, N: int | None = None, sigma_v: float = 10.0, sigma_w2
     column's; ``n_th`` applies to the CMSR columns only, the CMS columns never resample);
     ``only_cms`` runs the six CMS columns only; ``with_grid=False`` skips the grid; ``filters``
     keeps only the named columns; ``ukf_kappa`` another UKF kappa."""
+    seed = _seed(seed, "table3")
     N = ASSUMPTIONS["N_table2"] if N is None else N
     m = model(sigma_v, sigma_w2)
     over = dict(cms_over or {})
@@ -444,13 +463,14 @@ def table3(runs: int = 20, N: int | None = None, sigma_v: float = 10.0, sigma_w2
 
 
 # -- Figs. 4-5 -----------------------------------------------------------------------------
-def one_step(carrier: str, k: int = 20, N: int = 200, sigma_v: float = 1.0, seed=SEEDS["figs45"]):
+def one_step(carrier: str, k: int = 20, N: int = 200, sigma_v: float = 1.0, seed=None):
     """One step's particles and weights with and without mapping (Figs. 4-5).
 
     A single run is filtered by CMS-PF up to step k - 1; at step k the same
     predicted particles (same random numbers) go through the step without
     mapping (plain SIS) and with mapping. Returns a dict of arrays for one run.
     """
+    seed = _seed(seed, "figs45")
     m = model(sigma_v)
     sim = m.simulate(T, 1, truth_streams(seed, 1))
     f = cms(m, N, carrier=carrier)
@@ -477,11 +497,12 @@ def one_step(carrier: str, k: int = 20, N: int = 200, sigma_v: float = 1.0, seed
 
 
 # -- Fig. 6 --------------------------------------------------------------------------------
-def fig6(alphas=(0.05, 0.2, 0.5, 0.8, 2.0), k: int = 20, N: int = 200, seed=SEEDS["fig6"]):
+def fig6(alphas=(0.05, 0.2, 0.5, 0.8, 2.0), k: int = 20, N: int = 200, seed=None):
     """Map particles of one step for several adjustment factors alpha (Fig. 6, N = 200).
 
     The same predicted particles and the same carrier values are mapped with each alpha.
     """
+    seed = _seed(seed, "fig6")
     from ..filters.cmspf import map_particles
 
     base = one_step(ASSUMPTIONS["carrier"], k=k, N=N, seed=seed)
@@ -509,7 +530,7 @@ SENSITIVITY_GRID = {
 }
 
 
-def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed=SEEDS["sensitivity"],
+def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed=None,
                 *, executor=None, per_run: bool = False):
     """Mean RMSE of CMS-PF when one assumption at a time is varied over its reasonable range.
 
@@ -517,6 +538,7 @@ def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed
     filters (PF, exact grid, EKF, UKF, ESPF) run on the same truths. ``per_run=True`` adds a
     third output: ``{(parameter, value): per-run RMSE}`` and ``{reference: per-run RMSE}``
     for paired comparisons (same truths, same filter stream for every value)."""
+    seed = _seed(seed, "sensitivity")
     N = ASSUMPTIONS["N_table2"] if N is None else N
     m = model(sigma_v)
     sim = m.simulate(T, runs, truth_streams(seed, runs))
@@ -539,7 +561,7 @@ def sensitivity(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, seed
 
 
 # -- consistency (improper weights) ------------------------------------------------------------
-def consistency(Ns=(50, 200, 1000, 4000), runs: int = 50, sigma_v: float = 1.0, seed=SEEDS["consistency"],
+def consistency(Ns=(50, 200, 1000, 4000), runs: int = 50, sigma_v: float = 1.0, seed=None,
                 *, executor=None):
     """Distance of PF and CMS-PF estimates from the exact posterior mean, and their spread.
 
@@ -547,6 +569,7 @@ def consistency(Ns=(50, 200, 1000, 4000), runs: int = 50, sigma_v: float = 1.0, 
     posterior mean; a consistent filter drives it to 0 as N grows. ``var_ratio``:
     mean reported posterior variance over the grid's posterior variance.
     """
+    seed = _seed(seed, "consistency")
     m = model(sigma_v)
     sim = m.simulate(T, runs, truth_streams(seed, runs))
     g = grid(m).filter(sim.y)
@@ -566,10 +589,11 @@ def consistency(Ns=(50, 200, 1000, 4000), runs: int = 50, sigma_v: float = 1.0, 
 
 
 # -- cost evidence and per-run sweeps for the claims -------------------------------------------
-def cost_evidence_table2(N: int | None = None, sigma_v: float = 1.0, seed=SEEDS["table2"], repeats: int = 7):
+def cost_evidence_table2(N: int | None = None, sigma_v: float = 1.0, seed=None, repeats: int = 7):
     """Deterministic cost counts of the Table 2 filters on run 1 (:func:`pfrepro.cost.cost_counts`,
     per time step) beside single-run wall time as a ratio to the PF, median and [min, max]
     over ``repeats`` interleaved repeats. CMS-PF is timed with its carrier computed beforehand."""
+    seed = _seed(seed, "table2")
     from ..cost import cost_counts, time_repeats, time_summary
 
     N = ASSUMPTIONS["N_table2"] if N is None else N
@@ -588,8 +612,9 @@ def cost_evidence_table2(N: int | None = None, sigma_v: float = 1.0, seed=SEEDS[
                          "time ratio max": times["ratio max"]}).rename_axis("filter")
 
 
-def cost_counts_fig3(Ns=FIG3_N, sigma_v: float = 10.0, seed=SEEDS["fig3"]) -> pd.DataFrame:
+def cost_counts_fig3(Ns=FIG3_N, sigma_v: float = 10.0, seed=None) -> pd.DataFrame:
     """Model evaluations per time step of CMS-PF and PF at each N of Fig. 3 (run 1)."""
+    seed = _seed(seed, "fig3")
     from ..cost import cost_counts
 
     m = model(sigma_v)
@@ -603,11 +628,12 @@ def cost_counts_fig3(Ns=FIG3_N, sigma_v: float = 10.0, seed=SEEDS["fig3"]) -> pd
 
 
 def eta_sweep(values=SENSITIVITY_GRID["eta"], runs: int = 50, N: int | None = None,
-              sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["sensitivity"], *, executor=None) -> pd.DataFrame:
+              sigma_v: float = 1.0, sigma_w2=None, seed=None, *, executor=None) -> pd.DataFrame:
     """Per-run RMSE of CMS-PF for each adjustment factor (the eta rows of :func:`sensitivity`,
     same data and the same filter stream for every value: common random numbers), columns
     = eta values, rows = runs; for paired comparisons between values. ``sigma_v`` and
     ``sigma_w2`` give the sweep under another reading of the noise levels (Table 2's readings)."""
+    seed = _seed(seed, "sensitivity")
     N = ASSUMPTIONS["N_table2"] if N is None else N
     m = model(sigma_v, sigma_w2)
     sim = m.simulate(T, runs, truth_streams(seed, runs))
@@ -618,11 +644,12 @@ def eta_sweep(values=SENSITIVITY_GRID["eta"], runs: int = 50, N: int | None = No
     return pd.DataFrame(out, index=pd.RangeIndex(1, runs + 1, name="run"))
 
 
-def ess_per_run(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=None, seed=SEEDS["table2"], *,
+def ess_per_run(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=None, seed=None, *,
                 filters=("PF", "CMS-PF"), cms_over: dict | None = None, executor=None) -> pd.DataFrame:
     """Per-run mean effective sample size over the steps (the Figs. 4-5 claim) of Table 2's PF and
     CMS-PF, on Table 2's truths and filter streams (run i is the same run as in :func:`table2`);
     ``cms_over`` / ``sigma_w2`` give another value of a free choice. Columns = filters, rows = runs."""
+    seed = _seed(seed, "table2")
     N = ASSUMPTIONS["N_table2"] if N is None else N
     m = model(sigma_v, sigma_w2)
     make = {"PF": lambda: pf(m, N), "CMS-PF": lambda: cms(m, N, **(cms_over or {}))}
@@ -632,10 +659,11 @@ def ess_per_run(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigm
 
 
 def fig3_per_run(Ns=(FIG3_N[0], FIG3_N[-1]), runs: int | None = None, sigma_v: float = 10.0, sigma_w2=None,
-                 seed=SEEDS["fig3"], *, cms_over: dict | None = None, executor=None) -> pd.DataFrame:
+                 seed=None, *, cms_over: dict | None = None, executor=None) -> pd.DataFrame:
     """Per-run RMSE of CMS-PF at the given N on the Fig. 3 runs (the same data and filter
     stream as :func:`fig3`, without the timing), columns = N; for paired comparisons
     between N and for other readings of the noise levels (``sigma_v``, ``sigma_w2``)."""
+    seed = _seed(seed, "fig3")
     runs = ASSUMPTIONS["runs_fig3"] if runs is None else runs
     m = model(sigma_v, sigma_w2)
     sim = m.simulate(T, runs, truth_streams(seed, runs))
@@ -675,7 +703,7 @@ def set_stats(x) -> dict:
 
 
 def mechanism(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_w2=None,
-              seed=SEEDS["mechanism"], cms_over: dict | None = None) -> pd.DataFrame:
+              seed=None, cms_over: dict | None = None) -> pd.DataFrame:
     """The sets each filter works with, step by step, on the same truths (Table 2's setting).
 
     Bootstrap PF (systematic resampling every step): its **resampled set** (what it
@@ -684,6 +712,7 @@ def mechanism(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_
     what it propagates). Per run, the mean over the T steps of :func:`set_stats`; returns a
     DataFrame with columns (set, statistic), rows = runs.
     """
+    seed = _seed(seed, "mechanism")
     from ..filters.particle import normalize_log_weights
     from ..filters.resampling import resample_counts
     from ..rng import take_runs
@@ -747,3 +776,395 @@ def carrier_iterations(N: int, T_: int = T, burn_in: int | None = None, init: st
     init = ASSUMPTIONS["init"] if init is None else init
     its = {"chain": runs * N * (burn_in + T_), "run": runs * (burn_in + T_ * N), "shared": burn_in + T_ * N}[init]
     return {"carrier iterations": its, "model evaluations": runs * 3 * N * T_}
+
+
+# -- the equation checks (errata evidence) -------------------------------------------------------
+def equation_checks(n: int = 200_000, burn_in: int | None = None) -> dict:
+    """Numerical checks of eqs (1) and (6) and of sec 3.3's claims about the eq-(6) sequence.
+
+    Parameters
+    ----------
+    n : int
+        Iterates of the eq-(6) chains.
+    burn_in : int, optional
+        Burn-in T0 of the eq-(6) chains (default: the chapter's, ``ASSUMPTIONS["burn_in"]``).
+
+    Returns
+    -------
+    dict
+        ``roots``: the roots of the printed eq (6), x = 1 - 2x^2 (only 1/2 and -1);
+        ``mean6``, ``ac6``: mean and autocorrelations at lags 1-3 of the corrected eq (6);
+        ``xc6``: cross-correlations at lags -3..3 of that chain with one from an independent start
+        and with one whose start differs by 1e-9; ``n6`` and ``bound6`` = 4 / sqrt(n6) (what two
+        independent white sequences stay under); ``lyap383``, ``lyap4``: Lyapunov exponents of
+        eq (1) at u = 3.83 (a period-3 window) and u = 4; ``max38``: the largest value of eq (1)
+        at u = 3.8 (sec 2.1 says "onto (0, 1)").
+    """
+    import copy
+
+    burn_in = ASSUMPTIONS["burn_in"] if burn_in is None else burn_in
+    return copy.deepcopy(_equation_checks(int(n), int(burn_in)))
+
+
+@functools.lru_cache(maxsize=4)
+def _equation_checks(n: int, burn_in: int) -> dict:
+    """:func:`equation_checks`, computed once per (n, burn_in) in a process (deterministic, seedless)."""
+    from ..chaos import chebyshev_sequence, logistic_sequence
+
+    roots = np.sort(np.roots([2.0, 1.0, -1.0]))
+    s6 = chebyshev_sequence(n, x0=0.3, burn_in=burn_in)
+    ac6 = [np.corrcoef(s6[:-lag], s6[lag:])[0, 1] for lag in (1, 2, 3)]
+
+    def lyapunov(u, n_it=100_000):
+        s = logistic_sequence(n_it, x0=0.3, u=u, burn_in=1000)
+        return float(np.mean(np.log(np.abs(u * (1 - 2 * s)))))
+
+    n6 = s6.size
+    # the two other chains in one call (elementwise the same arithmetic as one chain at a time)
+    s6bc = chebyshev_sequence(n6, x0=np.array([-0.61, 0.3 + 1e-9]), burn_in=burn_in)
+    s6b, s6c = np.ascontiguousarray(s6bc[:, 0]), np.ascontiguousarray(s6bc[:, 1])
+    xc6 = [np.corrcoef(s6[max(0, -lag):n6 - max(0, lag)], o[max(0, lag):n6 - max(0, -lag)])[0, 1]
+           for o in (s6b, s6c) for lag in (-3, -2, -1, 0, 1, 2, 3)]
+    return {"roots": roots, "mean6": float(s6.mean()), "ac6": ac6, "xc6": xc6, "n6": int(n6),
+            "bound6": float(4 / np.sqrt(n6)), "lyap383": lyapunov(3.83), "lyap4": lyapunov(4.0),
+            "max38": float(logistic_sequence(100_000, x0=0.3, u=3.8).max())}
+
+
+def table3_oracle(res, seed=None) -> pd.DataFrame:
+    """Per-run RMSE of the oracle CMS-PF (the literal Step 2.2: the map centred on the true state)
+    for the six CMS columns of Table 3, on the runs of ``res`` (:func:`table3`'s second output)."""
+    seed = _seed(seed, "table3")
+    m10 = model(10.0)
+    out = {}
+    for car, name in [("randn", "CMS1"), ("logistic", "CMS2"), ("chebyshev", "CMS3")]:
+        for nth, suf in [(0.0, ""), (ASSUMPTIONS["n_th"], "R")]:
+            r = oracle(m10, ASSUMPTIONS["N_table2"], carrier=car, n_th=nth).filter(
+                res.sim.y, filter_streams(seed, f"oracle {name}{suf}", res.sim.runs), x_true=res.sim.x)
+            out[f"{name[:3]}{suf}{name[3:]}-PF"] = rmse(res.x_true, r.x)
+    return pd.DataFrame(out)
+
+
+# -- the readings and every experiment of the chapter: run_all ----------------------------------
+#: the CMS-PF readings as tags "<choice>=<value>" -> keyword overrides of :func:`cms`
+CMS_TAGS = {f"{c}={v}": kw for (c, v), kw in CMS_READINGS.items()}
+#: the same readings as (parameter, value) of the sensitivity sweep (Table 2's setting, its own truths)
+SENS_KEY = {"eta=0.2": ("eta", 0.2), "eta=0.8": ("eta", 0.8), "n_big=1": ("big_fraction", 0.005),
+            "n_th=0": ("n_th", 0.0), "n_th=N": ("n_th", 1.0), "carrier=randn": ("carrier", "randn"),
+            "carrier=eq (6)": ("carrier", "chebyshev"), "u=3.8": ("u", 3.8), "burn_in=100": ("burn_in", 100),
+            "carrier_init=run": ("init", "run"), "carrier_init=shared": ("init", "shared")}
+#: Table 1's readings: the two sigma_w^2, the PF's resampling and every CMS-PF reading
+T1_TAGS = ["sigma_w2=1", "sigma_w2=10", "pf_resampling=multinomial"] + list(CMS_TAGS)
+#: Table 2's main reading and its other settings (N, PF, UKF, ESPF): tag -> keywords of :func:`table2_rmse`
+T2_MAIN = next(iter(T2_READINGS))
+T2_OTHER = {"N_t23=100": dict(N=100), "pf_resampling=multinomial": dict(pf_resampling="multinomial"),
+            "ukf=κ 0": dict(ukf_kappa=0.0), "espf=MH 0.5, SBX 10": dict(espf_kw={"mcmc_scale": 0.5, "sbx_eta": 10.0})}
+#: the filters each of :data:`T2_OTHER` reruns (the others are the main reading's)
+T2_OTHER_FILTERS = {"N_t23=100": ("EKF", "UKF", "PF", "ESPF", "CMS-PF"), "pf_resampling=multinomial": ("PF",),
+                    "ukf=κ 0": ("UKF",), "espf=MH 0.5, SBX 10": ("ESPF",)}
+T2_TAGS = list(T2_READINGS) + list(T2_OTHER) + list(CMS_TAGS)
+#: Table 3's (and Fig. 3's) noise readings: tag -> label of :data:`T3_READINGS`; the main tag
+T3_LAB = {v: k for k, v in T3_TAGS.items()}
+T3_MAIN = T3_TAGS[next(iter(T3_READINGS))]
+#: the CMS-PF readings that apply to Table 3 (its columns fix the carrier and, for CMS1-3, N_th = 0)
+T3_CMS_TAGS = [t for t in CMS_TAGS if not t.startswith(("carrier=", "n_th=0"))]
+T3_ORDER_TAGS = list(T3_LAB) + ["N_t23=100"] + T3_CMS_TAGS
+#: Fig. 3's readings: Table 3's noise readings and the ends of the eta range
+F3_TAGS = list(T3_LAB) + ["eta=0.2", "eta=0.8"]
+#: runs of each mechanism reading (issue 19), and the readings: name -> keywords of :func:`mechanism`
+MECH_RUNS = 20
+MECH_READINGS = {"main": {}, "eta=0.2": {"cms_over": {"eta": 0.2}}, "eta=0.8": {"cms_over": {"eta": 0.8}},
+                 "carrier=randn": {"cms_over": {"carrier": "randn"}},
+                 "carrier=eq (6)": {"cms_over": {"carrier": "chebyshev"}}, "sigma_w2=10": {"sigma_w2": 10.0},
+                 "carrier_init=run": {"cms_over": {"init": "run"}},
+                 "carrier_init=shared": {"cms_over": {"init": "shared"}}}
+#: the ESS readings of Figs. 4-5 run on Table 2's first runs: tag -> CMS-PF keyword overrides
+ESS_TAGS = {"eta=0.2": {"eta": 0.2}, "eta=0.8": {"eta": 0.8},
+            "carrier_init=run": {"init": "run"}, "carrier_init=shared": {"init": "shared"}}
+
+#: the labels :func:`run_all` passes to ``steps`` (in order)
+STEPS = ("equation checks", "Table 1", "Table 2", "Fig. 2", "Fig. 3", "Table 3", "Figs. 4-5", "Fig. 6",
+         "sensitivity", "consistency", "Table 1 readings", "Table 2 readings", "Table 3 readings",
+         "Fig. 3 readings", "mechanism", "costs", "Figs. 4-5 readings", "Fig. 6 readings")
+
+
+@dataclass(eq=False)
+class Ning2011Results:
+    """Everything the chapter's claims, prose, tables and figures need, from :func:`run_all`.
+
+    The experiments at the chapter's scale are attributes: ``checks`` (:func:`equation_checks`),
+    ``t1``/``t1_q10`` (Table 1 per run, sigma_w^2 = 1 and 10, with ``t1_grid``, ``t1_grid_q10`` and
+    ``t1_lost``), ``t2``/``t2_q10`` (Table 2 summaries) with ``t2_res``/``t2_q10_res`` (their Monte
+    Carlo results) and ``t2_times``, ``f2`` (Fig. 2), ``f3``, ``f3_grid``, ``f3_runs`` (Fig. 3),
+    ``t3``, ``t3_res``, ``t3_q10``, ``t3_oracle`` (Table 3 and the oracle), ``step_randn``,
+    ``step_chaos`` (Figs. 4-5), ``f6_base``, ``f6_maps`` (Fig. 6), ``sens``, ``sens_ref``,
+    ``sens_runs`` (the sensitivity sweep), ``cons``, ``cons_grid`` (the consistency check),
+    ``mech``, ``mech_randn`` (the mechanism), ``cost2``, ``cost3``, ``carrier_ops``,
+    ``carrier_its`` (the cost counts). The readings (other values of the free choices) are read
+    with :meth:`t1_reading`, :meth:`t2_reading`, :meth:`t3_reading`, :meth:`f3_reading`,
+    :meth:`f6_reading`, :meth:`ess_reading` and :meth:`t3_grid_reading`, keyed by (reading tag,
+    runs) in ``readings``. ``n`` holds the run counts used (``t1``, ``t2``, ``t3``, ``fig3``,
+    ``power``, ``reading``, ``sens``, ``f6``, ``cons``, ``mech``). While :func:`run_all` builds
+    the object a reading not yet run is run on first use; afterwards a reading :func:`run_all`
+    did not run raises ``KeyError`` (deciding a claim never runs an experiment).
+    """
+
+    runs: int | None
+    seeds: dict
+    n: dict
+    checks: dict | None = None
+    t1: pd.DataFrame | None = None
+    t1_grid: np.ndarray | None = None
+    t1_lost: float | None = None
+    t1_q10: pd.DataFrame | None = None
+    t1_grid_q10: np.ndarray | None = None
+    t2: pd.DataFrame | None = None
+    t2_times: dict | None = None
+    t2_res: object = None
+    t2_q10: pd.DataFrame | None = None
+    t2_q10_res: object = None
+    f2: object = None
+    f3: pd.DataFrame | None = None
+    f3_grid: dict | None = None
+    f3_runs: pd.DataFrame | None = None
+    t3: pd.DataFrame | None = None
+    t3_res: object = None
+    t3_q10: pd.DataFrame | None = None
+    t3_oracle: pd.DataFrame | None = None
+    step_randn: dict | None = None
+    step_chaos: dict | None = None
+    f6_base: dict | None = None
+    f6_maps: dict | None = None
+    sens: pd.DataFrame | None = None
+    sens_ref: dict | None = None
+    sens_runs: dict | None = None
+    cons: pd.DataFrame | None = None
+    cons_grid: dict | None = None
+    mech: dict | None = None
+    mech_randn: dict | None = None
+    cost2: pd.DataFrame | None = None
+    cost3: pd.DataFrame | None = None
+    carrier_ops: dict | None = None
+    carrier_its: dict | None = None
+    readings: dict = field(default_factory=dict)
+    _executor: object = field(default=None, repr=False)
+    _live: bool = field(default=False, repr=False)
+
+    @property
+    def settings(self) -> dict:
+        """The runs and seeds used (printed by ``pfrepro run``)."""
+        runs = ("paper's (Tables 1, 3: 20; Table 2, Fig. 3: 50; undecided readings: "
+                f"{POWER_RUNS})") if self.runs is None else self.runs
+        return {"runs": runs, "seeds": dict(self.seeds)}
+
+    def _get(self, kind: str, tag, runs: int, compute):
+        key = (kind, tag, int(runs))
+        if key not in self.readings:
+            if not self._live:
+                raise KeyError(f"reading {key} was not run by run_all")
+            self.readings[key] = compute()
+        return self.readings[key]
+
+    def t1_reading(self, tag: str, runs: int) -> pd.DataFrame:
+        """Table 1's per-run RMSE (columns (N, filter)) under reading ``tag`` on ``runs`` runs."""
+        ex, s = self._executor, self.seeds["table1"]
+
+        def compute():
+            if tag.startswith("sigma_w2="):
+                q = float(tag.split("=")[1])
+                return table1(runs=runs, sigma_w2=None if q == 1 else q, extras=False, seed=s, executor=ex)[0]
+            main = self.t1_reading("sigma_w2=1", runs)
+            if tag == "pf_resampling=multinomial":
+                pf_m = table1(runs=runs, pf_resampling="multinomial", extras=False, filters=("PF",), seed=s,
+                              executor=ex)[0]
+                return pd.concat([pf_m, main.loc[:, (slice(None), "CMS-PF")]], axis=1)
+            cm = table1(runs=runs, cms_over=CMS_TAGS[tag], extras=False, filters=("CMS-PF",), seed=s, executor=ex)[0]
+            return pd.concat([main.loc[:, (slice(None), "PF")], cm], axis=1)
+        return self._get("t1", tag, runs, compute)
+
+    def t2_reading(self, tag: str, runs: int) -> pd.DataFrame:
+        """Table 2's per-run RMSE (columns = filters) under reading ``tag``; the CMS-PF readings are
+        the sensitivity runs (Table 2's setting, their own truths, whatever ``runs``)."""
+        ex, s = self._executor, self.seeds["table2"]
+
+        def compute():
+            if tag in T2_READINGS:
+                sv, q = T2_READINGS[tag]
+                if (sv, q) == (1.0, None) and runs == self.n["t2"]:
+                    return pd.DataFrame({n: self.t2_res.rmse(n) for n in ("EKF", "UKF", "PF", "ESPF", "CMS-PF")},
+                                        index=pd.RangeIndex(1, runs + 1, name="run"))
+                return table2_rmse(runs=runs, sigma_v=sv, sigma_w2=q, seed=s, executor=ex)
+            if tag in CMS_TAGS:
+                return pd.DataFrame({**{n: self.sens_runs["ref"][n] for n in ("EKF", "UKF", "PF", "ESPF")},
+                                     "CMS-PF": self.sens_runs["cms"][SENS_KEY[tag]]})
+            only = T2_OTHER_FILTERS[tag]
+            base = self.t2_reading(T2_MAIN, runs)
+            new = table2_rmse(runs=runs, filters=only, seed=s, executor=ex, **T2_OTHER[tag])
+            return base.assign(**{c: new[c] for c in only})
+        return self._get("t2", tag, runs, compute)
+
+    def t3_reading(self, tag: str, runs: int) -> pd.DataFrame:
+        """Table 3's per-run RMSE (columns = Table 3's columns and the PF) under reading ``tag``."""
+        ex, s = self._executor, self.seeds["table3"]
+
+        def compute():
+            if tag in T3_LAB:
+                sv, q = T3_READINGS[T3_LAB[tag]]
+                return table3(runs=runs, sigma_v=sv, sigma_w2=q, with_grid=False, seed=s, executor=ex)[0]
+            base = self.t3_reading(T3_MAIN, runs)
+            if tag == "N_t23=100":
+                new = table3(runs=runs, N=100, only_cms=True, seed=s, executor=ex)[0]
+                return base.assign(**{c: new[c] for c in new})
+            if tag == "ukf=κ 0":
+                return base.assign(UKF=table3(runs=runs, filters=("UKF",), ukf_kappa=0.0, seed=s, executor=ex)[0]["UKF"])
+            new = table3(runs=runs, cms_over=CMS_TAGS[tag], only_cms=True, seed=s, executor=ex)[0]
+            return base.assign(**{c: new[c] for c in new})
+        return self._get("t3", tag, runs, compute)
+
+    def f3_reading(self, tag: str, runs: int) -> pd.DataFrame:
+        """Fig. 3's per-run CMS-PF RMSE (columns = the 12 N) under reading ``tag``."""
+        ex, s = self._executor, self.seeds["fig3"]
+
+        def compute():
+            if tag in T3_LAB:
+                sv, q = T3_READINGS[T3_LAB[tag]]
+                return fig3_per_run(Ns=FIG3_N, runs=runs, sigma_v=sv, sigma_w2=q, seed=s, executor=ex)
+            return fig3_per_run(Ns=FIG3_N, runs=runs, cms_over=CMS_TAGS[tag], seed=s, executor=ex)
+        return self._get("f3", tag, runs, compute)
+
+    def f6_reading(self, tag: str, runs: int) -> pd.DataFrame:
+        """The eta sweep's per-run RMSE (columns = eta) under Table 2's noise reading ``tag``."""
+        def compute():
+            sv, q = T2_READINGS[tag]
+            return eta_sweep(runs=runs, sigma_v=sv, sigma_w2=q, seed=self.seeds["sensitivity"], executor=self._executor)
+        return self._get("f6", tag, runs, compute)
+
+    def ess_reading(self, tag: str, runs: int) -> np.ndarray:
+        """CMS-PF's per-run mean ESS on Table 2's first ``runs`` runs under reading ``tag`` (:data:`ESS_TAGS`)."""
+        def compute():
+            return ess_per_run(runs, filters=("CMS-PF",), cms_over=ESS_TAGS[tag], seed=self.seeds["table2"],
+                               executor=self._executor)["CMS-PF"].to_numpy()
+        return self._get("ess", tag, runs, compute)
+
+    def t3_grid_reading(self, label: str) -> pd.Series:
+        """The exact grid filter's per-run RMSE on Table 3's runs under noise reading ``label``
+        (:data:`T3_READINGS`)."""
+        def compute():
+            sv, q = T3_READINGS[label]
+            return table3(runs=self.n["t3"], sigma_v=sv, sigma_w2=q, filters=("Grid (exact)",),
+                          seed=self.seeds["table3"], executor=self._executor)[0]["Grid (exact)"]
+        return self._get("t3 grid", label, self.n["t3"], compute)
+
+
+def run_all(runs=None, seeds=None, executor=None, steps=None) -> Ning2011Results:
+    """Every experiment, reading and sweep of the chapter, for the claims, tables and figures.
+
+    Parameters
+    ----------
+    runs : int, optional
+        ``None``: the paper's and the chapter's counts (Tables 1 and 3: 20 runs; Table 2, Fig. 3,
+        the sensitivity sweep and the consistency check: 50; readings: 20, and
+        :data:`POWER_RUNS` or 50 where 20 leave an ordering undecided; the mechanism:
+        :data:`MECH_RUNS`). An int (>= 2) replaces every one of these counts, except that the
+        sensitivity sweep and Fig. 6's readings use at least 4 runs (Fig. 6 picks alpha on the first
+        half of the runs and judges it on the second); the one-run Figs. 2, 4-6, the cost counts and
+        the equation checks are not Monte Carlo counts and stay, and the timings (context, never a
+        claim) use one repeat.
+    seeds : None, int or dict, optional
+        The seeds (:func:`pfrepro.papers.resolve_seeds` of :data:`SEEDS`).
+    executor : concurrent.futures.Executor, optional
+        Passed to every Monte Carlo call (results bit-identical to a serial run).
+    steps : callable, optional
+        Called with a label (:data:`STEPS`) before each experiment (progress display).
+
+    Returns
+    -------
+    Ning2011Results
+        The results; its ``settings`` give the runs and seeds used.
+    """
+    from ..papers import resolve_seeds
+    from ..verdicts import cmspf_ning2011 as V   # the power rule: which readings need more runs
+
+    seeds = resolve_seeds(SEEDS, seeds)
+    step = steps or (lambda label: None)
+
+    def n_(paper_count):
+        return paper_count if runs is None else int(runs)
+
+    if runs is not None and int(runs) < 2:
+        raise ValueError(f"{PAPER} needs runs >= 2 (its claims are paired comparisons over runs), got {runs}")
+    n = {"t1": n_(20), "t2": n_(50), "t3": n_(20), "fig3": n_(ASSUMPTIONS["runs_fig3"]), "power": n_(POWER_RUNS),
+         "reading": n_(20), "sens": max(n_(50), 4), "f6": max(n_(20), 4), "cons": n_(50), "mech": n_(MECH_RUNS)}
+    timing = {} if runs is None else {"timing_repeats": 1}   # wall time is context, never a claim
+    R = Ning2011Results(runs, dict(seeds), n)
+    ex = executor
+    step("equation checks")
+    R.checks = equation_checks()
+    step("Table 1")
+    R.t1, R.t1_grid, R.t1_lost = table1(runs=n["t1"], seed=seeds["table1"], executor=ex)
+    R.t1_q10, R.t1_grid_q10, _ = table1(runs=n["t1"], sigma_w2=10.0, seed=seeds["table1"], executor=ex)
+    step("Table 2")
+    R.t2, R.t2_times, R.t2_res = table2(runs=n["t2"], seed=seeds["table2"], executor=ex, **timing)
+    R.t2_q10, _, R.t2_q10_res = table2(runs=n["t2"], sigma_w2=10.0, seed=seeds["table2"], executor=ex, **timing)
+    step("Fig. 2")
+    R.f2 = fig2_run(seed=seeds["fig2"])
+    step("Fig. 3")
+    R.f3, R.f3_grid, R.f3_runs = fig3(runs=n["fig3"], seed=seeds["fig3"], executor=ex, per_run=True, **timing)
+    step("Table 3")
+    R.t3, R.t3_res = table3(runs=n["t3"], seed=seeds["table3"], executor=ex)
+    R.t3_q10, _ = table3(runs=n["t3"], sigma_w2=10.0, seed=seeds["table3"], executor=ex)
+    R.t3_oracle = table3_oracle(R.t3_res, seed=seeds["table3"])
+    step("Figs. 4-5")
+    R.step_randn = one_step("randn", seed=seeds["figs45"])
+    R.step_chaos = one_step("logistic", seed=seeds["figs45"])
+    step("Fig. 6")
+    R.f6_base, R.f6_maps = fig6(seed=seeds["fig6"])
+    step("sensitivity")
+    R.sens, R.sens_ref, R.sens_runs = sensitivity(runs=n["sens"], seed=seeds["sensitivity"], executor=ex, per_run=True)
+    step("consistency")
+    R.cons, R.cons_grid = consistency(runs=n["cons"], seed=seeds["consistency"], executor=ex)
+
+    # the readings (stated up front in the chapter); the main readings are the runs above
+    R._executor, R._live = ex, True
+    try:
+        R.readings[("t1", "sigma_w2=1", n["t1"])] = R.t1
+        R.readings[("t1", "sigma_w2=10", n["t1"])] = R.t1_q10
+        R.readings[("t3", T3_MAIN, n["t3"])] = R.t3
+        R.readings[("f3", T3_MAIN, n["fig3"])] = R.f3_runs
+        step("Table 1 readings")
+        for t in T1_TAGS:
+            R.t1_reading(t, n["reading"])
+        V.t1_orderings(R)                      # more runs where 20 leave a reading undecided
+        step("Table 2 readings")
+        for t in T2_TAGS:
+            R.t2_reading(t, n["t2"])
+        V.t2_orderings(R)
+        step("Table 3 readings")
+        for t in T3_LAB:
+            R.t3_reading(t, n["power"])
+        for t in ["N_t23=100", "ukf=κ 0"] + T3_CMS_TAGS:
+            R.t3_reading(t, n["reading"])
+        for label in T3_READINGS:
+            if T3_READINGS[label] not in ((10.0, None), (10.0, 10.0)):
+                R.t3_grid_reading(label)
+        V.t3_orderings(R)
+        step("Fig. 3 readings")
+        V.f3_readings(R)
+        step("mechanism")
+        R.mech = {k: mechanism(runs=n["mech"], seed=seeds["mechanism"], **kw) for k, kw in MECH_READINGS.items()}
+        # the randn carrier at the other eta (for "chaos more uniform than randn" under every eta)
+        R.mech_randn = {e: mechanism(runs=n["mech"], seed=seeds["mechanism"], cms_over={"carrier": "randn", "eta": e})
+                        for e in (0.2, 0.8)}
+        R.mech_randn[0.5] = R.mech["carrier=randn"]
+        step("costs")
+        R.cost2 = cost_evidence_table2(seed=seeds["table2"], repeats=timing.get("timing_repeats", 7))
+        R.cost3 = cost_counts_fig3(seed=seeds["fig3"])
+        R.carrier_ops = {i: carrier_operations(init=i, seed=seeds["table2"]) for i in ("chain", "run", "shared")}
+        R.carrier_ops["chain, T0 = 100"] = carrier_operations(burn_in=100, seed=seeds["table2"])
+        R.carrier_its = {i: carrier_iterations(ASSUMPTIONS["N_table2"], init=i, runs=50) for i in ("chain", "run", "shared")}
+        step("Figs. 4-5 readings")
+        V.ess_readings(R)
+        step("Fig. 6 readings")
+        V.f6_readings(R)
+    finally:
+        R._executor, R._live = None, False
+    return R

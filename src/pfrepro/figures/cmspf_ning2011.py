@@ -1,9 +1,9 @@
 """Figures and tables of Ning, Chen, Zhao, He, Shi (2011), chaos map sampling PF
 (chapter ``book/40_cmspf.md``).
 
-The experiments are :mod:`pfrepro.experiments.cmspf_ning2011`; this module only draws
-their results, sets them beside the published tables, and bundles them for the command
-line (:func:`reproduce`).
+The experiments are :mod:`pfrepro.experiments.cmspf_ning2011` (``run_all``); this module only
+draws their results and sets them beside the published tables: :func:`tables` and
+:func:`figures` give the command line (``pfrepro run cmspf``) the chapter's tables and figures.
 """
 from __future__ import annotations
 
@@ -17,11 +17,13 @@ from . import new_figure
 
 __all__ = ["printed", "styled", "divisor_check", "table1_per_run_long", "table1_strip", "sensitivity_fig",
            "table1_side_by_side", "table1_summary", "table2_vs_published", "table3_vs_published",
-           "table1_plot", "fig2", "fig3", "fig_one_step", "fig6", "reproduce", "TABLES", "FIGURES", "N_STEPS"]
+           "table1_plot", "fig2", "fig3", "fig_one_step", "fig6", "table3_per_run", "mechanism_table", "oracle_table",
+           "consistency_fig", "consistency_table", "tables", "figures", "TABLES", "FIGURES", "N_STEPS"]
 
 TABLES = ("Table 1", "Table 1 (means)", "Table 2", "Table 3")
 FIGURES = ("Fig. 2", "Fig. 3", "Fig. 4", "Fig. 5", "Fig. 6")
-N_STEPS = 8
+#: the progress steps of :func:`pfrepro.experiments.cmspf_ning2011.run_all`
+N_STEPS = len(E.STEPS)
 TABLE2_FILTERS = ["EKF", "UKF", "PF", "ESPF", "CMS-PF"]
 
 
@@ -169,18 +171,24 @@ def table1_side_by_side(per_run: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(cols, index=idx)
 
 
-def table1_summary(per_run: pd.DataFrame) -> pd.DataFrame:
-    """Table 1's mean row: published and our mean RMSE (se) of PF and CMS-PF, and PF with 2N, by N."""
+def table1_summary(per_run: pd.DataFrame, per_run_q10: pd.DataFrame | None = None) -> pd.DataFrame:
+    """Table 1's mean row: published and our mean RMSE (se) of PF and CMS-PF, and PF with 2N, by N;
+    with ``per_run_q10`` (the runs under sigma_w^2 = 10) also our CMS-PF and PF means there."""
     pub1 = printed("Table 1")
     m1 = per_run.mean().unstack()
     se1 = (per_run.std(ddof=1) / np.sqrt(len(per_run))).unstack()
-    return pd.DataFrame({
+    out = pd.DataFrame({
         "PF paper": [pub1.loc["21", f"N={N} PF"] for N in E.TABLE1_N],
         "PF ours": m1["PF"], "PF se": se1["PF"],
         "CMS-PF paper": [pub1.loc["21", f"N={N} CMS-PF"] for N in E.TABLE1_N],
         "CMS-PF ours": m1["CMS-PF"], "CMS-PF se": se1["CMS-PF"],
         "PF with 2N ours": m1["PF (2N)"],
     }, index=pd.Index(E.TABLE1_N, name="N"))
+    if per_run_q10 is not None:
+        m10 = per_run_q10.mean().unstack()
+        out["CMS-PF ours (sigma_w^2=10)"] = m10["CMS-PF"]
+        out["PF ours (sigma_w^2=10)"] = m10["PF"]
+    return out
 
 
 def table2_vs_published(t2: pd.DataFrame, t2_q10: pd.DataFrame | None = None) -> pd.DataFrame:
@@ -321,49 +329,83 @@ def fig6(f6_base: dict, f6_maps: dict, sens: pd.DataFrame | None = None, sens_re
     return fig
 
 
-def reproduce(runs: int | None = None, seed: int | None = None, executor=None, steps=None):
-    """Tables 1-3 and Figs. 2-6 on the printed model (sigma_w^2 = 1).
+def table3_per_run(t3: pd.DataFrame) -> pd.DataFrame:
+    """Table 3's per-run RMSEs, the paper's (printed strings, rows 1-20) beside ours, one row per run."""
+    cols3 = list(E.TABLE3_COLUMNS)
+    pr3 = printed("Table 3")
+    return pd.concat({"paper (printed)": pr3.loc[[str(i) for i in range(1, 21)], cols3].set_axis(range(1, 21)),
+                      "ours": t3[cols3]}, axis=1).rename_axis("run")
 
-    ``runs`` replaces every run count (paper: 20 for Tables 1 and 3, 50 for Table 2 and
-    Fig. 3); ``seed`` replaces the fixed seeds (:data:`pfrepro.experiments.cmspf_ning2011.SEEDS`)
-    by ``seed, seed + 1, ...``. Returns a :class:`pfrepro.papers.Reproduction`.
+
+def mechanism_table(mech: pd.DataFrame) -> pd.DataFrame:
+    """The mechanism's sets (``E.mechanism()``): distinct fraction, repeated particles and KS distance
+    from uniform, each averaged over the runs."""
+    tab = mech.mean().unstack()[["distinct", "duplicates", "ks"]]
+    tab.columns = ["distinct fraction", "repeated particles", "KS distance from uniform"]
+    return tab
+
+
+def oracle_table(t3: pd.DataFrame, t3_oracle: pd.DataFrame) -> pd.DataFrame:
+    """Table 3's CMS columns: the paper's printed means, our CMS-PF (a filter) and the oracle that
+    centres the map on the true state (``E.table3_oracle``), with the exact posterior mean."""
+    cols = list(E.TABLE3_COLUMNS[2:])
+    mean3 = t3.mean()
+    tab = pd.DataFrame({"paper mean (printed)": printed("Table 3").loc["21", cols], "CMS-PF (filter), ours": mean3[cols],
+                        "ORACLE CMS-PF (uses true state), ours": t3_oracle.mean()[cols]})
+    tab.loc["exact posterior mean", "CMS-PF (filter), ours"] = mean3["Grid (exact)"]
+    return tab
+
+
+def consistency_fig(cons: pd.DataFrame):
+    """RMS distance of the PF's and the CMS-PF's estimates to the exact posterior mean against N
+    (``E.consistency()``, ±2 se, log scales)."""
+    fig, ax = new_figure(figsize=(6, 3.5))
+    for f, mk in [("PF", "o"), ("CMS-PF", "s")]:
+        c = cons[cons["filter"] == f]
+        ax.errorbar(c["N"], c["dist to exact mean"], 2 * c["se"], marker=mk, capsize=3, label=f)
+    ax.set_xscale("log"); ax.set_yscale("log"); ax.set_xlabel("N"); ax.set_ylabel("RMS distance to exact posterior mean")
+    ax.legend(); ax.set_title("Consistency (sigma_v = 1)")
+    fig.tight_layout()
+    return fig
+
+
+def consistency_table(cons: pd.DataFrame) -> pd.DataFrame:
+    """The consistency check as a table: distance to the exact mean, variance ratio and RMSE by N and filter."""
+    return cons.pivot(index="N", columns="filter", values=["dist to exact mean", "variance ratio", "RMSE"]).round(3)
+
+
+def tables(R) -> dict:
+    """The paper's tables beside ours, from :func:`pfrepro.experiments.cmspf_ning2011.run_all`'s results.
+
+    Parameters
+    ----------
+    R : pfrepro.experiments.cmspf_ning2011.Ning2011Results
+        The results.
+
+    Returns
+    -------
+    dict
+        Label (:data:`TABLES`) -> DataFrame: Table 1 per run (the paper's printed values and
+        ours), Table 1's means (with sigma_w^2 = 10), Table 2 and Table 3 beside the published ones.
     """
-    from ..papers import Reproduction, call_with_executor, cell_claims, override_seeds
+    return {"Table 1": table1_per_run_long(R.t1), "Table 1 (means)": table1_summary(R.t1, R.t1_q10),
+            "Table 2": table2_vs_published(R.t2, R.t2_q10), "Table 3": table3_vs_published(R.t3, R.t3_q10)}
 
-    step = steps or (lambda label: None)
-    kw = {} if runs is None else {"runs": runs}
-    with override_seeds(E.SEEDS, seed):
-        step("Table 1"); t1, t1_grid, _ = call_with_executor(E.table1, executor=executor, **kw)
-        step("Table 2"); t2, _, _ = call_with_executor(E.table2, executor=executor, **kw)
-        step("Table 3"); t3, _ = call_with_executor(E.table3, executor=executor, **kw)
-        step("Fig. 2"); f2 = E.fig2_run()
-        step("Fig. 3"); f3, f3_grid = call_with_executor(E.fig3, executor=executor, **kw)
-        step("Figs. 4-5"); s_randn, s_chaos = E.one_step("randn"), E.one_step("logistic")
-        step("Fig. 6"); f6_base, f6_maps = E.fig6()
-        step("Fig. 6, RMSE against alpha"); sens, sens_ref = call_with_executor(E.sensitivity, executor=executor, **kw)
-        seeds = dict(E.SEEDS)
-    tab1 = table1_summary(t1)
-    tab2 = table2_vs_published(t2)
-    tab3 = table3_vs_published(t3)
-    def _num(t):  # the printed strings as numbers for the claims
-        return t.assign(published=pd.to_numeric(t["published"]))
 
-    reg = cell_claims(E.PAPER, _num(tab1.rename(columns={"CMS-PF paper": "published", "CMS-PF ours": "ours", "CMS-PF se": "se"})),
-                      lambda r: f"t1_cms_mean_N{r['N']}", lambda r: f"Table 1: mean RMSE of CMS-PF, N = {r['N']}", "Table 1")
-    cell_claims(E.PAPER, _num(tab1.rename(columns={"PF paper": "published", "PF ours": "ours", "PF se": "se"})),
-                lambda r: f"t1_pf_mean_N{r['N']}", lambda r: f"Table 1: mean RMSE of PF, N = {r['N']}", "Table 1",
-                registry=reg)
-    cell_claims(E.PAPER, _num(tab2.rename(columns={"RMSE paper": "published", "RMSE ours": "ours"})),
-                lambda r: f"t2_rmse_{r['index']}", lambda r: f"Table 2: mean RMSE of {r['index']}", "Table 2",
-                registry=reg)
-    cell_claims(E.PAPER, _num(tab3.rename(columns={"paper mean (row 21)": "published", "ours mean": "ours", "ours se": "se"})),
-                lambda r: f"t3_mean_{r['index']}", lambda r: f"Table 3: mean RMSE of {r['index']}", "Table 3",
-                registry=reg)
-    figures = {"Fig. 2": fig2(f2), "Fig. 3": fig3(f3, f3_grid),
-               "Fig. 4": fig_one_step(s_randn, "Fig. 4: randn carrier, one step (k = 20, N = 200)"),
-               "Fig. 5": fig_one_step(s_chaos, "Fig. 5: logistic-map carrier, one step (k = 20, N = 200)"),
-               "Fig. 6": fig6(f6_base, f6_maps, sens, sens_ref)}
-    tables = {"Table 1": table1_side_by_side(t1) if len(t1) == 20 else tab1, "Table 1 (means)": tab1,
-              "Table 2": tab2, "Table 3": tab3}
-    return Reproduction(E.PAPER, tables=tables, figures=figures, claims=reg,
-                        settings={"runs": "paper's (20/50)" if runs is None else runs, "seeds": seeds})
+def figures(R) -> dict:
+    """Figs. 2-6 of the paper, re-run, from :func:`pfrepro.experiments.cmspf_ning2011.run_all`'s results.
+
+    Parameters
+    ----------
+    R : pfrepro.experiments.cmspf_ning2011.Ning2011Results
+        The results.
+
+    Returns
+    -------
+    dict
+        Label (:data:`FIGURES`) -> matplotlib Figure.
+    """
+    return {"Fig. 2": fig2(R.f2), "Fig. 3": fig3(R.f3, R.f3_grid),
+            "Fig. 4": fig_one_step(R.step_randn, "Fig. 4: randn carrier, one step (k = 20, N = 200)"),
+            "Fig. 5": fig_one_step(R.step_chaos, "Fig. 5: logistic-map carrier, one step (k = 20, N = 200)"),
+            "Fig. 6": fig6(R.f6_base, R.f6_maps, R.sens, R.sens_ref)}
