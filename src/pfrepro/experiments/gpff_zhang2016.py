@@ -12,9 +12,11 @@ particles and Delta lambda = 0.05 unless stated:
   (Figs. 4-5, Table 2; per-component MSE, eq 61).
 
 Plus the numerical checks of the derivation (eqs 4-46) the chapter ``book/20_gpff.md``
-shows. The values the paper leaves open are the rows of ``CHOICES`` (free choices,
-chosen before any run): the main reading is UT alpha = 1, beta = 2, kappa = 0 for UKF
-and GPFF; 20 Euler steps; the eq (41) field where it runs; KF/GPFF get the mixture's
+shows. :func:`run_all` runs all of it (the chapter and ``pfrepro run`` call it through
+:meth:`pfrepro.papers.Paper.run`) and returns a :class:`GpffResults`; the claims are decided
+on it in ``pfrepro.verdicts.gpff_zhang2016``. The values the paper leaves open are the rows
+of ``CHOICES`` (free choices, chosen before any run): the main reading is UT alpha = 1,
+beta = 2, kappa = 0 for UKF and GPFF; 20 Euler steps; the eq (41) field where it runs; KF/GPFF get the mixture's
 own covariance as R; bootstrap PF with systematic resampling at every step. The other
 admissible values are *readings* (:func:`reading_filters`, :func:`run_readings`), run
 on the same truths, and every claim is decided under each. BOT bearings by atan2 with
@@ -957,7 +959,7 @@ def bot_reference_table(mc_bot: MonteCarloResult, refs: BotReferences):
 # ============================================================================ everything, for the claims
 @dataclass
 class GpffResults:
-    """Every number the chapter, its claims (:mod:`pfrepro.verdicts.gpff_zhang2016`) and its
+    """Every number the chapter, its claims (``pfrepro.verdicts.gpff_zhang2016``) and its
     tables and figures (:mod:`pfrepro.figures.gpff_zhang2016`) need; made by :func:`run_all`.
 
     Attributes
@@ -1018,18 +1020,18 @@ class GpffResults:
 
     @property
     def table1(self) -> pd.DataFrame:
-        """Table 1 beside the published one (:func:`table1` of :attr:`ung`)."""
+        """Table 1 beside the published one (:func:`table1` of ``ung``)."""
         return table1(self.ung)
 
     @property
     def table2(self) -> pd.DataFrame:
-        """Table 2 beside the published one (:func:`table2` of :attr:`bot`)."""
+        """Table 2 beside the published one (:func:`table2` of ``bot``)."""
         return table2(self.bot)
 
 
 def derivation_checks(seed: int | None = None, reps: int = 200) -> dict:
     """Every numerical check of the derivation (secs 2-4 and sec 5.1's Q), name -> DataFrame
-    (the names of :attr:`GpffResults.checks`); check ``i`` draws its random problem from
+    (the names of ``GpffResults.checks``); check ``i`` draws its random problem from
     ``seed + i`` (default ``SEEDS["checks"]``); ``reps`` clouds per N in :func:`convergence_in_n`."""
     c = SEEDS["checks"] if seed is None else int(seed)
     conv = convergence_in_dlambda(schedules=("uniform", "exponential"), seed=c + 4)

@@ -19,6 +19,8 @@ value the chapter glues (:func:`prose`).
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pandas as pd
 
@@ -671,7 +673,7 @@ def _prose_cwpa(results) -> dict:
     words = {True: "equivalent within the margin" + (" (GPFF is measurably, but not materially, worse)"
                                                       if dm > 2 * dse else ""),
              False: "outside the margin (not equivalent)", None: "the interval straddles the margin (undecided)"}
-    out.update({"cwpa_margin_pct": E.EQUIV_MARGIN * 100, "cwpa_margin": margin, "cwpa_g_z": dm / dse,
+    out.update({"cwpa_margin_pct": E.EQUIV_MARGIN * 100, "cwpa_margin": margin, "cwpa_g_z": dm / dse if dse > 0 else float("nan"),
                 "cwpa_g_hi": dm + 2 * dse, "cwpa_equiv_word": Md(words[holds])})
     return out
 
@@ -863,6 +865,12 @@ def prose(reg, results) -> dict:
         the sweeps and bounds beyond the paper, and the verdict counts. Wall times and their
         words are context only (no claim rests on them).
     """
+    with warnings.catch_warnings():      # all-NaN rows (a field that diverges in every run) are NaN, as shown
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return _prose(reg, results)
+
+
+def _prose(reg, results) -> dict:
     out = {"runs": results.runs, "n_lambda": E.N_LAMBDA, "timing_repeats": results.timing_repeats,
            "dlambda": 1.0 / E.N_LAMBDA, "ut_alpha": E.UT["alpha"], "ut_beta": E.UT["beta"], "ut_kappa": E.UT["kappa"]}
     out.update(_prose_checks(results))
