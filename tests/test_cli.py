@@ -27,8 +27,11 @@ def test_registry_names_are_unique_and_resolve():
         for a in p.aliases:
             assert papers.get_paper(a.upper()) is p          # case-insensitive
         assert p.tables and p.figures
-        F = p.figures_module      # a moved paper: tables(results) and figures(results); else reproduce
-        assert (callable(F.tables) and callable(F.figures)) if p.verdicts_module else callable(F.reproduce)
+        if p.verdicts_module is not None:       # moved to run_all / record_claims: tables(results), figures(results)
+            assert callable(p.figures_module.tables) and callable(p.figures_module.figures)
+            assert callable(p.experiments_module.run_all) and callable(p.verdicts_module.record_claims)
+        else:
+            assert callable(p.figures_module.reproduce)
         assert p.citation and p.citation != p.key             # from pfrepro.published.PAPERS
     with pytest.raises(KeyError, match="choose from"):
         papers.get_paper("nosuchpaper")

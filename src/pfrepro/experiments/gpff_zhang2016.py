@@ -12,9 +12,11 @@ particles and Delta lambda = 0.05 unless stated:
   (Figs. 4-5, Table 2; per-component MSE, eq 61).
 
 Plus the numerical checks of the derivation (eqs 4-46) the chapter ``book/20_gpff.md``
-shows. The values the paper leaves open are the rows of ``CHOICES`` (free choices,
-chosen before any run): the main reading is UT alpha = 1, beta = 2, kappa = 0 for UKF
-and GPFF; 20 Euler steps; the eq (41) field where it runs; KF/GPFF get the mixture's
+shows. :func:`run_all` runs all of it (the chapter and ``pfrepro run`` call it through
+:meth:`pfrepro.papers.Paper.run`) and returns a :class:`GpffResults`; the claims are decided
+on it in ``pfrepro.verdicts.gpff_zhang2016``. The values the paper leaves open are the rows
+of ``CHOICES`` (free choices, chosen before any run): the main reading is UT alpha = 1,
+beta = 2, kappa = 0 for UKF and GPFF; 20 Euler steps; the eq (41) field where it runs; KF/GPFF get the mixture's
 own covariance as R; bootstrap PF with systematic resampling at every step. The other
 admissible values are *readings* (:func:`reading_filters`, :func:`run_readings`), run
 on the same truths, and every claim is decided under each. BOT bearings by atan2 with
@@ -22,19 +24,20 @@ wrapped residuals; MSE std = sample std (ddof = 1) of the per-run MSE over the 1
 """
 from __future__ import annotations
 
-import functools
+import time
+from dataclasses import dataclass, field
 from functools import partial
 
 import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 
-from .. import flow, published, stats
+from .. import flow, published
 from ..filters import (BootstrapParticleFilter, ExtendedKalmanFilter, GaussianParticleFlowFilter,
                        GridFilter, KalmanFilter, ScaledSigmaPoints, UnscentedKalmanFilter,
                        kalman_update, unscented_transform)
 from ..filters.gpff import particle_moments
-from ..metrics import mc_summary, mse, mse_per_component
+from ..metrics import mc_summary, mse, mse_per_component, mse_per_component_over_time
 from ..models import CWPA, UNGM, BearingsOnly
 from ..montecarlo import MonteCarloResult, map_runs, run_monte_carlo, truth_streams
 from ..rng import RunStreams
@@ -46,19 +49,27 @@ __all__ = ["PAPER", "RUNS", "SEEDS", "UT", "N_LAMBDA", "TIMING_REPEATS", "random
            "cost_ratios", "schedule_sweep", "ung_table_filters", "bot_table_filters", "cost_filters", "cost_evidence",
            "CHOICES", "INTEGRATORS", "PF_SCHEMES", "UT_SETS", "EQUIV_MARGIN", "HEAVY_SHARE", "CONV_BANDS",
            "reading_filters", "run_readings", "reading_label", 
-           "convergence_time", "eq43_check", "eqs16_18_check", "cost_reading_counts"]
+           "convergence_time", "eq43_check", "eqs16_18_check", "cost_reading_counts", "UNG_LABELS", "BOT_LABELS",
+           "COMPONENTS", "BOOT", "BOOT_SEED", "BIG_N", "PCRB_RUNS", "BotReferences", "bot_references",
+           "bot_reference_table", "GpffResults", "run_all"]
 
 PAPER = "gpff_zhang2016"
 RUNS = 100
 #: seeds fixed before any result was seen; never changed
 SEEDS = {"cwpa_gaussian": 51, "cwpa_mixture": 52, "ung": 57, "bot": 59, "checks": 2016,
-         "sweep_ung": 571, "sweep_bot": 591}
+         "sweep_ung": 571, "sweep_bot": 591, "pcrb_fixed": 593, "pcrb_prior": 594, "pcrb_prior_check": 595}
 #: unscented-transform parameters (not in the paper) -- the standard alpha = 1, beta = 2, kappa = 0
 UT = {"alpha": 1.0, "beta": 2.0, "kappa": 0.0}
 #: the paper's lambda step, Delta lambda = 0.05 -> 20 Euler steps
 N_LAMBDA = 20
 #: per-run times are the median of this many single-run timings (a shared machine is noisy)
 TIMING_REPEATS = 7
+
+
+def _check_seed(seed, offset: int) -> int:
+    """The seed of a derivation check: ``seed`` if given, else ``SEEDS["checks"] + offset``
+    (looked up when the check runs, never bound at import)."""
+    return SEEDS["checks"] + offset if seed is None else int(seed)
 
 
 # ============================================================================ derivation checks
@@ -80,14 +91,14 @@ def _kf(mean, P, H, R, y):
     return xk[0], Pk[0]
 
 
-def equivalence_table(sizes=((1, 1), (2, 1), (4, 2), (6, 2), (10, 5), (20, 10)), seed=SEEDS["checks"],
+def equivalence_table(sizes=((1, 1), (2, 1), (4, 2), (6, 2), (10, 5), (20, 10)), seed=None,
                       rtol=1e-12, atol=1e-12) -> pd.DataFrame:
     """Moment ODEs integrated by solve_ivp (DOP853) from lambda = 0 to 1 vs the Kalman posterior.
 
     Two ODEs: the moments of a cloud moved by the affine flow (d mean = A mean + b,
     d cov = A cov + cov A^T with eqs 24, 27) and the Kalman-Bucy form (eqs 39, 40).
     """
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(_check_seed(seed, 0))
     rows = []
     for d, m in sizes:
         mean, P, H, R, y = random_linear_problem(d, m, rng)
@@ -116,9 +127,9 @@ def equivalence_table(sizes=((1, 1), (2, 1), (4, 2), (6, 2), (10, 5), (20, 10)),
     return pd.DataFrame(rows)
 
 
-def interior_checks(d=4, m=2, lams=(0.1, 0.3, 0.5, 0.7, 0.9), eps=1e-5, seed=SEEDS["checks"] + 1):
+def interior_checks(d=4, m=2, lams=(0.1, 0.3, 0.5, 0.7, 0.9), eps=1e-5, seed=None):
     """Central differences in lambda against eqs (36)-(40), printed and corrected (38)."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(_check_seed(seed, 1))
     mean, P, H, R, y = random_linear_problem(d, m, rng)
     M = H @ P @ H.T
     rows = []
@@ -150,11 +161,11 @@ def interior_checks(d=4, m=2, lams=(0.1, 0.3, 0.5, 0.7, 0.9), eps=1e-5, seed=SEE
     return pd.DataFrame(rows).set_index("lambda")
 
 
-def fokker_planck_check(d=3, m=2, lams=(0.2, 0.5, 0.8), n_points=5, eps=1e-5, seed=SEEDS["checks"] + 2):
+def fokker_planck_check(d=3, m=2, lams=(0.2, 0.5, 0.8), n_points=5, eps=1e-5, seed=None):
     """Eq (8)/(14) at random x: d log q/d lambda (finite differences) against
     log h - E[log h] (eq 8), -div f - grad(log q)^T f (the correct form of 14) and
     +div f - grad(log q)^T f (eq 14 as printed), for the affine field of eqs (24), (27)."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(_check_seed(seed, 2))
     mean, P, H, R, y = random_linear_problem(d, m, rng)
     Ri = np.linalg.inv(R)
 
@@ -181,10 +192,10 @@ def fokker_planck_check(d=3, m=2, lams=(0.2, 0.5, 0.8), n_points=5, eps=1e-5, se
     return pd.DataFrame(rows).groupby("lambda").max()
 
 
-def printed_vs_corrected_linear(d=4, m=2, lams=(0.25, 0.5, 1.0), seed=SEEDS["checks"] + 3) -> pd.DataFrame:
+def printed_vs_corrected_linear(d=4, m=2, lams=(0.25, 0.5, 1.0), seed=None) -> pd.DataFrame:
     """Eqs (23)-(27) as printed (P^lambda_{k|k} inside; H^T P H in 23) vs corrected (prior P),
     each compared with the closed form of the lambda-posterior / the flow's defining eq (20)."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(_check_seed(seed, 3))
     mean, P, H, R, y = random_linear_problem(d, m, rng)
     Ri = np.linalg.inv(R)
     I = np.eye(d)
@@ -226,11 +237,11 @@ def printed_vs_corrected_linear(d=4, m=2, lams=(0.25, 0.5, 1.0), seed=SEEDS["che
 
 def convergence_in_dlambda(d=4, m=2, N=1000, steps=(5, 10, 20, 40, 80, 160, 320),
                            methods=("euler", "midpoint", "rk4"), schedules=("uniform",),
-                           seed=SEEDS["checks"] + 4) -> pd.DataFrame:
+                           seed=None) -> pd.DataFrame:
     """A cloud of N prior particles moved by the affine flow (coefficients from its own sample
     moments): error of its sample mean/covariance after the flow against the Kalman update of
     those sample moments (what the exact flow delivers), per integrator and number of steps."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(_check_seed(seed, 4))
     mean, P, H, R, y = random_linear_problem(d, m, rng)
     X = mean + rng.standard_normal((1, N, d)) @ np.linalg.cholesky(P).T
     ms, Ps = particle_moments(X)
@@ -269,11 +280,11 @@ def observed_orders(conv: pd.DataFrame, last: int = 4) -> pd.DataFrame:
 
 
 def convergence_in_n(d=4, m=2, Ns=(10, 30, 100, 300, 1000, 3000, 10000), reps=200, n_steps=N_LAMBDA,
-                     seed=SEEDS["checks"] + 5) -> pd.DataFrame:
+                     seed=None) -> pd.DataFrame:
     """Clouds of N particles from the true prior moved by the flow (paper's Euler/20 steps and
     the exact map) vs the true Kalman posterior; RMS relative error over ``reps`` clouds.
     All ``reps`` clouds are moved in one batched call (runs axis = reps)."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(_check_seed(seed, 5))
     mean, P, H, R, y = random_linear_problem(d, m, rng)
     xt, Pt = _kf(mean, P, H, R, y)
     L = np.linalg.cholesky(P)
@@ -296,10 +307,10 @@ def convergence_in_n(d=4, m=2, Ns=(10, 30, 100, 300, 1000, 3000, 10000), reps=20
 
 
 def nonlinear_vs_linear(sizes=((1, 1), (2, 2), (4, 2), (6, 2)), lams=(0.0, 0.5, 1.0), n_points=50,
-                        seed=SEEDS["checks"] + 6) -> pd.DataFrame:
+                        seed=None) -> pd.DataFrame:
     """Sec 4's field with a linear h and UT moments (exact for linear h) against the linear
     field A x + b (eqs 24, 27): printed (46) and corrected coefficients, max relative error."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(_check_seed(seed, 6))
     pts = ScaledSigmaPoints  # alias for brevity
     rows = []
     for d, m in sizes:
@@ -357,20 +368,23 @@ def _gpff(model, N, **kw):
     return GaussianParticleFlowFilter(model, n_particles=N, n_steps=N_LAMBDA, **UT, **kw)
 
 
-def run_cwpa(noise: str, runs=RUNS, T=80, time_per_run=True, *, executor=None) -> MonteCarloResult:
+def run_cwpa(noise: str, runs=RUNS, T=80, time_per_run=True, *, seed=None, executor=None) -> MonteCarloResult:
     """Sec 5.1: KF vs GPFF(100) on the CWPA model; ``noise`` is "gaussian" or "mixture".
 
     Both filters are given R = the measurement noise's covariance (the mixture's own
-    covariance in the mixture case). Also runs GPFF with the exact-in-lambda map."""
+    covariance in the mixture case). Also runs GPFF with the exact-in-lambda map.
+    ``seed``: the experiment's seed (default ``SEEDS["cwpa_<noise>"]``)."""
+    seed = SEEDS[f"cwpa_{noise}"] if seed is None else seed
     model = CWPA.zhang2016(noise)
     filters = {"KF": KalmanFilter(model), "GPFF": _gpff(model, 100, field="eq41"),
                "GPFF (exact map)": _gpff(model, 100, integrator="exact")}
-    return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS[f"cwpa_{noise}"],
+    return run_monte_carlo(model, filters, T=T, runs=runs, seed=seed,
                            time_per_run=time_per_run, executor=executor)
 
 
 def cwpa_r_sensitivity(mc_mixture: MonteCarloResult, *, executor=None) -> pd.DataFrame:
-    """The mixture data filtered by KF and GPFF given other R's (the paper does not say which)."""
+    """The mixture data filtered by KF and GPFF given other R's (the paper does not say which);
+    same truths and filter streams as ``mc_mixture`` (its seed)."""
     R1 = np.array([[0.6, 0.25], [0.25, 0.7]])
     noise = CWPA.zhang2016("mixture").measurement_noise
     R2 = noise.components[1].cov
@@ -380,7 +394,7 @@ def cwpa_r_sensitivity(mc_mixture: MonteCarloResult, *, executor=None) -> pd.Dat
     for label, R in choices.items():
         model = CWPA(R=R)
         res = run_monte_carlo(model, {"KF": KalmanFilter(model), "GPFF": _gpff(model, 100, field="eq41")},
-                              T=mc_mixture.sim.T, runs=mc_mixture.sim.runs, seed=SEEDS["cwpa_mixture"],
+                              T=mc_mixture.sim.T, runs=mc_mixture.sim.runs, seed=mc_mixture.seed,
                               sim=mc_mixture.sim, executor=executor)
         k, g = res.mse("KF"), res.mse("GPFF")
         s = mc_summary(g - k)
@@ -402,18 +416,21 @@ def ung_table_filters(model) -> dict:
     return filters
 
 
-def run_ung(runs=RUNS, T=500, time_per_run=True, *, executor=None) -> MonteCarloResult:
+def run_ung(runs=RUNS, T=500, time_per_run=True, *, seed=None, timing_repeats=TIMING_REPEATS,
+            executor=None) -> MonteCarloResult:
     """Sec 5.2 / Table 1: UNG with Q = R = 1, x0 = 0.1, P0 = 0.1, T = 500.
 
     GPFF(N) here is the eq (43) (statistically linearised) field: the literal eq (41) field
     blows up on this model (run as "GPFF(100) eq41" with divergence recorded).
-    Also the exact grid filter (the optimum) on [-40, 40] with 1601 nodes."""
+    Also the exact grid filter (the optimum) on [-40, 40] with 1601 nodes. ``seed``: default
+    ``SEEDS["ung"]``; ``timing_repeats``: single-run timings per filter (context only)."""
     model = UNGM.zhang2016()
     filters = ung_table_filters(model)
     filters["GPFF(100) eq41"] = _gpff(model, 100, field="eq41", on_divergence="drop")
     filters["Grid (exact)"] = GridFilter(model, bounds=(-40.0, 40.0), n_grid=1601)
-    return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS["ung"], time_per_run=time_per_run,
-                           timing_repeats=TIMING_REPEATS, executor=executor)
+    return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS["ung"] if seed is None else seed,
+                           time_per_run=time_per_run,
+                           timing_repeats=timing_repeats, executor=executor)
 
 
 BOT_LABELS = ["EKF", "UKF", "PF(500)", "PF(1000)", "PF(4000)", "GPFF(100)"]
@@ -428,14 +445,17 @@ def bot_table_filters(model) -> dict:
     return filters
 
 
-def run_bot(runs=RUNS, T=200, time_per_run=True, *, executor=None) -> MonteCarloResult:
+def run_bot(runs=RUNS, T=200, time_per_run=True, *, seed=None, timing_repeats=TIMING_REPEATS,
+            executor=None) -> MonteCarloResult:
     """Sec 5.3 / Table 2: two-sensor bearings-only tracking, T = 200; GPFF(100) is the
-    literal eq (41) field (it does not diverge here); "GPFF(100) eq43" for comparison."""
+    literal eq (41) field (it does not diverge here); "GPFF(100) eq43" for comparison.
+    ``seed``: default ``SEEDS["bot"]``; ``timing_repeats``: single-run timings per filter (context only)."""
     model = BearingsOnly.zhang2016()
     filters = bot_table_filters(model)
     filters["GPFF(100) eq43"] = _gpff(model, 100, field="eq43", on_divergence="drop")
-    return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS["bot"], time_per_run=time_per_run,
-                           timing_repeats=TIMING_REPEATS, executor=executor)
+    return run_monte_carlo(model, filters, T=T, runs=runs, seed=SEEDS["bot"] if seed is None else seed,
+                           time_per_run=time_per_run,
+                           timing_repeats=timing_repeats, executor=executor)
 
 
 def table1(mc: MonteCarloResult, reference="GPFF(100)") -> pd.DataFrame:
@@ -505,20 +525,23 @@ def _filter_runs(filt, y, entropy, start, size):
 
 
 def schedule_sweep(which: str, runs=RUNS, sim=None,
-                   integrators=("euler", "midpoint", "rk4"), *, reuse=None, executor=None) -> pd.DataFrame:
+                   integrators=("euler", "midpoint", "rk4"), *, reuse=None, seed=None, executor=None) -> pd.DataFrame:
     """GPFF(100) with uniform/exponential lambda steps and Euler/midpoint/RK4 integrators.
 
     ``which`` = "ung" (eq 43 field, T = 500) or "bot" (eq 41 field, T = 200). Same data
     and the same filter seed for every configuration (only the flow integration differs).
     ``reuse``: ``{(schedule, integrator): x_hat}`` of configurations already run on ``sim``
-    (e.g. the table's GPFF(100) and its integrator readings), not run again."""
+    (e.g. the table's GPFF(100) and its integrator readings), not run again. ``seed``: the
+    sweep's seed (truths when ``sim`` is None, and the filter's streams), default
+    ``SEEDS["sweep_<which>"]``."""
     reuse = dict(reuse or {})
     if which == "ung":
-        model, T, field, seed = UNGM.zhang2016(), 500, "eq43", SEEDS["sweep_ung"]
+        model, T, field = UNGM.zhang2016(), 500, "eq43"
     elif which == "bot":
-        model, T, field, seed = BearingsOnly.zhang2016(), 200, "eq41", SEEDS["sweep_bot"]
+        model, T, field = BearingsOnly.zhang2016(), 200, "eq41"
     else:
         raise ValueError("which must be 'ung' or 'bot'")
+    seed = SEEDS[f"sweep_{which}"] if seed is None else seed
     sim = model.simulate(T, runs, truth_streams(seed, runs)) if sim is None else sim
     rows = []
     for sched in ("uniform", "exponential"):
@@ -735,14 +758,7 @@ def reading_label(base: str, choice: str, value: str, main_value: str) -> str:
     return base if value == main_value else f"{base} | {choice}={value}"
 
 
-# ============================================================================ statistics for the claims
-# the shared estimators (pfrepro.stats) with this chapter's bootstrap size, seed and heavy-tail share
-heavy_tailed = functools.partial(stats.heavy_tailed, share=HEAVY_SHARE)
-median_paired = functools.partial(stats.median_paired, n_boot=BOOT, seed=BOOT_SEED)
-std_difference = functools.partial(stats.std_difference, n_boot=BOOT, seed=BOOT_SEED)
-equivalence = stats.equivalence
-
-
+# ============================================================================ convergence (BOT, Fig. 4)
 def convergence_time(err, band):
     """Per run, the first step (1-based) after which ``err`` (runs, T) stays below ``band`` for the
     rest of the run; ``T + 1`` if the last step is above it (never converged); NaN if any step is NaN."""
@@ -756,13 +772,13 @@ def convergence_time(err, band):
 
 
 # ============================================================================ eq (43), eqs (16)-(18)
-def eq43_check(d=4, m=2, lams=(0.0, 0.25, 0.5, 1.0), n_points=20, seed=SEEDS["checks"] + 7) -> pd.DataFrame:
+def eq43_check(d=4, m=2, lams=(0.0, 0.25, 0.5, 1.0), n_points=20, seed=None) -> pd.DataFrame:
     """Eq (43) as printed, for a linear h (J = H, h(x_hat) = H x_hat_{k|k-1}), against eq (22):
     max relative difference of the fields at ``n_points`` particles per lambda, and the
     relative error of the mean the printed field's flow (solve_ivp on the moment ODE) lands on
     against the Kalman posterior mean; the same for the corrected form (the second h
     evaluated at the lambda-mean, h(x_hat) + J (x_hat^lambda - x_hat), which is eq 22)."""
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(_check_seed(seed, 7))
     mean, P, H, R, y = random_linear_problem(d, m, rng)
     Ri = np.linalg.inv(R)
     X = mean + rng.standard_normal((n_points, d)) @ np.linalg.cholesky(P).T
@@ -790,12 +806,12 @@ def eq43_check(d=4, m=2, lams=(0.0, 0.25, 0.5, 1.0), n_points=20, seed=SEEDS["ch
     return out
 
 
-def eqs16_18_check(d=3, m=2, lams=(0.25, 0.5, 1.0), seed=SEEDS["checks"] + 8) -> pd.DataFrame:
+def eqs16_18_check(d=3, m=2, lams=(0.25, 0.5, 1.0), seed=None) -> pd.DataFrame:
     """Eqs (16), (17) (both lines) and (18) at the lambda-posterior q(., lambda) = N(x_l, P_l), each
     side computed separately; expectations by a tensor Gauss-Hermite rule with 3 nodes per
     dimension (exact for these polynomials of degree <= 3). Relative errors."""
     from numpy.polynomial.hermite_e import hermegauss
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(_check_seed(seed, 8))
     mean, P, H, R, y = random_linear_problem(d, m, rng)
     Ri = np.linalg.inv(R)
     G = H.T @ Ri @ H
@@ -854,3 +870,248 @@ def cost_reading_counts(which: str, mc: MonteCarloResult) -> pd.DataFrame:
                         "resampled / step": c["resampled"] / T})
     out.index.name = "filter"
     return out
+
+
+# ============================================================================ BOT: how far from the best achievable
+#: particles of the large-N bootstrap PF run as a reference on the Table 2 data
+BIG_N = 16000
+#: simulated truth trajectories behind the Monte Carlo expectation of the PCRB's information term
+PCRB_RUNS = 20000
+
+
+@dataclass
+class BotReferences:
+    """References for the Table 2 experiment (sec 5.3), beyond the paper.
+
+    Attributes
+    ----------
+    pcrb_fixed, pcrb_prior, pcrb_prior_check : numpy.ndarray
+        Posterior Cramér-Rao bounds per time step and component, ``(T, 4)``
+        (:func:`pfrepro.bounds.pcrb_linear_dynamics`): truth from the fixed ``x0`` (the data's
+        distribution), from the prior, and from the prior on a second, independent set of
+        trajectories (its Monte Carlo spread).
+    filters : dict
+        ``{name: FilterResult}`` on the Table 2 data: the bootstrap PF with :data:`BIG_N`
+        particles and the UKF started at the true ``x0``.
+    pcrb_runs : int
+        Trajectories behind each bound.
+    big_n : int
+        Particles of the large PF.
+    big_seconds : float
+        Wall time of the large PF (context only).
+    """
+
+    pcrb_fixed: np.ndarray
+    pcrb_prior: np.ndarray
+    pcrb_prior_check: np.ndarray
+    filters: dict
+    pcrb_runs: int
+    big_n: int
+    big_seconds: float
+
+
+def bot_references(mc_bot: MonteCarloResult, pcrb_runs: int = PCRB_RUNS, big_n: int = BIG_N, *, seeds=None,
+                   executor=None) -> BotReferences:
+    """The bounds and the reference filters of the Table 2 experiment ``mc_bot`` (same runs).
+
+    ``seeds``: a mapping with ``pcrb_fixed``, ``pcrb_prior`` and ``pcrb_prior_check`` (the PCRB's
+    truth trajectories; default :data:`SEEDS`); the large PF runs on ``mc_bot``'s data with its
+    seed (its streams keyed by its label)."""
+    from ..bounds import pcrb_linear_dynamics
+    from ..montecarlo import truth_rng
+
+    seeds = SEEDS if seeds is None else seeds
+    model = BearingsOnly.zhang2016()
+    T = mc_bot.sim.T
+    pcrb = {init_key: pcrb_linear_dynamics(model, T, pcrb_runs, truth_rng(seeds[init_key]), init=init)
+            for init_key, init in (("pcrb_fixed", "fixed"), ("pcrb_prior", "prior"), ("pcrb_prior_check", "prior"))}
+    name = f"PF({big_n})"
+    t0 = time.perf_counter()
+    big = run_monte_carlo(model, {name: BootstrapParticleFilter(model, big_n, resampling="systematic")},
+                          T, mc_bot.sim.runs, mc_bot.seed, sim=mc_bot.sim, executor=executor).results[name]
+    big_seconds = time.perf_counter() - t0
+    ukf0 = UnscentedKalmanFilter(model, m0=model.x0, P0=1e-9 * np.eye(4), **UT).filter(mc_bot.sim.y)
+    return BotReferences(pcrb["pcrb_fixed"], pcrb["pcrb_prior"], pcrb["pcrb_prior_check"],
+                         {name: big, "UKF, started at true x0": ukf0}, pcrb_runs, big_n, big_seconds)
+
+
+def bot_reference_table(mc_bot: MonteCarloResult, refs: BotReferences):
+    """Time-averaged MSE per component (mean over the runs where a filter stayed finite of eq 61
+    averaged over k) of the Table 2 filters and the references, with the time-averaged bounds.
+
+    Returns ``(table, ratio, curves)``: ``table`` (rows: filters, then the two bounds; columns
+    the components and their SEs), ``ratio`` (the components divided by the ``x0``-known bound)
+    and ``curves`` (``{filter: (T, 4)}`` MSE over time, eq 61, over the finite runs)."""
+    res = {**{n: mc_bot.results[n] for n in BOT_LABELS}, **refs.filters}
+    rows, curves = {}, {}
+    for name in list(BOT_LABELS) + list(refs.filters):
+        v = mse_per_component(mc_bot.x_true, res[name].x)
+        ok = np.all(np.isfinite(v), axis=1)
+        rows[name] = dict(zip(COMPONENTS, v[ok].mean(axis=0)))
+        rows[name].update({f"SE {c}": s for c, s in zip(COMPONENTS, v[ok].std(axis=0, ddof=1) / np.sqrt(ok.sum()))})
+        curves[name] = mse_per_component_over_time(mc_bot.x_true[ok], res[name].x[ok])
+    rows["PCRB, x0 known"] = dict(zip(COMPONENTS, refs.pcrb_fixed.mean(axis=0)))
+    rows["PCRB, x0 ~ prior (not a bound here)"] = dict(zip(COMPONENTS, refs.pcrb_prior.mean(axis=0)))
+    table = pd.DataFrame(rows).T
+    return table, table[COMPONENTS] / refs.pcrb_fixed.mean(axis=0), curves
+
+
+# ============================================================================ everything, for the claims
+@dataclass
+class GpffResults:
+    """Every number the chapter, its claims (``pfrepro.verdicts.gpff_zhang2016``) and its
+    tables and figures (:mod:`pfrepro.figures.gpff_zhang2016`) need; made by :func:`run_all`.
+
+    Attributes
+    ----------
+    runs : int
+        Monte Carlo runs of every experiment (the paper's 100 unless replaced).
+    seeds : dict
+        The seeds used (:data:`SEEDS` unless replaced).
+    checks : dict
+        The derivation checks of secs 2-4 (name -> DataFrame): ``fokker_planck`` (eq 8/14),
+        ``linear`` (eqs 23-27), ``eqs16_18``, ``interior`` (eqs 36-40), ``equivalence`` (sec 3.2),
+        ``conv_dlambda`` and ``orders`` (convergence in the lambda step), ``conv_n`` (in N),
+        ``nonlinear`` (eq 46), ``eq43`` and ``cwpa_q`` (sec 5.1's Q).
+    cwpa, cwpa_readings : dict
+        ``{"gaussian" | "mixture": MonteCarloResult}``: Fig. 1's experiment and its integrator readings.
+    cwpa_r_sweep : pandas.DataFrame
+        The mixture data under each R given to KF and GPFF (:func:`cwpa_r_sensitivity`).
+    ung, ung_readings : MonteCarloResult
+        Table 1's experiment (sec 5.2) and the readings of its free choices (same truths).
+    ung_cost, ung_counts : pandas.DataFrame
+        :func:`cost_evidence` and :func:`cost_reading_counts` on UNG.
+    bot, bot_readings, bot_cost, bot_counts
+        The same for Table 2 (sec 5.3).
+    sweep_ung, sweep_bot : pandas.DataFrame
+        GPFF(100) under the lambda grids and integrators (:func:`schedule_sweep`).
+    references : BotReferences
+        Bounds and reference filters on the Table 2 data.
+    seconds : dict
+        Wall time of each block (context only; no claim rests on it).
+    timing_repeats : int
+        Single-run timings behind the tables' time columns (context only).
+    """
+
+    runs: int
+    seeds: dict
+    checks: dict
+    cwpa: dict
+    cwpa_readings: dict
+    cwpa_r_sweep: pd.DataFrame
+    ung: MonteCarloResult
+    ung_readings: MonteCarloResult
+    ung_cost: pd.DataFrame
+    ung_counts: pd.DataFrame
+    bot: MonteCarloResult
+    bot_readings: MonteCarloResult
+    bot_cost: pd.DataFrame
+    bot_counts: pd.DataFrame
+    sweep_ung: pd.DataFrame
+    sweep_bot: pd.DataFrame
+    references: BotReferences
+    seconds: dict = field(default_factory=dict)
+    timing_repeats: int = TIMING_REPEATS
+
+    @property
+    def settings(self) -> dict:
+        """The runs and seeds of this reproduction (printed by ``pfrepro run``)."""
+        return {"runs": self.runs, "seeds": dict(self.seeds)}
+
+    @property
+    def table1(self) -> pd.DataFrame:
+        """Table 1 beside the published one (:func:`table1` of ``ung``)."""
+        return table1(self.ung)
+
+    @property
+    def table2(self) -> pd.DataFrame:
+        """Table 2 beside the published one (:func:`table2` of ``bot``)."""
+        return table2(self.bot)
+
+
+def derivation_checks(seed: int | None = None, reps: int = 200) -> dict:
+    """Every numerical check of the derivation (secs 2-4 and sec 5.1's Q), name -> DataFrame
+    (the names of ``GpffResults.checks``); check ``i`` draws its random problem from
+    ``seed + i`` (default ``SEEDS["checks"]``); ``reps`` clouds per N in :func:`convergence_in_n`."""
+    c = SEEDS["checks"] if seed is None else int(seed)
+    conv = convergence_in_dlambda(schedules=("uniform", "exponential"), seed=c + 4)
+    return {"fokker_planck": fokker_planck_check(seed=c + 2), "linear": printed_vs_corrected_linear(seed=c + 3),
+            "eqs16_18": eqs16_18_check(seed=c + 8), "interior": interior_checks(seed=c + 1),
+            "equivalence": equivalence_table(seed=c), "conv_dlambda": conv, "orders": observed_orders(conv),
+            "conv_n": convergence_in_n(reps=reps, seed=c + 5), "nonlinear": nonlinear_vs_linear(seed=c + 6),
+            "eq43": eq43_check(seed=c + 7), "cwpa_q": cwpa_q_check()}
+
+
+def run_all(runs=None, seeds=None, executor=None, steps=None) -> GpffResults:
+    """Run every experiment, reading and sweep of the chapter: the derivation checks, CWPA
+    (sec 5.1), UNG (sec 5.2, Table 1), BOT (sec 5.3, Table 2), the lambda-grid sweeps and the
+    BOT bounds.
+
+    Parameters
+    ----------
+    runs : int, optional
+        Replaces every Monte Carlo count: the runs of the three experiments (and so of their
+        readings, sweeps and the large-N PF, which run on the same data), the PCRB's truth
+        trajectories and the clouds per N of the convergence-in-N check; the single-run timings
+        (context, no claim rests on them) are then taken once instead of :data:`TIMING_REPEATS`
+        times. Default: the paper's 100 runs (:data:`RUNS`), :data:`PCRB_RUNS` trajectories,
+        200 clouds.
+    seeds : None, int or mapping, optional
+        :func:`pfrepro.papers.resolve_seeds` of :data:`SEEDS`.
+    executor : concurrent.futures.Executor, optional
+        For the heavy Monte Carlo calls (results bit-identical to serial).
+    steps : callable, optional
+        Called with a label before each of the six blocks (a progress display).
+
+    Returns
+    -------
+    GpffResults
+        Everything the claims, the chapter's prose and the tables and figures need.
+    """
+    from ..papers import resolve_seeds
+
+    seeds = resolve_seeds(SEEDS, seeds)
+    step = steps or (lambda label: None)
+    n = RUNS if runs is None else int(runs)
+    reps = TIMING_REPEATS if runs is None else 1
+    secs = {}
+    t0 = time.perf_counter()
+    step("derivation checks")
+    checks = derivation_checks(seeds["checks"], reps=200 if runs is None else n)
+    secs["checks"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    step(f"CWPA, Fig. 1 ({n} runs)")
+    cwpa = {"gaussian": run_cwpa("gaussian", runs=n, seed=seeds["cwpa_gaussian"], executor=executor),
+            "mixture": run_cwpa("mixture", runs=n, seed=seeds["cwpa_mixture"], executor=executor)}
+    r_sweep = cwpa_r_sensitivity(cwpa["mixture"], executor=executor)
+    cwpa_rd = {k: run_readings(f"cwpa_{k}", mc, executor=executor) for k, mc in cwpa.items()}
+    secs["cwpa"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    step(f"UNG, Table 1 ({n} runs)")
+    ung = run_ung(runs=n, seed=seeds["ung"], timing_repeats=reps, executor=executor)
+    ung_rd = run_readings("ung", ung, executor=executor)
+    ung_cost, ung_counts = cost_evidence("ung", ung, repeats=reps), cost_reading_counts("ung", ung)
+    secs["ung"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    step(f"BOT, Table 2 ({n} runs)")
+    bot = run_bot(runs=n, seed=seeds["bot"], timing_repeats=reps, executor=executor)
+    bot_rd = run_readings("bot", bot, executor=executor)
+    bot_cost, bot_counts = cost_evidence("bot", bot, repeats=reps), cost_reading_counts("bot", bot)
+    secs["bot"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    step("lambda grids and integrators")
+    # on the tables' data: the uniform grid's rows are the table's GPFF(100) and its integrator readings
+    reuse_u = {("uniform", m): (ung.results["GPFF(100)"] if m == "euler"
+                                else ung_rd.results[f"GPFF(100) | integrator={m}"]).x for m in INTEGRATORS}
+    reuse_b = {("uniform", m): (bot.results["GPFF(100)"] if m == "euler"
+                                else bot_rd.results[f"GPFF(100) | integrator={m}"]).x for m in ("euler", "rk4")}
+    sweep_u = schedule_sweep("ung", sim=ung.sim, reuse=reuse_u, seed=seeds["sweep_ung"], executor=executor)
+    sweep_b = schedule_sweep("bot", sim=bot.sim, integrators=("euler", "rk4"), reuse=reuse_b,
+                             seed=seeds["sweep_bot"], executor=executor)
+    secs["sweeps"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    step("BOT bounds and references")
+    refs = bot_references(bot, PCRB_RUNS if runs is None else n, seeds=seeds, executor=executor)
+    secs["references"] = time.perf_counter() - t0
+    return GpffResults(n, seeds, checks, cwpa, cwpa_rd, r_sweep, ung, ung_rd, ung_cost, ung_counts, bot, bot_rd,
+                       bot_cost, bot_counts, sweep_u, sweep_b, refs, secs, reps)

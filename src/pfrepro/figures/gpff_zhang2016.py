@@ -2,7 +2,8 @@
 (chapter ``book/20_gpff.md``).
 
 The experiments are :mod:`pfrepro.experiments.gpff_zhang2016`; this module only draws
-their results and bundles them for the command line (:func:`reproduce`).
+their results (:func:`~pfrepro.experiments.gpff_zhang2016.run_all`) and gives the command line
+its tables and figures (:func:`tables`, :func:`figures`).
 """
 from __future__ import annotations
 
@@ -10,15 +11,17 @@ import numpy as np
 import pandas as pd
 
 from ..experiments import gpff_zhang2016 as E
-from ..metrics import mse_per_component, mse_per_component_over_time
+from ..metrics import mc_summary, mse_per_component, mse_per_component_over_time
 from . import new_figure
 
-__all__ = ["fig1", "fig2", "fig3", "fig4", "fig5", "reproduce", "TABLES", "FIGURES", "N_STEPS",
-           "BOT_FIGURE_FILTERS", "COMPONENT_LABELS", "table1_shown", "table2_shown"]
+__all__ = ["fig1", "fig2", "fig3", "fig4", "fig5", "tables", "figures", "TABLES", "FIGURES", "N_STEPS",
+           "BOT_FIGURE_FILTERS", "COMPONENT_LABELS", "table1_shown", "table2_shown", "cwpa_table",
+           "fig_convergence_dlambda", "fig_convergence_n", "fig_bot_bound"]
 
 TABLES = ("Table 1", "Table 2")
 FIGURES = ("Fig. 1", "Fig. 2", "Fig. 3", "Fig. 4", "Fig. 5")
-N_STEPS = 4
+#: calls of ``steps`` in :func:`pfrepro.experiments.gpff_zhang2016.run_all` (the command line's progress bar)
+N_STEPS = 6
 #: the filters drawn in Figs. 4-5
 BOT_FIGURE_FILTERS = ("EKF", "UKF", "PF(500)", "GPFF(100)")
 #: axis labels of the BOT state components
@@ -94,40 +97,96 @@ def fig5(mc_bot, names=BOT_FIGURE_FILTERS):
     return fig
 
 
-def reproduce(runs: int | None = None, seed: int | None = None, executor=None, steps=None):
-    """Tables 1-2 and Figs. 1-5 (the CWPA, UNG and BOT experiments of sec 5).
+def tables(results) -> dict:
+    """Tables 1-2 (:attr:`~pfrepro.experiments.gpff_zhang2016.GpffResults.table1`, ``table2``) of
+    :func:`pfrepro.experiments.gpff_zhang2016.run_all`'s results, ``{label: DataFrame}``."""
+    return {"Table 1": results.table1, "Table 2": results.table2}
 
-    ``runs`` defaults to the paper's 100; ``seed`` replaces the experiments' fixed seeds
-    (:data:`pfrepro.experiments.gpff_zhang2016.SEEDS`) by ``seed, seed + 1, ...``.
-    Returns a :class:`pfrepro.papers.Reproduction`.
-    """
-    from ..papers import Reproduction, call_with_executor, cell_claims, override_seeds
 
-    step = steps or (lambda label: None)
-    runs = E.RUNS if runs is None else runs
-    with override_seeds(E.SEEDS, seed):
-        step(f"CWPA, Gaussian noise ({runs} runs)")
-        mc_g = call_with_executor(E.run_cwpa, "gaussian", runs=runs, executor=executor)
-        step(f"CWPA, mixture noise ({runs} runs)")
-        mc_m = call_with_executor(E.run_cwpa, "mixture", runs=runs, executor=executor)
-        step(f"UNG, Table 1 ({runs} runs)")
-        mc_u = call_with_executor(E.run_ung, runs=runs, executor=executor)
-        step(f"BOT, Table 2 ({runs} runs)")
-        mc_b = call_with_executor(E.run_bot, runs=runs, executor=executor)
-        seeds = dict(E.SEEDS)
-    t1, t2 = E.table1(mc_u), E.table2(mc_b)
-    t1_claims = t1.rename(columns={"published mean": "published", "MSE mean": "ours", "SE": "se"})
-    reg = cell_claims(E.PAPER, t1_claims, lambda r: f"t1_mse_{r['filter']}",
-                      lambda r: f"Table 1: mean MSE of {r['filter']} on UNG", "Table 1")
-    t2_claims = t2.rename(columns={"published mean": "published", "MSE mean": "ours", "SE": "se"})
-    cell_claims(E.PAPER, t2_claims, lambda r: f"t2_{r['component']}_{r['filter']}",
-                lambda r: f"Table 2: time-averaged MSE of {r['component']} for {r['filter']} on BOT",
-                "Table 2", registry=reg)
-    figures = {"Fig. 1": fig1(mc_g, mc_m), "Fig. 2": fig2(mc_m), "Fig. 3": fig3(mc_u),
-               "Fig. 4": fig4(mc_b), "Fig. 5": fig5(mc_b)}
-    return Reproduction(E.PAPER, tables={"Table 1": t1, "Table 2": t2}, figures=figures, claims=reg,
-                        settings={"runs": runs, "seeds": {k: seeds[k] for k in ("cwpa_gaussian", "cwpa_mixture",
-                                                                                 "ung", "bot")}})
+def figures(results) -> dict:
+    """Figs. 1-5 of :func:`pfrepro.experiments.gpff_zhang2016.run_all`'s results, ``{label: Figure}``."""
+    mc_m = results.cwpa["mixture"]
+    return {"Fig. 1": fig1(results.cwpa["gaussian"], mc_m), "Fig. 2": fig2(mc_m), "Fig. 3": fig3(results.ung),
+            "Fig. 4": fig4(results.bot), "Fig. 5": fig5(results.bot)}
+
+
+def cwpa_table(results) -> pd.DataFrame:
+    """Sec 5.1 in numbers: mean MSE (eq 56) of KF, GPFF and GPFF with the exact map, the paired
+    difference GPFF - KF with its SE, and the spread of the per-run MSE, per noise."""
+    rows = []
+    for label, mc in (("Gaussian", results.cwpa["gaussian"]), ("mixture", results.cwpa["mixture"])):
+        k, gg, ge = mc.mse("KF"), mc.mse("GPFF"), mc.mse("GPFF (exact map)")
+        d = mc_summary(gg - k)
+        rows.append({"noise": label, "KF MSE": k.mean(), "GPFF MSE": gg.mean(), "GPFF (exact map) MSE": ge.mean(),
+                     "GPFF − KF": d.mean, "SE(GPFF − KF)": d.se, "KF MSE std": k.std(ddof=1),
+                     "GPFF MSE std": gg.std(ddof=1)})
+    return pd.DataFrame(rows).set_index("noise")
+
+
+def fig_convergence_dlambda(conv: pd.DataFrame):
+    """Relative error of a cloud moved by the affine flow against the Kalman update of its moments,
+    against the step size, per integrator, on the uniform and the exponential lambda grid
+    (:func:`~pfrepro.experiments.gpff_zhang2016.convergence_in_dlambda`)."""
+    fig, axes = new_figure(1, 2, figsize=(10.2, 4), sharey=True)
+    styles = {"euler": "o-", "midpoint": "s-", "rk4": "^-"}
+    for ax, sched in zip(axes, ("uniform", "exponential")):
+        for meth in ("euler", "midpoint", "rk4"):
+            c = conv[(conv.schedule == sched) & (conv.integrator == meth)]
+            ax.loglog(c["dlambda"], c["mean error"], styles[meth], label=f"{meth}, mean")
+            ax.loglog(c["dlambda"], c["cov error"], styles[meth], mfc="none", alpha=0.6, label=f"{meth}, covariance")
+        ax.axvline(1 / E.N_LAMBDA, color="grey", lw=0.8, ls=":")
+        ax.set_xlabel(r"$1/n_\lambda$ (= $\Delta\lambda$ for the uniform grid)")
+        ax.set_title(f"{sched} λ grid")
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0].set_ylabel("relative error vs Kalman update")
+    axes[1].legend(fontsize=8, ncol=2)
+    fig.suptitle("Particle cloud moved by the affine flow: convergence in Δλ (dotted: the paper's Δλ = 0.05)")
+    fig.tight_layout()
+    return fig
+
+
+def fig_convergence_n(conv_n: pd.DataFrame):
+    """Error of the flowed cloud's mean and covariance against the true Kalman posterior as N grows,
+    for the exact map and 20 Euler steps (:func:`~pfrepro.experiments.gpff_zhang2016.convergence_in_n`)."""
+    fig, ax = new_figure(figsize=(6.5, 4))
+    for (name, c), mk in zip(conv_n.groupby("integrator", sort=False), ("o-", "s-")):
+        ax.loglog(c["N"], c["mean error"], mk, label=f"{name}: mean")
+        ax.loglog(c["N"], c["cov error"], mk, mfc="none", alpha=0.6, label=f"{name}: covariance")
+    Ns = conv_n["N"].unique()
+    ax.loglog(Ns, conv_n["mean error"].iloc[0] * np.sqrt(Ns[0] / Ns), "k:", label=r"$\propto N^{-1/2}$")
+    ax.set_xlabel("particles N"); ax.set_ylabel("RMS relative error vs Kalman posterior")
+    ax.set_title("Convergence in N (200 clouds per N)"); ax.grid(True, which="both", alpha=0.3); ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def fig_bot_bound(results, components=("y", "ydot"), dt: float = 0.1):
+    """MSE over time (eq 61) of the Table 2 filters and the references against the PCRB with known
+    x0 (solid) and with the prior start (dotted; not a bound on these data), one panel per component;
+    the vertical range spans the filters' curves after the first second."""
+    from ..plotting import log_ylim_from
+
+    mc_b, refs = results.bot, results.references
+    _, _, curves = E.bot_reference_table(mc_b, refs)
+    names = list(E.BOT_LABELS) + list(refs.filters)
+    tt = np.arange(1, mc_b.sim.T + 1) * dt   # time (s), as in Fig. 4
+    fig, axes = new_figure(1, len(components), figsize=(10.2, 4.2))
+    for ax, comp in zip(np.atleast_1d(axes), components):
+        j = E.COMPONENTS.index(comp)
+        for name in names:
+            ls = "--" if name.startswith("UKF, started") else "-"
+            ax.semilogy(tt, curves[name][:, j], ls, lw=1.6 if name == f"PF({refs.big_n})" else 1.0, label=name)
+        ax.semilogy(tt, refs.pcrb_fixed[:, j], "k-", lw=2, label="PCRB, $x_0$ known")
+        ax.semilogy(tt, refs.pcrb_prior[:, j], "k:", lw=1.5, label="PCRB, $x_0\\sim$ prior (not a bound here)")
+        ax.set_xlabel("time (s)"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]} (eq 61)")
+        ax.grid(alpha=0.3, which="both")
+        ax.set_title(f"BOT: {COMPONENT_LABELS[comp]} against the bound")
+        # the known-start bound and the UKF told x0 start near 0 and would stretch the axis over
+        # decades no filter visits later
+        log_ylim_from(ax, *[curves[name][tt > 1.0, j] for name in names], pad=1.5)
+    np.atleast_1d(axes)[0].legend(fontsize=8, ncol=2)
+    fig.tight_layout()
+    return fig
 
 
 def _printed_columns(t: pd.DataFrame, table_id: str, columns=("published mean", "published std")) -> pd.DataFrame:
