@@ -827,6 +827,7 @@ def run_all(runs: int | None = None, seeds=None, executor=None, steps=None) -> Z
     Returns
     -------
     Zhou2017Results
+        The runs and the statistics of every claim (its ``settings``: the counts and seeds used).
     """
     from ..claims import ordering_holds
     from ..papers import resolve_seeds
