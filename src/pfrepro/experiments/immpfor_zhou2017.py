@@ -1,8 +1,10 @@
 """Experiments of Zhou, Sun, Chu & Cui (2017), "Interacting multiple model particle filter
 optimization resampling algorithm" (a reconstruction: our copy lost every equation and matrix).
 
-Which models, which filters, which settings. The chapter ``book/60_immpf.md`` calls these
-functions. Every value the paper leaves out is fixed in :data:`SCENARIO` *before anything
+Which models, which filters, which settings, and every experiment of the chapter
+``book/60_immpf.md`` in one call, :func:`run_all` (the chapter and ``pfrepro run immpf`` both go
+through it; the claims are decided on its results by ``pfrepro.verdicts.immpfor_zhou2017``).
+Every value the paper leaves out is fixed in :data:`SCENARIO` *before anything
 was run*, with the reason next to it, and is never changed to move a number; the
 robustness scenarios in :data:`ALTERNATIVES` were fixed at the same time.
 
@@ -694,7 +696,7 @@ class Zhou2017Results:
 
     The runs (:class:`Run`, common truths within each) are kept for the tables and figures; the
     statistics the claims are decided on are computed once, here, so that
-    :mod:`pfrepro.verdicts.immpfor_zhou2017` only applies the rule. Differences are IMMPF minus
+    ``pfrepro.verdicts.immpfor_zhou2017`` only applies the rule. Differences are IMMPF minus
     IMMPFOR-variant unless said otherwise (positive: IMMPFOR better), as ``(diff, se)``.
 
     Attributes
@@ -805,9 +807,9 @@ def run_all(runs: int | None = None, seeds=None, executor=None, steps=None) -> Z
     the replacement and the density, the own-parent ablation, the large-N reference posterior,
     d = :data:`D_FAVOURABLE` at N = 2000 and per scenario, the particle sets for the distance to
     the posterior, the readings of :data:`HELD_READINGS` (on ``runs_held`` runs, ``runs_held_more``
-    where the rule :func:`pfrepro.verdicts.immpfor_zhou2017.held_needs_more_runs` asks for them) and,
+    where the rule ``pfrepro.verdicts.immpfor_zhou2017.held_needs_more_runs`` asks for them) and,
     per scenario reading, N = 2000 and the ablation (``runs_scen`` / ``runs_scen_more`` runs:
-    :func:`pfrepro.verdicts.immpfor_zhou2017.scenario_needs_more_runs`).
+    ``pfrepro.verdicts.immpfor_zhou2017.scenario_needs_more_runs``).
 
     Parameters
     ----------
