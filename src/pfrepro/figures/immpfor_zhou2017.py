@@ -232,7 +232,8 @@ def modes_table(results) -> pd.DataFrame:
 
 
 def fig_modes(results):
-    """Mean model probabilities over the runs against time (CV, CT, CA), turns shaded; the paper has no such plot."""
+    """Mean model probabilities over the runs against time (CV, CT, CA in the first three
+    :data:`~pfrepro.plotting.SERIES_COLORS`), turns shaded; the paper has no such plot."""
     import matplotlib.pyplot as plt
 
     kk = np.arange(1, E.SCENARIO["duration"] + 1)
@@ -240,8 +241,8 @@ def fig_modes(results):
     for ax, n in zip(axs, MODE_FILTERS[:3]):
         shade_turns(ax)
         mp = results.main.results[n].diagnostics["mode_probs"].mean(axis=0)
-        for j, (lab, st) in enumerate(zip(("CV", "CT", "CA"), ("C0-", "C1-", "C2-"))):
-            ax.plot(kk, mp[:, j], st, lw=1, label=lab)
+        for j, lab in enumerate(("CV", "CT", "CA")):   # model series: the book's series palette
+            ax.plot(kk, mp[:, j], "-", color=SERIES_COLORS[j], lw=1, label=lab)
         ax.set_title(n, fontsize=9); ax.set_xlabel("time [s]")
     axs[0].set_ylabel("mean model probability"); axs[0].legend(fontsize=8)
     fig.tight_layout()
