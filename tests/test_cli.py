@@ -223,22 +223,6 @@ def test_list_shows_dpf_and_immpf(capsys, tmp_path, monkeypatch):
     assert papers.get_paper("IMMPF").chapter == "book/60_immpf.md"
 
 
-@pytest.mark.parametrize("name, key, files", [
-    # dpf: its claims are the chapter's (tests/test_verdicts_dpf_hou2008.py runs it)
-    ("immpf", "immpfor_zhou2017", ("table1.csv", "fig1.png", "fig2.png", "fig3.png", "fig4.png", "fig5.png")),
-])
-def test_run_new_papers_on_one_run(name, key, files, tmp_path, capsys):
-    code, out, err = run_cli(["run", name, "--runs", "2", "--seed", "5", "--out", str(tmp_path)], capsys)
-    assert code == 0, err
-    for f in files:
-        assert (tmp_path / f).stat().st_size > 0
-        if f.endswith(".png"):
-            assert (tmp_path / f).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    claims = json.loads((tmp_path / "claims" / f"{key}.json").read_text())
-    assert len(claims) == 4 and all(c["published"] is not None for c in claims)
-    assert "verdicts of the 4 table-cell claims" in out
-
-
 def test_immpf_table1_frame_matches_the_experiment():
     from pfrepro.experiments import immpfor_zhou2017 as E
     from pfrepro.figures import immpfor_zhou2017 as F

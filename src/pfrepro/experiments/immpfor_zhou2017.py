@@ -1,8 +1,10 @@
 """Experiments of Zhou, Sun, Chu & Cui (2017), "Interacting multiple model particle filter
 optimization resampling algorithm" (a reconstruction: our copy lost every equation and matrix).
 
-Which models, which filters, which settings. The chapter ``book/60_immpf.md`` calls these
-functions. Every value the paper leaves out is fixed in :data:`SCENARIO` *before anything
+Which models, which filters, which settings, and every experiment of the chapter
+``book/60_immpf.md`` in one call, :func:`run_all` (the chapter and ``pfrepro run immpf`` both go
+through it; the claims are decided on its results by ``pfrepro.verdicts.immpfor_zhou2017``).
+Every value the paper leaves out is fixed in :data:`SCENARIO` *before anything
 was run*, with the reason next to it, and is never changed to move a number; the
 robustness scenarios in :data:`ALTERNATIVES` were fixed at the same time.
 
@@ -43,7 +45,9 @@ __all__ = ["PAPER", "SCENARIO", "ALTERNATIVES", "SEEDS", "scenario", "truth_syst
            "save_synthesis_record", "load_synthesis_record", "run_synthesis_record", "CHOICES", "HELD", "D_GRID",
            "READINGS", "HELD_READINGS", "TAIL", "LOST_KM", "pair_stats", "median_paired", "lost_mask", "plural", "compare_sentence",
            "posterior_distance", "reading_builders", "D_FAVOURABLE", "per_run_rms", "robustness", "POST_STEPS",
-           "posterior_builders", "weighted_w1", "posterior_w1"]
+           "posterior_builders", "weighted_w1", "posterior_w1", "mode_summary", "RUN_COUNTS", "STAT_KEYS",
+           "SCENARIO_TAGS", "run_counts", "main_tag", "d_tags", "variant_tags", "ablation_steps", "own_name",
+           "Zhou2017Results", "run_all", "today_given"]
 
 #: key of this paper in ``pfrepro.published`` and the claims registry
 PAPER = "immpfor_zhou2017"
@@ -247,9 +251,11 @@ def filter_system(sc=None) -> JumpMarkovSystem:
     return JumpMarkovSystem(models, Pi, initial_probs=sc["initial_probs"], names=["CV", "CT", "CA"])
 
 
-def simulate(sc=None, runs: int | None = None, seed: int = SEEDS["main"], start: int = 0):
-    """Truth and measurements of runs ``start .. start + runs - 1`` (per-run streams)."""
+def simulate(sc=None, runs: int | None = None, seed: int | None = None, start: int = 0):
+    """Truth and measurements of runs ``start .. start + runs - 1`` (per-run streams; ``seed`` default
+    ``SEEDS["main"]``, looked up at call time)."""
     sc = sc or SCENARIO
+    seed = SEEDS["main"] if seed is None else seed
     runs = sc["runs"] if runs is None else runs
     return truth_system(sc).simulate(sc["duration"], runs, truth_streams(seed, runs, start))
 
@@ -363,7 +369,7 @@ def _cat_results(parts):
     return sim, out
 
 
-def run(builders: dict, sc=None, runs: int | None = None, seed: int = SEEDS["main"], executor=None,
+def run(builders: dict, sc=None, runs: int | None = None, seed: int | None = None, executor=None,
         chunks: int = 2) -> Run:
     """Simulate ``runs`` runs of scenario ``sc`` and run every filter on the same data.
 
@@ -371,10 +377,11 @@ def run(builders: dict, sc=None, runs: int | None = None, seed: int = SEEDS["mai
     ``{"IMMPF": ("immpf", {}), "IMMPFOR": ("immpfor", {})}``. Each filter draws from
     ``filter_streams(seed, name, ...)`` and the truth from ``truth_streams(seed, ...)``, per run,
     so splitting the runs over an ``executor`` (anything with ``map``) in ``chunks`` pieces gives
-    bit-identical numbers.
+    bit-identical numbers. ``seed`` default: ``SEEDS["main"]`` (looked up at call time).
     """
     sc = sc or SCENARIO
     runs = sc["runs"] if runs is None else runs
+    seed = SEEDS["main"] if seed is None else seed
     if _ENGINE_EXECUTOR:   # package v2: the engine's runner (same streams, same chunking rule)
         filters = {name: globals()[fn](sc, **kw) for name, (fn, kw) in builders.items()}
         mc = run_monte_carlo(truth_system(sc), filters, sc["duration"], runs, seed, executor=executor,
@@ -411,12 +418,14 @@ def table1(run_: Run, names) -> pd.DataFrame:
     return pd.DataFrame(rows).T
 
 
-def bootstrap_table(run_: Run, names, B: int = 1000, seed: int = SEEDS["checks"]):
+def bootstrap_table(run_: Run, names, B: int = 1000, seed: int | None = None):
     """Bootstrap over runs (common resamples for all filters): SE of peak and mean for each filter,
     and paired differences of each filter against the first of ``names`` (peak and mean).
 
-    Returns (se DataFrame, diff DataFrame with columns peak, peak_se, mean, mean_se).
+    Returns (se DataFrame, diff DataFrame with columns peak, peak_se, mean, mean_se). ``seed`` of the
+    resamples: default ``SEEDS["checks"]`` (looked up at call time).
     """
+    seed = SEEDS["checks"] if seed is None else seed
     e2 = {n: errors(run_.x_true, run_.results[n].x) ** 2 for n in names}
     runs = next(iter(e2.values())).shape[0]
     rng = np.random.default_rng(seed)
@@ -461,14 +470,16 @@ def per_run_rms(run_: Run, name: str, idx=IDX_POS, steps=None):
     return np.sqrt(np.mean(e * e, axis=1))
 
 
-def pair_stats(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 500, seed: int = SEEDS["checks"]) -> dict:
+def pair_stats(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 500, seed: int | None = None) -> dict:
     """Paired differences ``a - b`` (positive: ``b`` better) of every statistic the chapter judges.
 
     Keys -> ``(diff, se)``: ``"rms"`` per-run RMS position error; ``"peak"``, ``"mean"`` of the
     position RMSE curve (bootstrap se over runs, common resamples); ``"vel"`` per-run RMS velocity
     error (Fig. 2 right); ``"x"``, ``"y"``, ``"vx"``, ``"vy"`` per-axis per-run RMS errors (Figs 3-4);
     ``"tail"`` per-run RMS position error over :data:`TAIL` (the convergence of the RMSE curve).
+    ``seed`` of the bootstrap: default ``SEEDS["checks"]`` (looked up at call time).
     """
+    seed = SEEDS["checks"] if seed is None else seed
     out = {"rms": paired(run_, a, b)}
     ea, eb = errors(run_.x_true, run_.results[a].x) ** 2, errors(run_.x_true, run_.results[b].x) ** 2
     rng = np.random.default_rng(seed)
@@ -483,13 +494,15 @@ def pair_stats(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 500, se
     return out
 
 
-def median_paired(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 2000, seed: int = SEEDS["checks"]):
+def median_paired(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 2000, seed: int | None = None):
     """Median over runs of the per-run RMS position error difference ``a - b``, its bootstrap
-    standard error and 95 % percentile interval: ``(median, se, lo, hi)`` (heavy tails cannot swamp it)."""
+    standard error and 95 % percentile interval: ``(median, se, lo, hi)`` (heavy tails cannot swamp it;
+    ``seed`` default ``SEEDS["checks"]``, looked up at call time)."""
+    seed = SEEDS["checks"] if seed is None else seed
     return bootstrap_median(per_run_rms(run_, a) - per_run_rms(run_, b), B, seed)
 
 
-def robustness(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 2000, seed: int = SEEDS["checks"]) -> dict:
+def robustness(run_: Run, a: str = "IMMPF", b: str = "IMMPFOR", B: int = 2000, seed: int | None = None) -> dict:
     """The chapter's robustness rule for "``b`` beats ``a``" in one scenario: the median paired difference
     (:func:`median_paired`) and the lost-track counts (:func:`lost_tracks`).
 
@@ -522,8 +535,10 @@ def posterior_distance(run_: Run, name: str, ref: str):
 POST_STEPS = tuple(range(20, SCENARIO["duration"] + 1, 20))
 
 
-def posterior_builders(builders: dict, steps=POST_STEPS) -> dict:
-    """``builders`` (name -> (function, keywords)) whose filters keep their particle sets at ``steps``."""
+def posterior_builders(builders: dict, steps=None) -> dict:
+    """``builders`` (name -> (function, keywords)) whose filters keep their particle sets at ``steps``
+    (default :data:`POST_STEPS`)."""
+    steps = POST_STEPS if steps is None else steps
     return {name: (fn, {**kw, "keep_steps": tuple(steps)}) for name, (fn, kw) in builders.items()}
 
 
@@ -542,7 +557,7 @@ def weighted_w1(a, wa, b, wb):
     return np.sum(np.abs(F) * np.diff(v, axis=-1), axis=-1)
 
 
-def posterior_w1(run_: Run, name: str, ref: str, idx=IDX_POS, steps=POST_STEPS) -> np.ndarray:
+def posterior_w1(run_: Run, name: str, ref: str, idx=IDX_POS, steps=None) -> np.ndarray:
     """Per run: the distance (m) between ``name``'s particle approximation of the posterior position and
     the large-N reference ``ref``'s, averaged over the kept ``steps`` (default :data:`POST_STEPS`, the
     ``keep_steps`` both filters were built with: :func:`posterior_builders`).
@@ -552,6 +567,7 @@ def posterior_w1(run_: Run, name: str, ref: str, idx=IDX_POS, steps=POST_STEPS) 
     position components ``idx`` of the 1-D Wasserstein-1 distances of the marginals
     (:func:`weighted_w1`). Unlike :func:`posterior_distance` it sees the spread and shape of the
     set, not only its mean. Both filters must have kept their particles at the same steps."""
+    steps = POST_STEPS if steps is None else steps
     out = []
     for nm in (name, ref):
         d = run_.results[nm].diagnostics
@@ -614,6 +630,368 @@ def mode_timeline(sc=None) -> np.ndarray:
     """True filter-mode label per step k = 1..T: 0 CV, 1 CT (either turn)."""
     s = schedule(sc)[1:]
     return np.where(s == 0, 0, 1)
+
+
+def mode_summary(run_: Run, name: str) -> dict:
+    """Mean model probabilities of filter ``name`` against the true manoeuvres (:func:`mode_timeline`):
+    P(CV) on the straight segments, P(CT) + P(CA) and P(CT) during the turns (means over runs and steps)."""
+    turn = mode_timeline() == 1
+    mp = run_.results[name].diagnostics["mode_probs"]
+    return {"P(CV) on CV segments": float(mp[:, ~turn, 0].mean()),
+            "P(CT) + P(CA) in turns": float(mp[:, turn, 1:].sum(-1).mean()),
+            "P(CT) in turns": float(mp[:, turn, 1].mean())}
+
+
+# -- every experiment of the chapter, in one call ----------------------------------------------------
+#: the Monte Carlo run counts of :func:`run_all` (``runs=None``: these entries of :data:`SCENARIO`;
+#: an int replaces every one of them)
+RUN_COUNTS = ("runs", "runs_lik", "runs_readings", "runs_ablation", "runs_ref", "runs_fav", "runs_robust",
+              "runs_held", "runs_held_more", "runs_scen", "runs_scen_more")
+#: the statistics of :func:`pair_stats` on which the readings of every ordering are decided
+STAT_KEYS = ("peak", "mean", "vel", "x", "y", "vx", "vy", "tail")
+#: the scenario readings (:data:`ALTERNATIVES` label -> reading tag of the choices trajectory, noise, p_stay),
+#: in the order their extra runs are decided
+SCENARIO_TAGS = {"sharp turns": "trajectory=6 deg/s", "low noise": "noise=low", "high noise": "noise=high",
+                 "sticky Markov": "p_stay=0.98"}
+
+
+def run_counts(runs: int | None = None) -> dict:
+    """The run count of every experiment: :data:`SCENARIO`'s (``runs=None``) or ``runs`` for each
+    entry of :data:`RUN_COUNTS` (an int >= 2: every ordering is a paired difference over runs)."""
+    if runs is None:
+        return {k: int(SCENARIO[k]) for k in RUN_COUNTS}
+    if int(runs) < 2:
+        raise ValueError(f"runs must be >= 2 (paired standard errors over runs), got {runs}")
+    return {k: int(runs) for k in RUN_COUNTS}
+
+
+def main_tag() -> str:
+    """Reading tag of the main step coefficient (``"d=1"``)."""
+    return f"d={SCENARIO['d']:g}"
+
+
+def d_tags() -> list:
+    """Reading tags of the step coefficients of :data:`D_GRID` other than the main one."""
+    return [f"d={d:g}" for d in D_GRID if d != SCENARIO["d"]]
+
+
+def variant_tags() -> list:
+    """Tags of the IMMPFOR variants run on the main truths: the other d values and :data:`READINGS`."""
+    return d_tags() + list(READINGS)
+
+
+def ablation_steps() -> tuple:
+    """The step coefficients of the own-parent ablation (the d grid from 0.01 up)."""
+    return tuple(d for d in D_GRID if d >= 0.01)
+
+
+def own_name(d: float) -> str:
+    """Name of the own-parent ablation filter (``mix_modes=False``) with step ``d``."""
+    return f"own d={d:g}"
+
+
+@dataclass
+class Zhou2017Results:
+    """Everything the chapter's claims, prose, tables and figures need (:func:`run_all`).
+
+    The runs (:class:`Run`, common truths within each) are kept for the tables and figures; the
+    statistics the claims are decided on are computed once, here, so that
+    ``pfrepro.verdicts.immpfor_zhou2017`` only applies the rule. Differences are IMMPF minus
+    IMMPFOR-variant unless said otherwise (positive: IMMPFOR better), as ``(diff, se)``.
+
+    Attributes
+    ----------
+    counts, seeds : dict
+        The run counts (:func:`run_counts`) and seeds used.
+    main, lik_pair, fig5, rd, abl, fav5_pair : Run
+        Table 1 and Figs. 1-4 (IMMPF, IMMPFOR, IMM-EKF, IMM-UKF); the mean-likelihood reading with
+        main's filters on its runs; Fig. 5 (N = 2000, and the IMMPF with IMMPFOR's cost); the IMMPFOR
+        variants of :func:`variant_tags` with main's filters; the own-parent ablation with main's
+        filters; IMMPFOR at d = :data:`D_FAVOURABLE`, N = 2000, with Fig. 5's filters.
+    robust, robust_fav : dict
+        Scenario label (:data:`ALTERNATIVES`) -> Run of IMMPF and IMMPFOR (and "IMMPFOR fav").
+    N_eq : int
+        IMMPF particle number with IMMPFOR(N)'s cost (:func:`equal_compute_N`).
+    table1, table1_se, table1_diff : pandas.DataFrame
+        :func:`table1` and :func:`bootstrap_table` of IMMPF and IMMPFOR on ``main``.
+    fig5_table : pandas.DataFrame
+        :func:`table1` of IMMPF and IMMPFOR on ``fig5``.
+    stats, rob : dict
+        Reading tag -> :func:`pair_stats` / :func:`robustness` of IMMPF against IMMPFOR under that
+        reading, in the order the readings were run (main d, other d, :data:`READINGS`, ``lik=mean``,
+        the :data:`SCENARIO_TAGS`, :data:`HELD_READINGS`).
+    held_runs : dict
+        :data:`HELD_READINGS` tag -> runs it was decided on.
+    pairs : dict
+        Named paired differences: ``rms``, ``lik``, ``lik_pf`` (mean-lik. IMMPF - IMMPF), ``d5`` (Fig. 5),
+        ``fav5`` (Fig. 5 IMMPF - IMMPFOR at d = :data:`D_FAVOURABLE`), ``dN_pf``/``dN_or`` (N = 500 - N = 2000),
+        ``abl`` (own parent: RMS at the largest step - at the smallest).
+    ablation : dict
+        Step d -> IMMPF - own-parent IMMPFOR(d).
+    ekf, ekf_pf : dict, tuple
+        Tag -> IMMPFOR-variant - IMM-EKF in Table 1's mean (``main_tag()`` on ``main``, the others on
+        ``rd``); IMMPF - IMM-EKF on ``main``.
+    equal : dict
+        Tag -> IMMPF(N_eq) - IMMPFOR-variant (per-run RMS).
+    costs, equal_means : dict
+        Evaluations per run (:func:`pfrepro.cost.imm_evaluations`) and Table 1 mean of "IMMPF",
+        "IMMPFOR" and "IMMPF eq".
+    posterior : dict
+        ``"mean"`` / ``"w1"`` -> filter name or tag -> per-run distance to the large-N reference
+        (:func:`posterior_distance`, :func:`posterior_w1`).
+    scenarios : dict
+        "main" and each scenario label -> ``change``, ``IMMPF mean``, ``IMMPFOR mean``, ``gain``
+        (paired), ``rb`` (:func:`robustness` at the main d) and ``fav`` (at d = :data:`D_FAVOURABLE`).
+    scen : dict
+        ``"f5"`` (IMMPF(500) - IMMPF(2000)) and ``"abl"`` (own parent, largest - smallest step) ->
+        scenario tag -> ``(runs, (diff, se))``.
+    """
+
+    counts: dict
+    seeds: dict
+    main: Run
+    lik_pair: Run
+    N_eq: int
+    fig5: Run
+    robust: dict
+    rd: Run
+    abl: Run
+    fav5_pair: Run
+    robust_fav: dict
+    table1: pd.DataFrame
+    table1_se: pd.DataFrame
+    table1_diff: pd.DataFrame
+    fig5_table: pd.DataFrame
+    stats: dict
+    rob: dict
+    held_runs: dict
+    pairs: dict
+    ablation: dict
+    ekf: dict
+    ekf_pf: tuple
+    equal: dict
+    costs: dict
+    equal_means: dict
+    posterior: dict
+    scenarios: dict
+    scen: dict
+
+    @property
+    def settings(self) -> dict:
+        """The run counts and seeds of this reproduction (printed by ``pfrepro run``)."""
+        return {**self.counts, "N": SCENARIO["N"], "N (Fig. 5)": SCENARIO["N_fig5"], "N (reference)": SCENARIO["N_ref"],
+                "seeds": dict(self.seeds)}
+
+
+def _paired_with(base: Run, extra: Run, n: int) -> Run:
+    """``extra`` (run on the first ``n`` truths of ``base``'s seed) with ``base``'s filters on those runs."""
+    if not np.array_equal(extra.sim.y, base.sim.y[:n]):
+        raise AssertionError("a reading must run on the main run's first truths")
+    return Run(extra.sim, {**base.head(n).results, **extra.results}, base.seed)
+
+
+def _scenario_row(change, run_: Run, fav: Run, seed: int) -> dict:
+    """One scenario of the robustness table: Table 1 means, the paired gain and the robustness rule at the
+    main d and at d = :data:`D_FAVOURABLE`."""
+    t_ = table1(run_, ["IMMPF", "IMMPFOR"])
+    return {"change": change, "IMMPF mean": t_.loc["IMMPF", "mean"], "IMMPFOR mean": t_.loc["IMMPFOR", "mean"],
+            "gain": paired(run_, "IMMPF", "IMMPFOR"), "rb": robustness(run_, seed=seed),
+            "fav": robustness(fav, "IMMPF", "IMMPFOR fav", seed=seed)}
+
+
+def run_all(runs: int | None = None, seeds=None, executor=None, steps=None) -> Zhou2017Results:
+    """Every experiment, reading and sweep of the chapter, and the statistics its claims are decided on.
+
+    In the chapter's order: Table 1 and Figs. 1-4 (the main run), the mean-likelihood reading of
+    eq 15, Fig. 5 with the equal-compute IMMPF, the four robustness scenarios, the readings of d,
+    the replacement and the density, the own-parent ablation, the large-N reference posterior,
+    d = :data:`D_FAVOURABLE` at N = 2000 and per scenario, the particle sets for the distance to
+    the posterior, the readings of :data:`HELD_READINGS` (on ``runs_held`` runs, ``runs_held_more``
+    where the rule ``pfrepro.verdicts.immpfor_zhou2017.held_needs_more_runs`` asks for them) and,
+    per scenario reading, N = 2000 and the ablation (``runs_scen`` / ``runs_scen_more`` runs:
+    ``pfrepro.verdicts.immpfor_zhou2017.scenario_needs_more_runs``).
+
+    Parameters
+    ----------
+    runs : int, optional
+        ``None``: the chapter's counts (:data:`SCENARIO`: 100 runs, readings on 50, ...); an int
+        (>= 2) replaces every Monte Carlo run count (:data:`RUN_COUNTS`); a second, larger count of
+        an adaptive step is then the same count and is not run twice.
+    seeds : None, int or dict, optional
+        :func:`pfrepro.papers.resolve_seeds` of :data:`SEEDS`: ``"main"`` (the truths and filters of
+        the main scenario), ``"robust"`` (+ i for the i-th scenario of :data:`ALTERNATIVES`),
+        ``"checks"`` (every bootstrap).
+    executor : concurrent.futures.Executor, optional
+        Passed to every Monte Carlo call (bit-identical to serial).
+    steps : callable, optional
+        ``steps(label)`` before each experiment (a progress display).
+
+    Returns
+    -------
+    Zhou2017Results
+        The runs and the statistics of every claim (its ``settings``: the counts and seeds used).
+    """
+    from ..claims import ordering_holds
+    from ..papers import resolve_seeds
+    from ..verdicts import immpfor_zhou2017 as V
+
+    n = run_counts(runs)
+    sd = resolve_seeds(SEEDS, seeds)
+    step = steps or (lambda label: None)
+    S, ck = SCENARIO, sd["checks"]
+
+    def mc(builders, n_runs, sc=None, seed=None):
+        return run(builders, sc, runs=n_runs, seed=sd["main"] if seed is None else seed, executor=executor)
+
+    # --- the paper-scale runs (common truths for every filter) -----------------------------------
+    step(f"Table 1, Figs. 1-4 ({n['runs']} runs)")
+    main = mc(MAIN_BUILDERS, n["runs"])
+    step(f"Table 1, mean model likelihood ({n['runs_lik']} runs)")
+    lik = mc({"IMMPF (mean lik.)": ("immpf", {"model_likelihood": "mean"}),
+              "IMMPFOR (mean lik.)": ("immpfor", {"model_likelihood": "mean"})}, n["runs_lik"])
+    lik_pair = Run(lik.sim, {**lik.results, **main.head(n["runs_lik"]).results}, lik.seed)
+    assert np.array_equal(lik.sim.y, main.sim.y[:n["runs_lik"]])
+    N_eq = equal_compute_N(main.results["IMMPFOR"], S["N"])
+    step(f"Fig. 5, N = {S['N_fig5']}, and IMMPF at equal cost ({n['runs']} runs)")
+    fig5 = mc(fig5_builders(N_eq), n["runs"])
+    robust = {}
+    for i, (label, alt) in enumerate(ALTERNATIVES.items()):
+        step(f"robustness: {label} ({n['runs_robust']} runs)")
+        robust[label] = mc(PF_BUILDERS, n["runs_robust"], scenario(**alt), sd["robust"] + i)
+    # --- readings of the free choices, on the main run's first truths (paired with its filters) ----------
+    step(f"readings of d, replacement, density ({n['runs_readings']} runs)")
+    rd = _paired_with(main, mc(reading_builders(ablation=False), n["runs_readings"]), n["runs_readings"])
+    step(f"own-parent ablation ({n['runs_ablation']} runs)")
+    abl = _paired_with(main, mc({k: v for k, v in reading_builders().items() if k.startswith("own")},
+                                n["runs_ablation"]), n["runs_ablation"])
+    step(f"reference posterior, N = {S['N_ref']} ({n['runs_ref']} runs)")
+    ref_run = mc(posterior_builders({"IMMPF ref": ("immpf", {"N": S["N_ref"]})}), n["runs_ref"])
+    step(f"d = {D_FAVOURABLE:g} at N = {S['N_fig5']} and per scenario ({n['runs_fav']} runs)")
+    fav5 = mc({"IMMPFOR fav": ("immpfor", {"N": S["N_fig5"], "d": D_FAVOURABLE})}, n["runs_fav"])
+    assert np.array_equal(fav5.sim.y, main.sim.y[:n["runs_fav"]])
+    robust_fav = {}
+    for i, (label, over_) in enumerate(ALTERNATIVES.items()):
+        rf = mc({"IMMPFOR fav": ("immpfor", {"d": D_FAVOURABLE})}, n["runs_fav"], scenario(**over_), sd["robust"] + i)
+        assert np.array_equal(rf.sim.y, robust[label].sim.y[:n["runs_fav"]])
+        robust_fav[label] = Run(rf.sim, {**robust[label].head(n["runs_fav"]).results, **rf.results}, rf.seed)
+    # --- Table 1 and Fig. 5 --------------------------------------------------------------------------
+    names1 = list(PF_BUILDERS)
+    t1 = table1(main, names1)
+    se1, diff1 = bootstrap_table(main, names1, seed=ck)
+    t5 = table1(fig5, names1)
+    assert np.array_equal(main.sim.y, fig5.sim.y)
+    both = Run(main.sim, {"500 IMMPF": main.results["IMMPF"], "2000 IMMPF": fig5.results["IMMPF"],
+                          "500 IMMPFOR": main.results["IMMPFOR"], "2000 IMMPFOR": fig5.results["IMMPFOR"]}, main.seed)
+    # --- the particle sets against the large-N reference (same filters and streams as main and rd) -------
+    nref = n["runs_ref"]
+    assert np.array_equal(ref_run.sim.y, main.sim.y[:nref])
+    step(f"particle sets for the distance to the posterior ({nref} runs)")
+    tags = variant_tags()
+    post_b = {**PF_BUILDERS, **{t: b for t, b in reading_builders(ablation=False).items() if t in tags}}
+    post_sets = mc(posterior_builders(post_b), nref)
+    assert np.array_equal(post_sets.sim.y, main.sim.y[:nref])
+    for nm in PF_BUILDERS:
+        assert np.array_equal(post_sets.results[nm].x, main.results[nm].x[:nref])
+    for t in tags:
+        assert np.array_equal(post_sets.results[t].x, rd.results[t].x[:nref])
+    ps = Run(post_sets.sim, {**post_sets.results, "IMMPF ref": ref_run.results["IMMPF ref"]}, post_sets.seed)
+    posterior = {key: {nm: dist(ps, nm, "IMMPF ref") for nm in [*PF_BUILDERS, *tags]}
+                 for key, dist in (("mean", posterior_distance), ("w1", posterior_w1))}
+    del ps, post_sets, ref_run                          # the particle sets are large; the distances are kept
+    # --- every reading of the orderings: IMMPF - IMMPFOR statistics and the robustness rule -------------
+    stats, rob = {}, {}
+
+    def reading(tag, run_, a="IMMPF", b="IMMPFOR"):
+        stats[tag] = pair_stats(run_, a, b, seed=ck)
+        rob[tag] = robustness(run_, a, b, seed=ck)
+
+    reading(main_tag(), main)
+    for t in tags:
+        reading(t, rd, b=t)
+    reading("lik=mean", lik_pair, "IMMPF (mean lik.)", "IMMPFOR (mean lik.)")
+    for label, tag in SCENARIO_TAGS.items():
+        reading(tag, robust[label])
+    # the three settings the first round held fixed: runs_held runs of the main truths, runs_held_more where
+    # the rule asks (decided against the readings so far, before any of these three is added)
+    so_far = dict(stats)
+    held_runs = {}
+    for tag, (sc_over, kw_pf, kw_or) in HELD_READINGS.items():
+        b = {"IMMPFOR": ("immpfor", kw_or), **({} if kw_pf is None else {"IMMPF": ("immpf", kw_pf)})}
+        step(f"reading {tag} ({n['runs_held']} runs)")
+        nh = n["runs_held"]
+        run_ = _paired_with(main, mc(b, nh, scenario(**sc_over)), nh)
+        st = pair_stats(run_, seed=ck)
+        if n["runs_held_more"] != nh and V.held_needs_more_runs(so_far, st):
+            nh = n["runs_held_more"]
+            step(f"reading {tag} ({nh} runs)")
+            run_ = _paired_with(main, mc(b, nh, scenario(**sc_over)), nh)
+            st = pair_stats(run_, seed=ck)
+        stats[tag], rob[tag] = st, robustness(run_, seed=ck)
+        held_runs[tag] = nh
+    # --- the other paired comparisons -----------------------------------------------------------------------
+    ekf_pf = pair_stats(main, "IMMPF", "IMM-EKF", seed=ck)["mean"]
+    ekf = {main_tag(): pair_stats(main, "IMMPFOR", "IMM-EKF", seed=ck)["mean"]}
+    for (a_, b_), (d_, _) in {("IMMPFOR", "IMM-EKF"): ekf[main_tag()], ("IMMPF", "IMM-EKF"): ekf_pf}.items():
+        t_ = table1(main, [a_, b_])      # the table's two rows: the sentences' signs are the table's
+        assert np.isclose(d_, float(t_.loc[a_, "mean"] - t_.loc[b_, "mean"]), rtol=1e-9, atol=1e-9), (a_, b_)
+    for t in tags:
+        ekf[t] = pair_stats(rd, t, "IMM-EKF", seed=ck)["mean"]
+    eq_name = equal_compute_name(N_eq)
+    eq_run = Run(main.sim, {"IMMPFOR": main.results["IMMPFOR"], "IMMPF eq": fig5.results[eq_name],
+                            "IMMPF": main.results["IMMPF"]}, main.seed)
+    eqr = Run(rd.sim, {**rd.results, "IMMPF eq": fig5.head(n["runs_readings"]).results[eq_name]}, rd.seed)
+    equal = {main_tag(): paired(eq_run, "IMMPF eq", "IMMPFOR"), **{t: paired(eqr, "IMMPF eq", t) for t in tags}}
+    costs = {"IMMPF": float(np.mean(imm_evaluations(main.results["IMMPF"], S["N"]))),
+             "IMMPFOR": float(np.mean(imm_evaluations(main.results["IMMPFOR"], S["N"]))),
+             "IMMPF eq": float(np.mean(imm_evaluations(fig5.results[eq_name], N_eq)))}
+    equal_means = {nm: float(table1(eq_run, [nm]).loc[nm, "mean"]) for nm in ("IMMPF", "IMMPFOR", "IMMPF eq")}
+    ablation = {d: paired(abl, "IMMPF", own_name(d)) for d in ablation_steps()}
+    a_small, a_big = min(ablation), max(ablation)
+    fav5_pair = Run(fav5.sim, {**fig5.head(n["runs_fav"]).results, **fav5.results}, fav5.seed)
+    pairs = {"rms": paired(main, "IMMPF", "IMMPFOR"),
+             "lik": paired(lik_pair, "IMMPF (mean lik.)", "IMMPFOR (mean lik.)"),
+             "lik_pf": paired(lik_pair, "IMMPF (mean lik.)", "IMMPF"),
+             "d5": paired(fig5, "IMMPF", "IMMPFOR"), "fav5": paired(fav5_pair, "IMMPF", "IMMPFOR fav"),
+             "dN_pf": paired(both, "500 IMMPF", "2000 IMMPF"), "dN_or": paired(both, "500 IMMPFOR", "2000 IMMPFOR"),
+             "abl": paired(abl, own_name(a_big), own_name(a_small))}
+    fav_main = Run(rd.sim, {"IMMPF": rd.results["IMMPF"], "IMMPFOR fav": rd.results[f"d={D_FAVOURABLE:g}"]}, rd.seed)
+    scenarios = {"main": _scenario_row("–", main, fav_main, ck)}
+    for label, run_ in robust.items():
+        scenarios[label] = _scenario_row(", ".join(f"{k}={v}" for k, v in ALTERNATIVES[label].items()), run_,
+                                         robust_fav[label], ck)
+    # --- "more particles are better" and the ablation in each scenario reading ------------------------------
+    f5_so_far = {"main": ordering_holds(*pairs["dN_pf"])}
+    abl_so_far = {"main": ordering_holds(*pairs["abl"])}
+    scen = {"f5": {}, "abl": {}}
+    own = {own_name(d): ("immpfor", {"d": d, "mix_modes": False}) for d in (a_small, a_big)}
+    for label, tag in SCENARIO_TAGS.items():
+        i = list(ALTERNATIVES).index(label)
+        for key, builders, a_, b_, so_far_ in (
+                ("f5", {"IMMPF N2000": ("immpf", {"N": S["N_fig5"]})}, "IMMPF", "IMMPF N2000", f5_so_far),
+                ("abl", own, own_name(a_big), own_name(a_small), abl_so_far)):
+            for nn in dict.fromkeys((n["runs_scen"], n["runs_scen_more"])):
+                step(f"{label}: {'N = ' + str(S['N_fig5']) if key == 'f5' else 'ablation'} ({nn} runs)")
+                r_ = mc(builders, nn, scenario(**ALTERNATIVES[label]), sd["robust"] + i)
+                assert np.array_equal(r_.sim.y, robust[label].sim.y[:nn])
+                dd = paired(Run(r_.sim, {**robust[label].head(nn).results, **r_.results}, r_.seed), a_, b_)
+                if not V.scenario_needs_more_runs(dd, so_far_):
+                    break
+            so_far_[label] = ordering_holds(*dd)
+            scen[key][tag] = (nn, dd)
+    return Zhou2017Results(
+        counts=n, seeds=sd, main=main, lik_pair=lik_pair, N_eq=N_eq, fig5=fig5, robust=robust, rd=rd, abl=abl,
+        fav5_pair=fav5_pair, robust_fav=robust_fav, table1=t1, table1_se=se1, table1_diff=diff1, fig5_table=t5,
+        stats=stats, rob=rob, held_runs=held_runs, pairs=pairs, ablation=ablation, ekf=ekf, ekf_pf=ekf_pf,
+        equal=equal, costs=costs, equal_means=equal_means, posterior=posterior, scenarios=scenarios, scen=scen)
+
+
+def today_given(main: Run) -> dict:
+    """IMMPFOR(N) of the main run for :func:`pfrepro.experiments.today.against_today` (not rerun there):
+    per-run position MSE and its model evaluations per step (:func:`pfrepro.cost.imm_evaluations`)."""
+    n = SCENARIO["N"]
+    e = errors(main.x_true, main.results["IMMPFOR"].x)
+    c = float(np.mean(imm_evaluations(main.results["IMMPFOR"], n, 3))) / main.sim.y.shape[1]
+    return {f"IMMPFOR({n})": (np.mean(e * e, axis=1), c)}
 
 
 # -- the synthesis chapter's manoeuvring-target benchmark ------------------------------------------

@@ -1,8 +1,10 @@
 """Figures and tables of Zhou, Sun, Chu, Cui (2017), IMMPF with optimal resampling
 (chapter ``book/60_immpf.md``).
 
-The experiments are :mod:`pfrepro.experiments.immpfor_zhou2017`; this module only draws their
-results (Table 1, Figs. 1-5) and bundles them for the command line (:func:`reproduce`).
+The experiments are :mod:`pfrepro.experiments.immpfor_zhou2017` (``run_all``); this module only draws
+their results: the paper's Table 1 and Figs. 1-5 for the command line (:func:`tables`, :func:`figures`)
+and the chapter's other tables and figures (readings, robustness, equal compute, model probabilities,
+the d sweep).
 """
 from __future__ import annotations
 
@@ -14,21 +16,23 @@ from ..models.tracking import IDX_POS, IDX_VEL
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
 
-__all__ = ["d_sweep_figure", "table1_frame", "fig1", "shade_turns", "rmse_plot", "fig2", "fig3", "fig4", "fig5", "reproduce",
-           "TABLES", "FIGURES", "N_STEPS", "PF_NAMES"]
+__all__ = ["d_sweep_figure", "table1_frame", "table1_shown", "fig1", "shade_turns", "rmse_plot", "fig2", "fig3", "fig4",
+           "fig5", "tables", "figures", "readings_table", "robustness_table", "equal_compute_table", "modes_table",
+           "fig_modes", "fig_dsweep", "sweep_frames", "TABLES", "FIGURES", "N_STEPS", "PF_NAMES"]
 
-#: what :func:`reproduce` makes
+#: what :func:`tables` and :func:`figures` make
 TABLES = ("Table 1",)
 FIGURES = ("Fig. 1", "Fig. 2", "Fig. 3", "Fig. 4", "Fig. 5")
-#: experiments :func:`reproduce` runs (for a progress bar)
-N_STEPS = 3
+#: experiments :func:`pfrepro.experiments.immpfor_zhou2017.run_all` announces with ``steps`` (for a progress
+#: bar) when the adaptive readings need no extra runs
+N_STEPS = 23
 #: the two particle filters the paper compares (builders of :func:`pfrepro.experiments.immpfor_zhou2017.run`)
 PF_NAMES = E.PF_BUILDERS
 #: the Kalman references and the second reading of eq (15) shown in Table 1
 EXTRA_ROWS = ("IMMPF (mean lik.)", "IMMPFOR (mean lik.)", "IMM-EKF", "IMM-UKF")
 
 
-def table1_frame(main, lik_pair=None, pub=None) -> pd.DataFrame:
+def table1_frame(main, lik_pair=None, pub=None, seed=None) -> pd.DataFrame:
     """Table 1: peak and mean position RMSE, paper beside ours with bootstrap standard errors.
 
     Parameters
@@ -39,6 +43,8 @@ def table1_frame(main, lik_pair=None, pub=None) -> pd.DataFrame:
         The mean-likelihood reading paired with ``main``'s first runs; its rows are added.
     pub : pandas.DataFrame, optional
         ``published.table("immpfor_zhou2017", "Table 1")`` (default: read it).
+    seed : int, optional
+        Seed of the bootstrap standard errors (default the module's ``SEEDS["checks"]``).
 
     Returns
     -------
@@ -52,14 +58,14 @@ def table1_frame(main, lik_pair=None, pub=None) -> pd.DataFrame:
         pub = published.table(E.PAPER, "Table 1")
     names1 = list(PF_NAMES)
     t1 = E.table1(main, names1)
-    se1, _ = E.bootstrap_table(main, names1)
+    se1, _ = E.bootstrap_table(main, names1, seed=seed)
     tab1 = pd.DataFrame({"paper peak": pub["peak"], "ours peak": t1["peak"], "se": se1["peak"],
                          "paper mean": pub["mean"], "ours mean": t1["mean"], "se ": se1["mean"]})
     for n in EXTRA_ROWS:
         src_ = lik_pair if "mean lik." in n else main
         if src_ is None or n not in src_.results:
             continue
-        t_ = E.table1(src_, [n]); s_, _ = E.bootstrap_table(src_, [n])
+        t_ = E.table1(src_, [n]); s_, _ = E.bootstrap_table(src_, [n], seed=seed)
         tab1.loc[n, ["ours peak", "se", "ours mean", "se "]] = [t_.loc[n, "peak"], s_.loc[n, "peak"],
                                                                 t_.loc[n, "mean"], s_.loc[n, "mean"]]
     return tab1
@@ -160,41 +166,99 @@ def d_sweep_figure(sweep: pd.DataFrame, ablation: pd.DataFrame | None = None):
     return fig
 
 
-def reproduce(runs: int | None = None, seed: int | None = None, executor=None, steps=None):
-    """Table 1 and Figs. 1-5 (paper scale: 100 runs; the mean-likelihood rows on the first 50).
+def tables(results) -> dict:
+    """The paper's tables from :func:`pfrepro.experiments.immpfor_zhou2017.run_all`'s results: Table 1
+    (:func:`table1_frame`, the mean-likelihood rows named with their run count)."""
+    tab1 = table1_frame(results.main, results.lik_pair, seed=results.seeds["checks"])
+    n_lik = results.counts["runs_lik"]
+    return {"Table 1": tab1.rename(index={n: f"{n}, {n_lik} runs" for n in EXTRA_ROWS[:2]})}
 
-    Calls the chapter's experiment function :func:`pfrepro.experiments.immpfor_zhou2017.run`
-    with the chapter's builders. ``runs`` replaces the run count (the mean-likelihood reading
-    runs on at most ``runs``), ``seed`` the main seed. Returns a
-    :class:`pfrepro.papers.Reproduction` whose claims are Table 1's published cells.
-    """
-    from ..papers import Reproduction, cell_claims
 
-    step = steps or (lambda label: None)
-    S = E.SCENARIO
-    n_runs = S["runs"] if runs is None else int(runs)
-    n_lik = min(S["runs_lik"], n_runs)
-    sd = E.SEEDS["main"] if seed is None else int(seed)
-    step(f"Table 1, Figs. 1-4 ({n_runs} runs)")
-    main = E.run(E.MAIN_BUILDERS, runs=n_runs, seed=sd, executor=executor)
-    step(f"Table 1, mean model likelihood ({n_lik} runs)")
-    lik = E.run({"IMMPF (mean lik.)": ("immpf", {"model_likelihood": "mean"}),
-                 "IMMPFOR (mean lik.)": ("immpfor", {"model_likelihood": "mean"})}, runs=n_lik, seed=sd,
-                executor=executor)
-    lik_pair = E.Run(lik.sim, {**lik.results, **main.head(n_lik).results}, lik.seed)
-    step(f"Fig. 5, N = {S['N_fig5']} ({n_runs} runs)")
-    f5 = E.run(E.fig5_builders(), runs=n_runs, seed=sd, executor=executor)
-    tab1 = table1_frame(main, lik_pair)
-    cells = []
-    for n in PF_NAMES:
-        for q, se in (("peak", "se"), ("mean", "se ")):
-            cells.append({"filter": n, "quantity": q, "published": float(tab1.loc[n, f"paper {q}"]),
-                          "ours": float(tab1.loc[n, f"ours {q}"]), "se": float(tab1.loc[n, se])})
-    claims = cell_claims(E.PAPER, pd.DataFrame(cells), lambda r: f"cli-table1-{r['quantity']}-{r['filter'].lower()}",
-                         lambda r: f"{r['filter']} {r['quantity']} position RMSE (Table 1)", "Table 1")
-    tab1 = tab1.rename(index={n: f"{n}, {n_lik} runs" for n in EXTRA_ROWS[:2]})
-    figures = {"Fig. 1": fig1(main), "Fig. 2": fig2(main), "Fig. 3": fig3(main), "Fig. 4": fig4(main),
-               "Fig. 5": fig5(f5)}
-    return Reproduction(E.PAPER, tables={"Table 1": tab1}, figures=figures, claims=claims,
-                        settings={"runs": n_runs, "runs (mean likelihood)": n_lik, "seed": sd,
-                                  "N": S["N"], "N (Fig. 5)": S["N_fig5"]})
+def figures(results) -> dict:
+    """The paper's Figs. 1-5 from :func:`pfrepro.experiments.immpfor_zhou2017.run_all`'s results."""
+    return {"Fig. 1": fig1(results.main), "Fig. 2": fig2(results.main), "Fig. 3": fig3(results.main),
+            "Fig. 4": fig4(results.main), "Fig. 5": fig5(results.fig5)}
+
+
+def readings_table(results) -> pd.DataFrame:
+    """Every reading of the orderings: IMMPF - IMMPFOR per-run RMS position error with its paired se and
+    ordering, the median rule (:func:`pfrepro.experiments.immpfor_zhou2017.robustness`) and lost tracks."""
+    from ..claims import ordering_holds
+    from ..verdicts.immpfor_zhou2017 import WORD
+
+    ST, ROB = results.stats, results.rob
+    out = pd.DataFrame({t: {"runs": ROB[t]["runs"], "RMS diff [m]": ST[t]["rms"][0], "se": ST[t]["rms"][1],
+                            "ordering": WORD[ordering_holds(*ST[t]["rms"])],
+                            "median [m]": ROB[t]["median"], "95 % interval": f"[{ROB[t]['lo']:.1f}, {ROB[t]['hi']:.1f}]",
+                            "IMMPFOR better in": ROB[t]["b_better"],
+                            "lost IMMPF": ROB[t]["lost_a"], "lost IMMPFOR": ROB[t]["lost_b"]} for t in ST}).T
+    out.index.name = "reading"
+    return out
+
+
+def robustness_table(results) -> pd.DataFrame:
+    """The scenarios (main and :data:`~pfrepro.experiments.immpfor_zhou2017.ALTERNATIVES`): Table 1 means,
+    the paired gain IMMPF - IMMPFOR, the median rule and its outcome at the main d and at d = D_FAVOURABLE."""
+    from ..verdicts.immpfor_zhou2017 import WORD
+
+    rows = []
+    for label, r in results.scenarios.items():
+        rb, rf = r["rb"], r["fav"]
+        rows.append({"scenario": label, "IMMPF mean": r["IMMPF mean"], "IMMPFOR mean": r["IMMPFOR mean"],
+                     "gain (RMS)": r["gain"][0], "se": r["gain"][1], "median gain": rb["median"],
+                     "95 % interval": f"[{rb['lo']:.1f}, {rb['hi']:.1f}]",
+                     "IMMPFOR better in": f"{rb['b_better']} of {rb['runs']}", "lost IMMPF": rb["lost_a"],
+                     "lost IMMPFOR": rb["lost_b"], "robust (d = 1)": WORD[rb["holds"]],
+                     f"robust (d = {E.D_FAVOURABLE:g})": WORD[rf["holds"]]})
+    return pd.DataFrame(rows).set_index("scenario")
+
+
+def equal_compute_table(results) -> pd.DataFrame:
+    """Model evaluations per run and Table 1 mean of the IMMPF, IMMPFOR and the IMMPF with IMMPFOR's cost."""
+    names = ("IMMPF", "IMMPFOR", "IMMPF eq")
+    return pd.DataFrame({"evaluations per run": [results.costs[n] for n in names],
+                         "mean RMSE [m]": [results.equal_means[n] for n in names]},
+                        index=[f"IMMPF, N = {E.SCENARIO['N']}", f"IMMPFOR, N = {E.SCENARIO['N']}",
+                               f"IMMPF, N = {results.N_eq}"])
+
+
+#: the filters whose model probabilities the chapter shows (the figure: the first three)
+MODE_FILTERS = ("IMMPF", "IMMPFOR", "IMM-EKF", "IMM-UKF")
+
+
+def modes_table(results) -> pd.DataFrame:
+    """Mean model probabilities against the true manoeuvres (:func:`pfrepro.experiments.immpfor_zhou2017.mode_summary`)."""
+    return pd.DataFrame({n: E.mode_summary(results.main, n) for n in MODE_FILTERS}).T
+
+
+def fig_modes(results):
+    """Mean model probabilities over the runs against time (CV, CT, CA in the first three
+    :data:`~pfrepro.plotting.SERIES_COLORS`), turns shaded; the paper has no such plot."""
+    import matplotlib.pyplot as plt
+
+    kk = np.arange(1, E.SCENARIO["duration"] + 1)
+    fig, axs = plt.subplots(1, 3, figsize=(10, 3), sharey=True)
+    for ax, n in zip(axs, MODE_FILTERS[:3]):
+        shade_turns(ax)
+        mp = results.main.results[n].diagnostics["mode_probs"].mean(axis=0)
+        for j, lab in enumerate(("CV", "CT", "CA")):   # model series: the book's series palette
+            ax.plot(kk, mp[:, j], "-", color=SERIES_COLORS[j], lw=1, label=lab)
+        ax.set_title(n, fontsize=9); ax.set_xlabel("time [s]")
+    axs[0].set_ylabel("mean model probability"); axs[0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def sweep_frames(results):
+    """The d sweep (IMMPF - IMMPFOR(d), index d) and the own-parent ablation, columns ``diff``, ``se``, ``runs``."""
+    ST, ROB = results.stats, results.rob
+    sweep = pd.DataFrame({d: {"diff": ST[f"d={d:g}"]["rms"][0], "se": ST[f"d={d:g}"]["rms"][1],
+                              "runs": ROB[f"d={d:g}"]["runs"]} for d in E.D_GRID}).T
+    abl = pd.DataFrame({d: dict(zip(("diff", "se"), v), runs=results.counts["runs_ablation"])
+                        for d, v in results.ablation.items()}).T
+    return sweep, abl
+
+
+def fig_dsweep(results):
+    """:func:`d_sweep_figure` of :func:`sweep_frames`."""
+    return d_sweep_figure(*sweep_frames(results))
