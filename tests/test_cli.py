@@ -27,40 +27,27 @@ def test_registry_names_are_unique_and_resolve():
         for a in p.aliases:
             assert papers.get_paper(a.upper()) is p          # case-insensitive
         assert p.tables and p.figures
-        if p.verdicts_module is not None:       # moved to run_all / record_claims: tables(results), figures(results)
-            assert callable(p.figures_module.tables) and callable(p.figures_module.figures)
-            assert callable(p.experiments_module.run_all) and callable(p.verdicts_module.record_claims)
-        else:
-            assert callable(p.figures_module.reproduce)
+        # every paper: run_all -> record_claims, and tables(results) / figures(results) for the CLI
+        assert callable(p.figures_module.tables) and callable(p.figures_module.figures)
+        assert callable(p.experiments_module.run_all) and callable(p.verdicts_module.record_claims)
+        assert not hasattr(p.figures_module, "reproduce")     # no second path to the claims
         assert p.citation and p.citation != p.key             # from pfrepro.published.PAPERS
     with pytest.raises(KeyError, match="choose from"):
         papers.get_paper("nosuchpaper")
 
 
-def test_override_seeds_restores_the_table():
-    seeds = {"a": 1, "b": 2}
-    with papers.override_seeds(seeds, 100):
-        assert seeds == {"a": 100, "b": 101}
-    assert seeds == {"a": 1, "b": 2}
-    with pytest.raises(RuntimeError):
-        with papers.override_seeds(seeds, 5):
-            raise RuntimeError
-    assert seeds == {"a": 1, "b": 2}
-    with papers.override_seeds(seeds, None):
-        assert seeds == {"a": 1, "b": 2}
-
-
-def test_call_with_executor_passes_it_only_where_accepted():
-    def plain(x):
-        return ("plain", x)
-
-    def takes(x, executor=None):
-        return ("takes", x, executor)
-
-    ex = object()
-    assert papers.call_with_executor(plain, 1, executor=ex) == ("plain", 1)
-    assert papers.call_with_executor(takes, 1, executor=ex) == ("takes", 1, ex)
-    assert papers.call_with_executor(takes, 1) == ("takes", 1, None)
+def test_resolve_seeds_never_touches_the_module_table():
+    book = {"a": 1, "b": 2, "c": 3}
+    assert papers.resolve_seeds(book) == book and papers.resolve_seeds(book) is not book
+    assert papers.resolve_seeds(book, 10) == {"a": 10, "b": 11, "c": 12}       # --seed 10: every seed moves
+    assert papers.resolve_seeds(book, {"b": 7}) == {"a": 1, "b": 7, "c": 3}
+    assert book == {"a": 1, "b": 2, "c": 3}
+    with pytest.raises(KeyError, match="unknown seed"):
+        papers.resolve_seeds(book, {"z": 1})
+    with pytest.raises(ValueError, match=">= 0"):
+        papers.resolve_seeds(book, -1)
+    with pytest.raises(TypeError):
+        papers.resolve_seeds(book, "7")
 
 
 # -- list ------------------------------------------------------------------------------------

@@ -6,10 +6,11 @@
     pfrepro run <paper> [--runs R] [--seed S] [--jobs J | --scheduler ADDRESS] [--out DIR]
     pfrepro scorecard [--format table|csv|json] [--dir DIR]
 
-``run`` calls the same experiment functions as the paper's chapter (through
-``pfrepro.figures.<paper>.reproduce``, see :mod:`pfrepro.papers`), writes every table as
-CSV and every figure as PNG into ``--out`` (default ``pfrepro-<paper>``), saves the claims
-of the table cells to ``<out>/claims/<paper>.json`` and prints the verdict summary.
+``run`` makes the chapter's own call, :meth:`pfrepro.papers.Paper.run` (every experiment,
+reading and sweep of the paper, then every claim decided by ``pfrepro.verdicts.<paper>``),
+writes every table as CSV and every figure as PNG into ``--out`` (default
+``pfrepro-<paper>``), saves the chapter's claims to ``<out>/claims/<paper>.json`` and prints
+the verdict summary.
 ``--jobs J`` spreads the runs over J local processes, ``--scheduler ADDRESS`` over the
 workers of a running dask.distributed scheduler (several machines; every worker needs the
 same environment, e.g. ``pip install -e .`` of the same commit): the files are the same
@@ -255,10 +256,7 @@ def cmd_run(args) -> int:
     for path in written:
         print(f"  {path.relative_to(out)}")
     df = rep.claims.to_frame()
-    if paper.verdicts_module is not None:
-        print(f"\nverdicts of the {len(df)} claims (the chapter's claims, decided by the same code):")
-    else:
-        print(f"\nverdicts of the {len(df)} table-cell claims (the chapter has the ordering and cost claims too):")
+    print(f"\nverdicts of the {len(df)} claims (the chapter's claims, decided by the same code):")
     for v, n in rep.verdict_counts().items():
         print(f"  {n:3d}  {v}")
     if len(df):

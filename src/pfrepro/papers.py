@@ -18,10 +18,7 @@ claims for the same runs and seeds.
 """
 from __future__ import annotations
 
-import contextlib
 import importlib
-import inspect
-import math
 import numbers
 from dataclasses import dataclass, field
 
@@ -29,8 +26,7 @@ import pandas as pd
 
 from .claims import ClaimsRegistry
 
-__all__ = ["Paper", "PAPERS", "Reproduction", "get_paper", "paper_keys", "call_with_executor", "cell_claims", "override_seeds",
-           "resolve_seeds"]
+__all__ = ["Paper", "PAPERS", "Reproduction", "get_paper", "paper_keys", "resolve_seeds"]
 
 
 @dataclass(frozen=True)
@@ -100,7 +96,7 @@ class Paper:
         """
         verdicts = self.verdicts_module
         if verdicts is None:
-            raise NotImplementedError(f"{self.key} has no pfrepro.verdicts module yet")
+            raise NotImplementedError(f"{self.key} has no pfrepro.verdicts module: its claims are decided nowhere")
         E = self.experiments_module
         results = E.run_all(runs=runs, seeds=seeds, executor=executor, steps=steps)
         reg = ClaimsRegistry(self.key, choices=E.CHOICES)
@@ -109,8 +105,6 @@ class Paper:
 
     def reproduce(self, runs=None, seed=None, executor=None, steps=None) -> "Reproduction":
         """Run the paper's experiments and return its tables, figures and claims (:meth:`run`)."""
-        if self.verdicts_module is None:   # a paper not yet moved to run_all / record_claims
-            return self.figures_module.reproduce(runs=runs, seed=seed, executor=executor, steps=steps)
         results, reg = self.run(runs=runs, seeds=seed, executor=executor, steps=steps)
         F = self.figures_module
         return Reproduction(self.key, tables=F.tables(results), figures=F.figures(results), claims=reg,
@@ -163,35 +157,6 @@ class Reproduction:
         return df["verdict"].value_counts() if len(df) else pd.Series(dtype=int)
 
 
-def call_with_executor(fn, *args, executor=None, **kwargs):
-    """``fn(*args, **kwargs)``, passing ``executor=`` only if ``fn`` accepts it and it is not None."""
-    if executor is not None:
-        try:
-            params = inspect.signature(fn).parameters
-        except (TypeError, ValueError):  # builtins: no signature
-            params = {}
-        if "executor" in params or any(p.kind is p.VAR_KEYWORD for p in params.values()):
-            kwargs["executor"] = executor
-    return fn(*args, **kwargs)
-
-
-def cell_claims(paper: str, table: pd.DataFrame, claim_id, text, source: str, *, published="published",
-                ours="ours", se="se", registry: ClaimsRegistry | None = None) -> ClaimsRegistry:
-    """A claim per table cell that has a published value: published vs ours within 2 se or 10 %.
-
-    ``claim_id`` and ``text`` are functions of the row. Rows without a finite published
-    value are skipped. The verdict is :func:`pfrepro.claims.verdict`'s, as in the chapter.
-    """
-    reg = registry if registry is not None else ClaimsRegistry(paper)
-    for _, row in table.reset_index().iterrows():
-        p = row.get(published)
-        if not isinstance(p, numbers.Real) or isinstance(p, bool) or not math.isfinite(p):
-            continue
-        reg.add(claim_id(row), text(row), published=float(p), reproduced=float(row[ours]),
-                se=float(row[se]), source=source)
-    return reg
-
-
 def resolve_seeds(defaults: dict, seeds=None) -> dict:
     """The seeds an experiment module runs with: a new dict, never the module's own.
 
@@ -213,28 +178,3 @@ def resolve_seeds(defaults: dict, seeds=None) -> dict:
         raise KeyError(f"unknown seed name(s) {unknown}; the seeds are {list(out)}")
     out.update({k: int(v) for k, v in seeds.items()})
     return out
-
-
-@contextlib.contextmanager
-def override_seeds(seeds: dict, base: int | None):
-    """Temporarily set the entries of an experiment module's ``SEEDS`` dict to ``base``, ``base + 1`` and so on.
-
-    The entries are set in the dict's order; ``base=None`` leaves them unchanged. For experiment functions that
-    read their seed from the module's table of fixed seeds.
-
-    Yields
-    ------
-    dict
-        ``seeds``, overridden until the ``with`` block ends (then restored).
-    """
-    if base is None:
-        yield seeds
-        return
-    saved = dict(seeds)
-    try:
-        for i, k in enumerate(saved):
-            seeds[k] = int(base) + i
-        yield seeds
-    finally:
-        seeds.clear()
-        seeds.update(saved)

@@ -3,8 +3,9 @@
 Each figure function takes the results of the paper's experiment functions
 (:mod:`pfrepro.experiments`) and returns a :class:`matplotlib.figure.Figure`; the chapter
 shows it and ``pfrepro run <paper>`` saves it as PNG, so the drawing code exists once.
-Every module also has ``reproduce(...)``: the paper's tables and figures in one call,
-which is what the command line runs (see :mod:`pfrepro.papers`).
+Every module also has ``tables(results)`` and ``figures(results)``: the paper's tables and
+figures from the results of its ``run_all``, which is what the command line saves (see
+:mod:`pfrepro.papers`).
 """
 from __future__ import annotations
 
