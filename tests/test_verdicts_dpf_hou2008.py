@@ -275,7 +275,8 @@ def _reg(**verdicts):
     base = {"s51_dpf_beats_dekf_x": "reproduced", "fig5_dpf_robust_to_guess": "reproduced",
             "dpf_beats_liu_west_theta": "inconclusive"}
     base.update(verdicts)
-    return SimpleNamespace(claims=[SimpleNamespace(claim_id=k, verdict=v) for k, v in base.items()])
+    claims = [SimpleNamespace(claim_id=k, verdict=v) for k, v in base.items()]
+    return SimpleNamespace(claims=claims, verdicts=lambda: dict(base))
 
 
 @pytest.mark.parametrize("acc, guess, start", [

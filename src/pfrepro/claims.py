@@ -513,6 +513,10 @@ class ClaimsRegistry:
         self.claims.append(c)
         return c
 
+    def verdicts(self) -> dict:
+        """``{claim_id: verdict}`` of every claim, in the order recorded (verdicts recomputed, never stored)."""
+        return {c.claim_id: c.verdict for c in self.claims}
+
     def to_frame(self) -> pd.DataFrame:
         """Every recorded claim as a row (:meth:`Claim.as_row`), with its verdict."""
         return pd.DataFrame([c.as_row() for c in self.claims])

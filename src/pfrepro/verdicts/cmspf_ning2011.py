@@ -590,9 +590,6 @@ def which_reading(reg):
     return cells, table
 
 
-def _verdicts(reg) -> dict:
-    return {c.claim_id: c.verdict for c in reg.claims}
-
 
 def _cons_bias(cons: pd.DataFrame) -> dict:
     """Does CMS-PF's distance to the exact posterior mean shrink with N, and does it level off?
@@ -639,7 +636,7 @@ def takeaway(reg, R) -> str:
     str
         One or two sentences.
     """
-    v = _verdicts(reg)
+    v = reg.verdicts()
     better, equal = v.get("t1_cms_better_than_pf"), v.get("abstract_equal_computation")
     bias = _cons_bias(R.cons)
     if better == "not reproduced":
@@ -894,7 +891,7 @@ def _prose_verdicts(reg, R) -> dict:
         out[f"cms_n_{v.replace(' ', '_')}"] = verdicts.count(v)
     out["cms_n_claims"] = len(verdicts)
     out["cms_verdict_sentence"] = Md(verdict_sentence(verdicts))
-    vs = _verdicts(reg)
+    vs = reg.verdicts()
     for v in ["reproduced", "qualitatively reproduced", "not reproduced", "inconclusive"]:
         ids = [k for k, vv in vs.items() if vv == v and not k.startswith(("t1_pf_", "t1_cms_mean", "t2_rmse_", "t3_mean_"))]
         out[f"cms_ids_{v.replace(' ', '_')}"] = Md(", ".join(f"`{i}`" for i in ids) if ids else "none")

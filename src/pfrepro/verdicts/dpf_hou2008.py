@@ -468,9 +468,6 @@ def record_claims(reg: ClaimsRegistry, results) -> ClaimsRegistry:
 
 
 # --------------------------------------------------------------------------- what the chapter says
-def _verdicts(reg) -> dict:
-    return {c.claim_id: c.verdict for c in reg.claims}
-
 
 def takeaway(reg: ClaimsRegistry, results) -> str:
     """The one thing a practitioner should take away, generated from the verdicts and numbers.
@@ -491,7 +488,7 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
     str
         One or two sentences.
     """
-    v = _verdicts(reg)
+    v = reg.verdicts()
     acc, guess, lw = v["s51_dpf_beats_dekf_x"], v["fig5_dpf_robust_to_guess"], v["dpf_beats_liu_west_theta"]
     if acc == "reproduced" and guess == "reproduced":
         first = ("On the paper's growth model the dual PF is the safer of the two dual filters: it tracks the state "

@@ -209,9 +209,6 @@ def record_claims(reg, results):
     return reg
 
 
-def _verdicts(reg) -> dict:
-    return {c.claim_id: c.verdict for c in reg.claims}
-
 
 _HOLDS = ("reproduced", "qualitatively reproduced")
 
@@ -232,7 +229,7 @@ def takeaway(reg, results) -> str:
         One or two sentences: whether the PF's advantage on the strongly nonlinear model (and
         its size against the exact posterior) holds, and what the weakly nonlinear model says.
     """
-    v = _verdicts(reg)
+    v = reg.verdicts()
     r1, r2 = (E.ratio_of_means(results.res[w].rmse("EKF"), results.res[w].rmse("PF"))[0] for w in (1, 2))
     cost = float(results.cnt[1].loc["PF", "count ratio"])
     gap_pf = E.gap_to(results.res[1], "PF")["relative"]
@@ -407,7 +404,7 @@ def _verdict_prose(reg, R) -> dict:
     out["li_ratio_m1_max"] = max(v[0] for v in v1.values())
     d1, se1 = out["li_ratio_m1"] - RATIO_STRONG_MIN, out["li_ratio_m1_se"]
     out["li_ratio_m1_z"] = d1 / se1 if se1 > 0 else math.copysign(math.inf, d1)   # standard errors from 7
-    vt = _verdicts(reg)
+    vt = reg.verdicts()
     out["li_n_inconclusive"] = sum(v == "inconclusive" for v in vt.values())
     for name in ("EKF", "PF"):
         out[f"li_m2_rel_{name}"] = 1 - _pub(name, 2) / float(res[2].rmse(name).mean())

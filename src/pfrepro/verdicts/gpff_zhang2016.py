@@ -530,9 +530,6 @@ def record_claims(reg, results):
 
 
 # ============================================================================ findings
-def _verdicts(reg) -> dict:
-    return {c.claim_id: c.verdict for c in reg.claims}
-
 
 def takeaway(reg, results) -> str:
     """The one thing a practitioner should take away, generated from the verdicts.
@@ -550,7 +547,7 @@ def takeaway(reg, results) -> str:
         Two sentences: the linear case (sec 3.2 and Fig. 1(b)), then accuracy on the nonlinear
         benchmarks (sec 5.2, sec 5.3) and cost against a PF (Tables 1-2).
     """
-    v = _verdicts(reg)
+    v = reg.verdicts()
     rep = "reproduced"
     mix = next(c for c in reg.claims if c.claim_id == "cwpa_mixture_gpff_better")
     if v["kb_equivalence"] != rep:
@@ -690,7 +687,7 @@ def _prose_ung(reg, results) -> dict:
     m_ = {n: np.nanmean(mc_u.mse(n)) for n in mc_u.results}
     ms = {n: mc_u.mse(n) for n in mc_u.results}
     tpr, bts = mc_u.seconds_per_run, mc_u.batch_seconds
-    v = _verdicts(reg)
+    v = reg.verdicts()
     rows = {w: [n for n in E.UNG_LABELS if v[f"t1_mse_{n}"] == w] for w in ("reproduced", "not reproduced", "inconclusive")}
     gpff_grow, pf_grow = tpr["GPFF(1000)"] / tpr["GPFF(100)"], tpr["PF(1000)"] / tpr["PF(100)"]
     gpff_grow_b, pf_grow_b = bts["GPFF(1000)"] / bts["GPFF(100)"], bts["PF(1000)"] / bts["PF(100)"]

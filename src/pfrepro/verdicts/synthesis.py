@@ -777,7 +777,7 @@ def reference_sentence(brt: dict) -> Md:
 
 def _claims_prose(reg: ClaimsRegistry) -> dict:
     """The count of the claims' verdicts, as numbers and as a sentence."""
-    cl = {c.claim_id: c.verdict for c in reg.claims}
+    cl = reg.verdicts()
     n = {v: sum(x == v for x in cl.values()) for v in ("reproduced", "not reproduced", "inconclusive", "not checkable")}
     out = {f"syn_n_{v.replace(' ', '_')}": k for v, k in n.items()}
     out["syn_n_claims"] = len(cl)
