@@ -45,11 +45,14 @@ class FlowStub:
         self.noise = None if noise is None else [np.asarray(e, float) for e in noise]
         self.m0 = np.zeros(self.dim_x) if m0 is None else np.asarray(m0, float)
         self.P0 = np.eye(self.dim_x) if P0 is None else np.atleast_2d(np.asarray(P0, float))
+        self.steps = []                                   # the k of every f / jacobian_f / transition call
 
     def f(self, x, k):
+        self.steps.append(k)
         return self._f(x)
 
     def jacobian_f(self, x, k):
+        self.steps.append(k)
         return self._jf(x)
 
     def h(self, x):
@@ -62,7 +65,7 @@ class FlowStub:
         return y - hx
 
     def sample_transition(self, x, k, rng):
-        return self.f(x, k) + self.noise[k - 1]
+        return self._f(x) + self.noise[k - 1]
 
     def log_likelihood(self, y, x):
         d = y[:, None, :] - self.h(x)
@@ -242,6 +245,12 @@ EDH1 = dict(eta1=[7 / 6, 3 / 2], log_det=[log(2 / 3), log(2 / 3)])
 LEDH1 = dict(eta1=[7 / 6, 331 / 242], log_det=[log(2 / 3), log(17 / 33)])
 
 
+def _edh1_weights():
+    """The normalised step-1 EDH weights from the hand numbers."""
+    w = np.exp([_log_w(EDH1["eta1"][i], [1.0, 1.5][i], [0.5, 2.0][i], log(2 / 3)) for i in range(2)])
+    return w / w.sum()
+
+
 @pytest.mark.parametrize("flow, hand", [("edh", EDH1), ("ledh", LEDH1)])
 def test_step_one_weights_estimate_evidence_of_the_invertible_flow(flow, hand):
     """w^i ∝ (1/N) p(y | eta_1^i) p(eta_1^i | x^i) abs(det) / p(eta_0^i | x^i) with the hand eta_1,
@@ -265,8 +274,17 @@ def test_ekf_alongside_gives_step_two_its_covariance_and_linearisation_point():
     P_1 = (1/3)^2 2 + (2/3)^2 1 = 2/3. Step 2 (EDH, one Euler step) at the particle estimate
     xh = x_hat_1: F = f'(xh) = xh, P_pred = xh^2 (2/3) + 1, eta_bar = m_pred = f(xh) = xh^2/2,
     H = 2 m_pred = xh^2; its log det = log(1 + A) with A = -1/2 P_pred H^2 / (H^2 P_pred + 1).
-    Checked against the update without K R K^T (P_1 = 2/9) and against P not updated (P_1 = 2)."""
-    res = _run_step1("edh", T=2, ys=(1.0, 0.5), noise=STEP1["noise"] * 2)
+    Each step's diagnostics go to its own column (step 1's log det is log(2/3), its ESS the hand
+    weights'), and the model is called with the step index k (f, jacobian_f: 1, 1, 1, 2, 2, 2).
+    Checked against the update without K R K^T (P_1 = 2/9), against P not updated (P_1 = 2)
+    and against the diagnostics written to column k - 2."""
+    model = scalar_stub(Q=[[1.0]], R=[[1.0]], noise=STEP1["noise"] * 2, m0=[1.0], P0=[[1.0]])
+    pf = with_prior(ParticleFlowParticleFilter(model, 2, n_steps=1), STEP1["x0"])
+    res = pf.filter(fl([1.0, 0.5]).reshape(1, 2, 1), rng=np.random.default_rng(0))
+    assert model.steps == [1, 1, 1, 2, 2, 2]            # jacobian_f(x_hat), f(x_hat), f(x) per step
+    w = _edh1_weights()
+    np.testing.assert_allclose(res.diagnostics["log_det"][0, 0], log(2 / 3), rtol=1e-13)
+    np.testing.assert_allclose(res.diagnostics["ess"][0, 0], 1 / (w @ w), rtol=1e-13)
     xh = res.x[0, 0, 0]
     np.testing.assert_allclose(xh, 1.3, atol=0.2)       # the step-1 estimate (pinned above)
     P_pred = xh ** 2 * 2 / 3 + 1
@@ -322,3 +340,69 @@ def test_weights_carried_after_resampling(ess_threshold, resampled):
         ev = log(np.exp(lw1).mean()) + log(v.sum())
         np.testing.assert_allclose(res.diagnostics["log_evidence"][r], ev, rtol=1e-12)
         np.testing.assert_allclose(res.diagnostics["ess"][r, 0], 1 / (w1 @ w1), rtol=1e-12)
+
+
+# ------------------------------------------------------------------------------ 5. zero weights, divergence
+def test_zero_weights_resample_to_copies_and_survive_floating_point_errors():
+    """Three particles x_0 = (1, 2, 2), noise (1/2, 40, 1e200): eta_0 = (1, 42, ~1e200). EDH as in
+    the step-1 case (A = -1/3, b = 1/2): eta_1 = (7/6, 57/2, ~6.7e199). Particle 1's log weight is
+    about -3e5 (its weight underflows to exactly 0), particle 2's is NaN (h and the transition
+    density overflow, inf - inf), so w = (1, 0, 0): x_hat_1 = 7/6 and systematic resampling makes
+    three copies of 7/6. Step 2 (zero noise, y = 1/2): every particle starts at
+    f(7/6) = 49/72 = eta_bar, P_pred = (49/36)(2/3) + 1 = 103/54, H = 49/36,
+    y - e = 1/2 + 2401/5184, A = -247303/634574, b = 8062990978945/28993259626272, so all three
+    move to 6701614749697/9664419875424 with equal weights (ESS 3).
+    The filter ignores the over/under/divide/invalid floating-point events it causes, also when
+    the caller raises on them. Checked against the particles not resampled (ESS < 3, another
+    estimate) and against errstate(under=None) (a FloatingPointError)."""
+    model = scalar_stub(Q=[[1.0]], R=[[1.0]], noise=[[[0.5], [40.0], [1e200]], np.zeros((3, 1))],
+                        m0=[1.0], P0=[[1.0]])
+    pf = with_prior(ParticleFlowParticleFilter(model, 3, n_steps=1), [[[1.0], [2.0], [2.0]]])
+    with np.errstate(all="raise"):
+        res = pf.filter(fl([1.0, 0.5]).reshape(1, 2, 1), rng=np.random.default_rng(2))
+    np.testing.assert_allclose(res.x[0, :, 0], [7 / 6, 6701614749697 / 9664419875424], rtol=1e-13)
+    np.testing.assert_allclose(res.diagnostics["ess"][0], [1.0, 3.0], rtol=1e-13)
+    assert not res.diagnostics["collapsed"].any()
+
+
+def test_collapse_and_divergence_are_flagged_per_run_and_step():
+    """Two runs of the forgetful stub (f = 1): run 1's step-1 draws are all +inf, so every log
+    weight is NaN (collapse: uniform weights, ESS = N) and its estimate is inf (diverged); its
+    step 2 is normal again (the transition forgets). Run 0 is normal throughout. Expected:
+    collapsed = [[F, F], [T, F]], diverged = [F, T], ESS[1, 0] = 3, one WeightCollapseWarning
+    naming PFPF(EDH). Checked against collapsed written to column k - 2 and against the
+    divergence flag reduced over all runs (axis=None)."""
+    noise1 = np.array([[[-1.0], [0.0], [1.5]], [[np.inf], [np.inf], [np.inf]]])
+    noise2 = np.array([[[0.5], [-0.5], [2.0]], [[0.5], [-0.5], [2.0]]])
+    pf = with_prior(ParticleFlowParticleFilter(_forgetful([noise1, noise2]), 3, n_steps=1, ess_threshold=0.5),
+                    np.ones((2, 3, 1)))
+    with pytest.warns(RuntimeWarning, match=r"^PFPF\(EDH\): weight collapse in 1 of 4 run-steps"):
+        res = pf.filter(np.broadcast_to(fl(YS)[None, :, None], (2, 2, 1)).copy(), rng=np.random.default_rng(1))
+    d = res.diagnostics
+    np.testing.assert_array_equal(d["collapsed"], [[False, False], [True, False]])
+    np.testing.assert_array_equal(d["diverged"], [False, True])
+    assert d["n_collapsed"] == 1 and d["ess"][1, 0] == pytest.approx(3.0, rel=1e-14)
+    assert np.isfinite(res.x[1, 1]).all() and np.isfinite(res.x[0]).all()
+
+
+# ------------------------------------------------------------------------------ 6. settings
+def test_settings_default_grid_initial_distribution_names_and_messages():
+    """Defaults: 29 exponential steps with ratio 1.2, first step (1.2 - 1)/(1.2^29 - 1);
+    the m0/P0 overrides start the EKF (model m0 = 0, P0 = 5 overridden by 1, 1 gives the
+    step-1 numbers above); names PFPF(EDH)/PFPF(LEDH) and the repr; messages name the argument.
+    Checked against ratio 2.2 by default, against m0 (P0) not passed to the base class, and
+    against 'XXn_stepsXX' in the message."""
+    model = scalar_stub(Q=[[1.0]], R=[[1.0]], noise=STEP1["noise"], m0=[0.0], P0=[[5.0]])
+    f = ParticleFlowParticleFilter(model, 2)
+    assert len(f.grid) == 30 and f.grid[1] == pytest.approx(0.2 / (1.2 ** 29 - 1), rel=1e-12)
+    assert f.name == "PFPF(EDH)" and ParticleFlowParticleFilter(model, 2, flow="ledh").name == "PFPF(LEDH)"
+    assert repr(f) == "ParticleFlowParticleFilter(N=2, flow='edh', n_steps=29, resampling='systematic')"
+    pf = with_prior(ParticleFlowParticleFilter(model, 2, n_steps=1, m0=[1.0], P0=[[1.0]]), STEP1["x0"])
+    res = pf.filter(fl([1.0]).reshape(1, 1, 1), rng=np.random.default_rng(0))
+    np.testing.assert_allclose(res.diagnostics["log_det"][0, 0], log(2 / 3), rtol=1e-13)
+    np.testing.assert_allclose(res.x[0, 0, 0], _edh1_weights() @ EDH1["eta1"], rtol=1e-13)
+    for kw, msg in ((dict(n_particles=0), r"^n_particles must be >= 1"), (dict(n_steps=0), r"^n_steps must be >= 1"),
+                    (dict(ess_threshold=1.5), r"^ess_threshold must lie in \[0, 1\]")):
+        args = {"n_particles": 2, **kw}
+        with pytest.raises(ValueError, match=msg):
+            ParticleFlowParticleFilter(model, **args)
