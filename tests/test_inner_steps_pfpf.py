@@ -255,8 +255,9 @@ def _edh1_weights():
 def test_step_one_weights_estimate_evidence_of_the_invertible_flow(flow, hand):
     """w^i ∝ (1/N) p(y | eta_1^i) p(eta_1^i | x^i) abs(det) / p(eta_0^i | x^i) with the hand eta_1,
     log det above. Estimate sum_i w^i eta_1^i; log evidence log sum_i (1/N) exp(log w^i); ESS
-    1/sum w^2; log_det diagnostic sum_i w^i log det^i. Checked against the weight without the
-    transition ratio, against - log det, and against the ratio inverted (eta_0 over eta_1)."""
+    1/sum w^2; log_det diagnostic sum_i w^i log det^i; the resampled/collapsed flags are booleans.
+    Checked against the weight without the transition ratio, against - log det, against the
+    ratio inverted (eta_0 over eta_1) and against the flags allocated as float zeros."""
     res = _run_step1(flow)
     eta1, mu, eta0 = np.array(hand["eta1"]), np.array([0.5, 2.0]), np.array([1.0, 1.5])
     lw = np.array([_log_w(eta1[i], eta0[i], mu[i], hand["log_det"][i]) for i in range(2)])
@@ -267,6 +268,7 @@ def test_step_one_weights_estimate_evidence_of_the_invertible_flow(flow, hand):
     np.testing.assert_allclose(res.diagnostics["log_det"][0, 0], w @ hand["log_det"], rtol=1e-13)
     assert res.diagnostics["resampled"].all() and not res.diagnostics["collapsed"].any()
     assert not res.diagnostics["diverged"].any() and res.diagnostics["n_collapsed"] == 0
+    assert res.diagnostics["resampled"].dtype == bool and res.diagnostics["collapsed"].dtype == bool
 
 
 def test_ekf_alongside_gives_step_two_its_covariance_and_linearisation_point():
