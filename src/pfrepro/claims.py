@@ -29,7 +29,7 @@ Ordering claims ("A beats B") are decided on paired differences over common
 random numbers: the chapter passes ``diff``, the mean over runs of a per-run
 difference oriented so that the claim asserts ``diff > 0`` (e.g. RMSE of B minus
 RMSE of A, on the same truths), and its standard error ``diff_se``
-(:func:`paired_difference`). The claim holds if ``diff > Z_CRIT * diff_se``,
+(:func:`pfrepro.stats.paired_difference`). The claim holds if ``diff > Z_CRIT * diff_se``,
 is contradicted if ``diff < -Z_CRIT * diff_se``, and is undecided otherwise.
 
 Cost claims (``basis="count"``) are decided on a deterministic count of what each
@@ -451,7 +451,7 @@ class ClaimsRegistry:
             What was compared, in a few words.
         diff, diff_se : float, optional
             An ordering claim: the paired difference oriented so that the claim asserts
-            ``diff > 0`` and its standard error (:func:`paired_difference`).
+            ``diff > 0`` and its standard error (:func:`pfrepro.stats.paired_difference`).
         published_se : float, optional
             The paper's own standard error, if it prints one.
         basis : {"", "count"}, optional

@@ -1054,7 +1054,7 @@ def run_all(runs=None, seeds=None, executor=None, steps=None) -> GpffResults:
         readings, sweeps and the large-N PF, which run on the same data), the PCRB's truth
         trajectories and the clouds per N of the convergence-in-N check; the single-run timings
         (context, no claim rests on them) are then taken once instead of :data:`TIMING_REPEATS`
-        times. Default: the paper's 100 runs (:data:`RUNS`), :data:`PCRB_RUNS` trajectories,
+        times. Default: the paper's 100 runs (``RUNS``), ``PCRB_RUNS`` trajectories,
         200 clouds.
     seeds : None, int or mapping, optional
         :func:`pfrepro.papers.resolve_seeds` of :data:`SEEDS`.

@@ -622,8 +622,8 @@ def run_all(runs=None, seeds=None, executor=None, steps=None, *, time_it: bool =
     Parameters
     ----------
     runs : int, optional
-        None: the chapter's counts (:data:`RUNS` per benchmark, :data:`RUNS_OF` for the centred
-        reading, :data:`BOT_FLOW_REF_RUNS` for the PFPF-EDH reference, :data:`PCRB_RUNS` truths for
+        None: the chapter's counts (``RUNS`` per benchmark, ``RUNS_OF`` for the centred
+        reading, ``BOT_FLOW_REF_RUNS`` for the PFPF-EDH reference, ``PCRB_RUNS`` truths for
         the bounds). An int replaces every one of these counts (``run_all(runs=2)`` for a quick check).
     seeds : None, int or dict, optional
         :func:`pfrepro.papers.resolve_seeds` of :data:`SEEDS` (None: the book's seeds).

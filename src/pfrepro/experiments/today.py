@@ -8,7 +8,7 @@ same N with their defaults. Few runs (:data:`RUNS`, stated in the chapters), so 
 it within seconds; the synthesis chapter has every method on 100 runs at equal budget.
 
 Decision: per today's method, the paired per-run difference MSE(method) - MSE(paper's method),
-two-sided z test, Holm over today's methods of that benchmark (:func:`pfrepro.experiments.synthesis.holm`,
+two-sided z test, Holm over today's methods of that benchmark (:func:`pfrepro.stats.holm`,
 family-wise ``ALPHA``): "better" / "worse" than the paper's method, or "no difference shown".
 """
 from __future__ import annotations

@@ -385,7 +385,7 @@ def tables(R) -> dict:
     Returns
     -------
     dict
-        Label (:data:`TABLES`) -> DataFrame: Table 1 per run (the paper's printed values and
+        Label (``TABLES``) -> DataFrame: Table 1 per run (the paper's printed values and
         ours), Table 1's means (with sigma_w^2 = 10), Table 2 and Table 3 beside the published ones.
     """
     return {"Table 1": table1_per_run_long(R.t1), "Table 1 (means)": table1_summary(R.t1, R.t1_q10),
@@ -403,7 +403,7 @@ def figures(R) -> dict:
     Returns
     -------
     dict
-        Label (:data:`FIGURES`) -> matplotlib Figure.
+        Label (``FIGURES``) -> matplotlib Figure.
     """
     return {"Fig. 2": fig2(R.f2), "Fig. 3": fig3(R.f3, R.f3_grid),
             "Fig. 4": fig_one_step(R.step_randn, "Fig. 4: randn carrier, one step (k = 20, N = 200)"),

@@ -124,7 +124,7 @@ def _t1_equal(pf2n, t):
 
 
 def t2_order(r):
-    """Table 2: CMS-PF below EKF, UKF and PF, and within 10 % of ESPF (10 % of ESPF − |CMS − ESPF| > 0)."""
+    """Table 2: CMS-PF below EKF, UKF and PF, and within 10 % of ESPF (10 % of ESPF − ``|CMS − ESPF|`` > 0)."""
     pairs = [paired_difference(r[o], r["CMS-PF"]) for o in ("EKF", "UKF", "PF")]
     dm, dse = paired_difference(r["CMS-PF"], r["ESPF"])
     pairs.append((0.1 * float(r["ESPF"].mean()) - abs(dm), dse))

@@ -7,7 +7,7 @@ systematic resampling every step; Liu-West on ``theta_hou``; the IMMPF on ``imm_
 B, on the same truths: per run, the baseline's MSE is interpolated linearly in log cost between the
 two configurations of its efficient frontier that bracket B (:func:`efficient_frontier`,
 :func:`pf_at_cost`), and the paired per-run difference MSE(baseline at B) - MSE(method), in units of
-the reference's MSE, decides better / equal / worse. Significance is family-wise (:data:`ALPHA`,
+the reference's MSE, decides better / equal / worse. Significance is family-wise (:data:`pfrepro.experiments.synthesis.ALPHA`,
 Holm's step-down rule, :func:`pfrepro.stats.holm`) over every equal-budget comparison of the verdict
 table on one cost axis (:func:`verdict_table`); a *tie* is a difference that is not significant under
 that rule (not a proof of equality). Outside the baseline's range of costs the nearest configuration
@@ -106,7 +106,7 @@ def equal_budget(r: BenchResult, name: str, axis: str = "count", significant=Non
     MSE of the reference (so d is in units of the optimum's MSE; d > 0: the method is better),
     ``se`` its paired standard error, ``p`` its two-sided p-value, ``holds`` True/False/None (None:
     not significant, or a conclusion the cost mismatch at the frontier's ends does not support).
-    ``significant``: the family-wise decision made by the caller (:func:`verdicts`, Holm); None
+    ``significant``: the family-wise decision made by the caller (:func:`verdict_table`, Holm); None
     decides this comparison alone (2 SE).
     """
     if not r.finite(name):
@@ -344,7 +344,7 @@ MAIN_CLAIMS = (_cid("ung_zhang", "GPFF eq43 unif."), _cid("bot", "GPFF eq41 unif
 
 
 def bot_reference_tables(ref: dict, r: BenchResult, tol: float = BOT_FLOW_REF_TOL) -> dict:
-    """Is the largest-N PFPF-EDH of :func:`bot_flow_reference` a reference, and how far is every BOT method from it?
+    """Is the largest-N PFPF-EDH of :func:`pfrepro.experiments.synthesis.bot_flow_reference` a reference, and how far is every BOT method from it?
 
     ``convergence``: per N, the mean MSE over the subset's runs (± SE), and d²(N) = the mean over runs of the
     time- and component-averaged squared distance between the estimates at N and at N_max (the MSE's units).
