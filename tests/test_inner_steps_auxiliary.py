@@ -171,12 +171,75 @@ def test_apf_second_stage_collapse_is_flagged_per_step():
     model = SquareSpy()
     rng = ScriptedNormals(np.reshape(X0, (1, 4, 1)), np.reshape(NOISE1, (1, 4, 1)),
                           np.reshape(NOISE2, (1, 4, 1)))
-    with pytest.warns(WeightCollapseWarning):
+    with pytest.warns(WeightCollapseWarning, match=r"^APF: weight collapse in 1 of 2 run-steps"):
         res = AuxiliaryParticleFilter(model, 4).filter(np.reshape([1.0, 20.0], (1, 2, 1)), rng)
+    assert res.diagnostics["collapsed"].dtype == bool
     np.testing.assert_array_equal(res.diagnostics["collapsed"], [[False, True]])
     assert res.diagnostics["n_collapsed"] == 1
     assert res.diagnostics["log_evidence"][0] == -np.inf
     assert res.x[0, 0, 0] == pytest.approx(-3 / 8, rel=1e-12)
+
+
+def test_apf_collapse_of_the_second_stage_alone_is_flagged():
+    """The look-ahead keeps the hand case's particles (first stage as above, resampled
+    [-3/2, 0, 0, 3/2]) but the transition noise 5 throws every one of them out of the noise's
+    support (x^2 >= 12.25, y_1 = 1): only the second stage collapses, the step is flagged, its
+    weights are uniform (estimate (3.5 + 5 + 5 + 6.5)/4 = 5) and the evidence is 0. Checked
+    against ``collapsed = coll1 & coll2``: fails. (The first stage alone cannot collapse without
+    an error: see the report of issue 35 -- every look-ahead likelihood 0 makes the second stage
+    +inf where a propagated particle has a positive likelihood.)"""
+    model = SquareSpy()
+    rng = ScriptedNormals(np.reshape(X0, (1, 4, 1)), np.full((1, 4, 1), 5.0))
+    with pytest.warns(WeightCollapseWarning, match=r"^APF: "):
+        res = AuxiliaryParticleFilter(model, 4).filter(np.reshape([1.0], (1, 1, 1)), rng)
+    np.testing.assert_array_equal(res.diagnostics["collapsed"], [[True]])
+    assert res.diagnostics["log_evidence"][0] == -np.inf
+    assert res.x[0, 0, 0] == pytest.approx(5.0, rel=1e-12)
+    assert res.diagnostics["first_stage_ess"][0, 0] == pytest.approx(8 / 3, rel=1e-12)
+
+
+class SteepSpy(SquareSpy):
+    """The same dynamics with a Gaussian-like likelihood 1000 nats steep: log p = -1000 (y - x^2)^2,
+    so that the normalisation's exp underflows for every particle but the best."""
+
+    def log_likelihood(self, y, x):
+        return -1000.0 * (y[:, None, 0] - x[..., 0] ** 2) ** 2
+
+
+def test_apf_runs_under_floating_point_errors_raised():
+    """The filter keeps its own floating-point error state: under ``np.errstate(all="raise")``
+    the hand case (log of zero weights: divide), a collapse (-inf - -inf: invalid) and a steep
+    likelihood (exp underflow: under) give the same numbers as before, without a
+    FloatingPointError. Checked against the filter's ``np.errstate`` without ``divide``,
+    ``invalid`` or ``under``: each raises."""
+    with np.errstate(all="raise"):
+        _, res = _run()
+        np.testing.assert_allclose(res.x[0, :, 0], [-3 / 8, 1 / 2], rtol=1e-12)
+        rng = ScriptedNormals(np.reshape(X0, (1, 4, 1)), np.reshape(NOISE1, (1, 4, 1)),
+                              np.reshape(NOISE2, (1, 4, 1)))
+        with pytest.warns(WeightCollapseWarning):
+            res = AuxiliaryParticleFilter(SquareSpy(), 4).filter(np.reshape([1.0, 20.0], (1, 2, 1)), rng)
+        assert res.diagnostics["log_evidence"][0] == -np.inf
+        rng = ScriptedNormals(np.reshape(X0, (1, 4, 1)), np.zeros((1, 4, 1)))
+        res = AuxiliaryParticleFilter(SteepSpy(), 4).filter(np.reshape([0.0], (1, 1, 1)), rng)
+        # look-ahead log p(0 | mu) = -1000 mu^4 = [-5062.5, 0, -5062.5, -16000]: exp underflows
+        # to 0 for all but x = 0, whose four copies are propagated without noise: second stage
+        # 0 - 0, estimate 0, ESS 4
+        assert res.x[0, 0, 0] == 0.0 and res.diagnostics["ess"][0, 0] == pytest.approx(4.0)
+        assert res.diagnostics["first_stage_ess"][0, 0] == pytest.approx(1.0)
+
+
+def test_apf_initial_distribution_override():
+    """m0, P0 given to the filter replace the model's: the prior cloud is m0 + z chol(P0)^T,
+    here 1 + 2 z. Checked against the override dropped (``super().__init__(model, None, P0)``):
+    fails."""
+    f = AuxiliaryParticleFilter(SquareSpy(), 4, m0=[1.0], P0=[[4.0]])
+    np.testing.assert_array_equal(f.m0, [1.0])
+    np.testing.assert_array_equal(f.P0, [[4.0]])
+    model = SquareSpy()
+    rng = ScriptedNormals(np.reshape(X0, (1, 4, 1)), np.zeros((1, 4, 1)))
+    AuxiliaryParticleFilter(model, 4, m0=[1.0], P0=[[4.0]]).filter(np.reshape([1.0], (1, 1, 1)), rng)
+    np.testing.assert_allclose(_cloud(model.inputs("f", 1)[0]), 1.0 + 2.0 * np.array(X0), rtol=1e-15)
 
 
 def test_apf_runs_are_filtered_independently():
@@ -205,3 +268,5 @@ def test_apf_repr_and_name():
     assert repr(f) == "AuxiliaryParticleFilter(N=7, resampling='residual')"
     assert f.name == "APF" and f.n_particles == 7 and f.resampling == "residual"
     assert AuxiliaryParticleFilter(SquareSpy(), 3).resampling == "systematic"
+    with pytest.raises(ValueError, match=r"^n_particles must be >= 1"):
+        AuxiliaryParticleFilter(SquareSpy(), 0)

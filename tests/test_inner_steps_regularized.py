@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from pfrepro.filters.particle import WeightCollapseWarning
 from pfrepro.filters.regularized import RegularizedParticleFilter, _weighted_cholesky, optimal_bandwidth
 
 S_HALF = 1.5
@@ -110,9 +111,9 @@ def test_optimal_bandwidth_hand_values():
     assert optimal_bandwidth(4, 2) == pytest.approx(H_OPT_4_2, rel=1e-14)
     assert optimal_bandwidth(64, 2) == pytest.approx(0.5, rel=1e-14)
     assert optimal_bandwidth(1, 1) == pytest.approx((4 / 3) ** 0.2, rel=1e-14)
-    with pytest.raises(ValueError, match="dim"):
+    with pytest.raises(ValueError, match=r"^dim must be >= 1"):
         optimal_bandwidth(4, 0)
-    with pytest.raises(ValueError, match="n_particles"):
+    with pytest.raises(ValueError, match=r"^n_particles must be >= 1"):
         optimal_bandwidth(0, 1)
 
 
@@ -155,6 +156,12 @@ def test_rpf_weights_estimate_and_evidence_before_resampling():
     np.testing.assert_allclose(res1.diagnostics["log_evidence"], [np.log(1 / 9) + np.log(1 / 6)], rtol=1e-12)
     # and weights 1/N carried (resampled): w_2 = [1/3, 1/3, 1/6, 1/6], estimate (1/6, 4/3)
     np.testing.assert_allclose(res1.x[0, 1], [1 / 6, 4 / 3], rtol=1e-12)
+    # the same with ESS threshold 0.8 (3.2 particles): step 1 (ESS 8/3) resamples, step 2
+    # (ESS 1 / (2/9 + 2/36) = 18/5) does not; the flags are written at their own step
+    _, res2 = _filter(X[None], [3.0, 3.0], EPS[None], ess_threshold=0.8, bandwidth_scale=0.0)
+    assert res2.diagnostics["resampled"].dtype == bool
+    np.testing.assert_array_equal(res2.diagnostics["resampled"], [[True, False]])
+    np.testing.assert_allclose(res2.diagnostics["ess"], [[8 / 3, 18 / 5]], rtol=1e-12)
 
 
 def test_rpf_jitter_is_h_L_eps_after_resampling():
@@ -242,5 +249,48 @@ def test_rpf_repr_and_attributes():
     assert f.name == "RPF"
     g = RegularizedParticleFilter(RangeSpy(), 4)
     assert g.resampling == "systematic" and g.ess_threshold is None and g.bandwidth_scale == 1.0
-    with pytest.raises(ValueError, match="ess_threshold"):
+    with pytest.raises(ValueError, match=r"^ess_threshold must lie in \[0, 1\]"):
         RegularizedParticleFilter(RangeSpy(), 4, ess_threshold=1.5)
+    with pytest.raises(ValueError, match=r"^bandwidth_scale must be >= 0"):
+        RegularizedParticleFilter(RangeSpy(), 4, bandwidth_scale=-1.0)
+    with pytest.raises(ValueError, match=r"^n_particles must be >= 1"):
+        RegularizedParticleFilter(RangeSpy(), 0)
+    h = RegularizedParticleFilter(RangeSpy(), 4, m0=[1.0, 2.0], P0=np.diag([4.0, 9.0]))
+    np.testing.assert_array_equal(h.m0, [1.0, 2.0])
+    np.testing.assert_array_equal(h.P0, np.diag([4.0, 9.0]))
+
+
+def test_rpf_collapse_is_flagged_at_its_step():
+    """Step 2 with y_2 = 50: every particle is outside the noise's support, the step collapses:
+    flagged at step 2 (not step 1), warned as "RPF: ...", evidence 0. Checked against the flag
+    written at column k - 2: fails."""
+    with pytest.warns(WeightCollapseWarning, match=r"^RPF: weight collapse in 1 of 2 run-steps"):
+        _, res = _filter(X[None], [3.0, 50.0], EPS[None])
+    assert res.diagnostics["collapsed"].dtype == bool
+    np.testing.assert_array_equal(res.diagnostics["collapsed"], [[False, True]])
+    assert res.diagnostics["n_collapsed"] == 1 and res.diagnostics["log_evidence"][0] == -np.inf
+
+
+class SteepRangeSpy(RangeSpy):
+    """log p = -1e5 (y - |x|^2)^2: the normalisation's exp underflows for all but the best."""
+
+    def log_likelihood(self, y, x):
+        return -1e5 * (y[:, None, 0] - np.sum(x ** 2, axis=-1)) ** 2
+
+
+def test_rpf_runs_under_floating_point_errors_raised():
+    """Under ``np.errstate(all="raise")`` the hand case (log of a zero weight: divide) and a steep
+    likelihood (exp underflow: under) run as before. Checked against the filter's
+    ``np.errstate`` without ``divide`` or ``under``: each raises FloatingPointError."""
+    with np.errstate(all="raise"):
+        model, _ = _filter(X[None], [3.0, 3.0], EPS[None])
+        np.testing.assert_allclose(model.handed[2][0], RESAMPLED + H_OPT_4_2 * L_EPS, rtol=1e-9, atol=1e-15)
+        zero = np.zeros((1, 4, 2))
+        rng = ScriptedNormals(X[None], zero, zero, zero)
+        res = RegularizedParticleFilter(SteepRangeSpy(), 4).filter(np.reshape([4.0, 4.0], (1, 2, 1)), rng)
+        # |x|^2 = [4, 17/4, 9/2, 17/4], y = 4: log p = -1e5 [0, 1/16, 1/4, 1/16] = [0, -6250, -25000,
+        # -6250]: exp underflows to 0 but for (0, 2), which takes all the weight (ESS 1); the
+        # resampled cloud has no spread, so no jitter: all four particles enter step 2 at (0, 2)
+        assert res.diagnostics["ess"][0, 0] == 1.0
+        np.testing.assert_array_equal(res.x[0, 0], [0.0, 2.0])
+        np.testing.assert_array_equal(res.x[0, 1], [0.0, 2.0])
