@@ -852,32 +852,32 @@ SENS_KEY = {"eta=0.2": ("eta", 0.2), "eta=0.8": ("eta", 0.8), "n_big=1": ("big_f
             "n_th=0": ("n_th", 0.0), "n_th=N": ("n_th", 1.0), "carrier=randn": ("carrier", "randn"),
             "carrier=eq (6)": ("carrier", "chebyshev"), "u=3.8": ("u", 3.8), "burn_in=100": ("burn_in", 100),
             "carrier_init=run": ("init", "run"), "carrier_init=shared": ("init", "shared")}
-#: Table 1's readings: the two sigma_w^2, the PF's resampling and every CMS-PF reading
+#: Table 1's readings — the two sigma_w^2, the PF's resampling and every CMS-PF reading
 T1_TAGS = ["sigma_w2=1", "sigma_w2=10", "pf_resampling=multinomial"] + list(CMS_TAGS)
-#: Table 2's main reading and its other settings (N, PF, UKF, ESPF): tag -> keywords of :func:`table2_rmse`
+#: Table 2's main reading and its other settings (N, PF, UKF, ESPF) — tag -> keywords of :func:`table2_rmse`
 T2_MAIN = next(iter(T2_READINGS))
 T2_OTHER = {"N_t23=100": dict(N=100), "pf_resampling=multinomial": dict(pf_resampling="multinomial"),
             "ukf=κ 0": dict(ukf_kappa=0.0), "espf=MH 0.5, SBX 10": dict(espf_kw={"mcmc_scale": 0.5, "sbx_eta": 10.0})}
-#: the filters each of :data:`T2_OTHER` reruns (the others are the main reading's)
+#: the filters each of ``T2_OTHER`` reruns (the others are the main reading's)
 T2_OTHER_FILTERS = {"N_t23=100": ("EKF", "UKF", "PF", "ESPF", "CMS-PF"), "pf_resampling=multinomial": ("PF",),
                     "ukf=κ 0": ("UKF",), "espf=MH 0.5, SBX 10": ("ESPF",)}
 T2_TAGS = list(T2_READINGS) + list(T2_OTHER) + list(CMS_TAGS)
-#: Table 3's (and Fig. 3's) noise readings: tag -> label of :data:`T3_READINGS`; the main tag
+#: Table 3's (and Fig. 3's) noise readings — tag -> label of :data:`T3_READINGS`; the main tag
 T3_LAB = {v: k for k, v in T3_TAGS.items()}
 T3_MAIN = T3_TAGS[next(iter(T3_READINGS))]
 #: the CMS-PF readings that apply to Table 3 (its columns fix the carrier and, for CMS1-3, N_th = 0)
 T3_CMS_TAGS = [t for t in CMS_TAGS if not t.startswith(("carrier=", "n_th=0"))]
 T3_ORDER_TAGS = list(T3_LAB) + ["N_t23=100"] + T3_CMS_TAGS
-#: Fig. 3's readings: Table 3's noise readings and the ends of the eta range
+#: Fig. 3's readings — Table 3's noise readings and the ends of the eta range
 F3_TAGS = list(T3_LAB) + ["eta=0.2", "eta=0.8"]
-#: runs of each mechanism reading (issue 19), and the readings: name -> keywords of :func:`mechanism`
+#: runs of each mechanism reading, and the readings — name -> keywords of :func:`mechanism`
 MECH_RUNS = 20
 MECH_READINGS = {"main": {}, "eta=0.2": {"cms_over": {"eta": 0.2}}, "eta=0.8": {"cms_over": {"eta": 0.8}},
                  "carrier=randn": {"cms_over": {"carrier": "randn"}},
                  "carrier=eq (6)": {"cms_over": {"carrier": "chebyshev"}}, "sigma_w2=10": {"sigma_w2": 10.0},
                  "carrier_init=run": {"cms_over": {"init": "run"}},
                  "carrier_init=shared": {"cms_over": {"init": "shared"}}}
-#: the ESS readings of Figs. 4-5 run on Table 2's first runs: tag -> CMS-PF keyword overrides
+#: the ESS readings of Figs. 4-5 run on Table 2's first runs — tag -> CMS-PF keyword overrides
 ESS_TAGS = {"eta=0.2": {"eta": 0.2}, "eta=0.8": {"eta": 0.8},
             "carrier_init=run": {"init": "run"}, "carrier_init=shared": {"init": "shared"}}
 

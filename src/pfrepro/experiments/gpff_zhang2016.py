@@ -885,11 +885,15 @@ class BotReferences:
 
     Attributes
     ----------
-    pcrb_fixed, pcrb_prior, pcrb_prior_check : numpy.ndarray
+    pcrb_fixed : numpy.ndarray
         Posterior Cramér-Rao bounds per time step and component, ``(T, 4)``
         (:func:`pfrepro.bounds.pcrb_linear_dynamics`): truth from the fixed ``x0`` (the data's
         distribution), from the prior, and from the prior on a second, independent set of
         trajectories (its Monte Carlo spread).
+    pcrb_prior : numpy.ndarray
+        See ``pcrb_fixed``.
+    pcrb_prior_check : numpy.ndarray
+        See ``pcrb_fixed``.
     filters : dict
         ``{name: FilterResult}`` on the Table 2 data: the bootstrap PF with :data:`BIG_N`
         particles and the UKF started at the true ``x0``.
@@ -973,18 +977,32 @@ class GpffResults:
         ``linear`` (eqs 23-27), ``eqs16_18``, ``interior`` (eqs 36-40), ``equivalence`` (sec 3.2),
         ``conv_dlambda`` and ``orders`` (convergence in the lambda step), ``conv_n`` (in N),
         ``nonlinear`` (eq 46), ``eq43`` and ``cwpa_q`` (sec 5.1's Q).
-    cwpa, cwpa_readings : dict
+    cwpa : dict
         ``{"gaussian" | "mixture": MonteCarloResult}``: Fig. 1's experiment and its integrator readings.
+    cwpa_readings : dict
+        See ``cwpa``.
     cwpa_r_sweep : pandas.DataFrame
         The mixture data under each R given to KF and GPFF (:func:`cwpa_r_sensitivity`).
-    ung, ung_readings : MonteCarloResult
+    ung : MonteCarloResult
         Table 1's experiment (sec 5.2) and the readings of its free choices (same truths).
-    ung_cost, ung_counts : pandas.DataFrame
+    ung_readings : MonteCarloResult
+        See ``ung``.
+    ung_cost : pandas.DataFrame
         :func:`cost_evidence` and :func:`cost_reading_counts` on UNG.
-    bot, bot_readings, bot_cost, bot_counts
+    ung_counts : pandas.DataFrame
+        See ``ung_cost``.
+    bot
         The same for Table 2 (sec 5.3).
-    sweep_ung, sweep_bot : pandas.DataFrame
+    bot_readings
+        See ``bot``.
+    bot_cost
+        See ``bot``.
+    bot_counts
+        See ``bot``.
+    sweep_ung : pandas.DataFrame
         GPFF(100) under the lambda grids and integrators (:func:`schedule_sweep`).
+    sweep_bot : pandas.DataFrame
+        See ``sweep_ung``.
     references : BotReferences
         Bounds and reference filters on the Table 2 data.
     seconds : dict

@@ -701,25 +701,45 @@ class Zhou2017Results:
 
     Attributes
     ----------
-    counts, seeds : dict
+    counts : dict
         The run counts (:func:`run_counts`) and seeds used.
-    main, lik_pair, fig5, rd, abl, fav5_pair : Run
+    seeds : dict
+        See ``counts``.
+    main : Run
         Table 1 and Figs. 1-4 (IMMPF, IMMPFOR, IMM-EKF, IMM-UKF); the mean-likelihood reading with
         main's filters on its runs; Fig. 5 (N = 2000, and the IMMPF with IMMPFOR's cost); the IMMPFOR
         variants of :func:`variant_tags` with main's filters; the own-parent ablation with main's
         filters; IMMPFOR at d = :data:`D_FAVOURABLE`, N = 2000, with Fig. 5's filters.
-    robust, robust_fav : dict
+    lik_pair : Run
+        See ``main``.
+    fig5 : Run
+        See ``main``.
+    rd : Run
+        See ``main``.
+    abl : Run
+        See ``main``.
+    fav5_pair : Run
+        See ``main``.
+    robust : dict
         Scenario label (:data:`ALTERNATIVES`) -> Run of IMMPF and IMMPFOR (and "IMMPFOR fav").
+    robust_fav : dict
+        See ``robust``.
     N_eq : int
         IMMPF particle number with IMMPFOR(N)'s cost (:func:`equal_compute_N`).
-    table1, table1_se, table1_diff : pandas.DataFrame
+    table1 : pandas.DataFrame
         :func:`table1` and :func:`bootstrap_table` of IMMPF and IMMPFOR on ``main``.
+    table1_se : pandas.DataFrame
+        See ``table1``.
+    table1_diff : pandas.DataFrame
+        See ``table1``.
     fig5_table : pandas.DataFrame
         :func:`table1` of IMMPF and IMMPFOR on ``fig5``.
-    stats, rob : dict
+    stats : dict
         Reading tag -> :func:`pair_stats` / :func:`robustness` of IMMPF against IMMPFOR under that
         reading, in the order the readings were run (main d, other d, :data:`READINGS`, ``lik=mean``,
         the :data:`SCENARIO_TAGS`, :data:`HELD_READINGS`).
+    rob : dict
+        See ``stats``.
     held_runs : dict
         :data:`HELD_READINGS` tag -> runs it was decided on.
     pairs : dict
@@ -728,14 +748,18 @@ class Zhou2017Results:
         ``abl`` (own parent: RMS at the largest step - at the smallest).
     ablation : dict
         Step d -> IMMPF - own-parent IMMPFOR(d).
-    ekf, ekf_pf : dict, tuple
+    ekf : dict, tuple
         Tag -> IMMPFOR-variant - IMM-EKF in Table 1's mean (``main_tag()`` on ``main``, the others on
         ``rd``); IMMPF - IMM-EKF on ``main``.
+    ekf_pf : dict, tuple
+        See ``ekf``.
     equal : dict
         Tag -> IMMPF(N_eq) - IMMPFOR-variant (per-run RMS).
-    costs, equal_means : dict
+    costs : dict
         Evaluations per run (:func:`pfrepro.cost.imm_evaluations`) and Table 1 mean of "IMMPF",
         "IMMPFOR" and "IMMPF eq".
+    equal_means : dict
+        See ``costs``.
     posterior : dict
         ``"mean"`` / ``"w1"`` -> filter name or tag -> per-run distance to the large-N reference
         (:func:`posterior_distance`, :func:`posterior_w1`).

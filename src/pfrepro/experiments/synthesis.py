@@ -134,7 +134,7 @@ TODAY_FAMILIES = ("APF", "RPF", "EKF-prop. PF", "PFPF-EDH", "PFPF-LEDH", "SMC²"
 BOT_FLOW_REF_N = (500, 2000, 8000)
 BOT_FLOW_REF_RUNS = 10
 #: the largest-N PFPF counts as converged when its estimated excess MSE over the posterior mean (1/N law, see
-#: :func:`bot_reference_tables`) is below this share of its own MSE (fixed before the runs)
+#: :func:`pfrepro.verdicts.synthesis.bot_reference_tables`) is below this share of its own MSE (fixed before the runs)
 BOT_FLOW_REF_TOL = 0.05
 #: the two readings of the bearings-only start (free choice ``bot_prior``) — the benchmark key of each
 BOT_READINGS = {"offset": "bot", "centred": "bot_centred"}

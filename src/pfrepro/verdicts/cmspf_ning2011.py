@@ -33,7 +33,7 @@ __all__ = ["MAIN_CLAIMS", "CMS_CHOICES", "T3_CMS_CHOICES", "record_claims", "tak
            "eq6_white", "which_reading"]
 
 PAPER = E.PAPER
-#: the paper's main claims (abstract, secs 3.2-3.3): CMS-PF beats the PF (Table 1) and the EKF,
+#: the paper's main claims (abstract, secs 3.2-3.3) — CMS-PF beats the PF (Table 1) and the EKF,
 #: UKF and PF, close to ESPF (Table 2), ESPF costs more (Table 2), eq (6) is the best map and
 #: resampling is not needed (Table 3)
 MAIN_CLAIMS = ("t1_cms_better_than_pf", "t2_cms_order", "t2_time_espf_over_pf", "t3_eq6_best",

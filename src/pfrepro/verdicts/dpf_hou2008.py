@@ -29,13 +29,13 @@ __all__ = ["MAIN_CLAIMS", "NO_CAP", "LOG_SIM", "N52", "record_claims", "takeaway
            "dpf_vs_exact", "liu_west_vs_dpf", "impoverishment", "cap_coverage", "liu_west_readings_51",
            "beta_vs_gaussian", "similar", "s52_stats", "readings_52", "tagged", "not_held_51"]
 
-#: the paper's main claims (abstract: no parameter impoverishment, sampling efficiency of the Beta
+#: the paper's main claims (abstract — no parameter impoverishment, sampling efficiency of the Beta
 #: law, better accuracy and lower initial sensitivity than the DEKF; secs 5.1 and 5.2)
 MAIN_CLAIMS = ("no_parameter_impoverishment", "beta_sampling_efficiency", "s51_dpf_beats_dekf_x",
                "s51_dpf_beats_dekf_theta", "fig5_dpf_robust_to_guess", "s52_dpf_beats_dekf_th")
-#: "no cap" contradicts the paper's own capping (sec 5.2, last paragraph): shown in the sweep, not a reading
+#: "no cap" contradicts the paper's own capping (sec 5.2, last paragraph) — shown in the sweep, not a reading
 NO_CAP = {("cap", "none")}
-#: sec 5.2 "similar": the DEKF/DPF RMSE ratio within [0.8, 1.25] (fixed before the runs)
+#: sec 5.2 "similar" — the DEKF/DPF RMSE ratio within [0.8, 1.25] (fixed before the runs)
 LOG_SIM = float(np.log(1.25))
 #: the filters of sec 5.2
 N52 = ("DPF", "DEKF", "Liu-West")

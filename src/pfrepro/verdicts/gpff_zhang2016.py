@@ -37,11 +37,11 @@ __all__ = ["PAPER", "MAIN_CLAIMS", "GROWTH_MARGIN", "KB_TOL_SOLVER", "KB_TOL_FD"
            "readings_disagree"]
 
 PAPER = E.PAPER
-#: the paper's main claims (abstract): the Kalman-Bucy form, non-Gaussian noise, more accurate
+#: the paper's main claims (abstract) — the Kalman-Bucy form, non-Gaussian noise, more accurate
 #: than the Gaussian filters (UNG and BOT), cheaper than a PF, stable
 MAIN_CLAIMS = ("kb_equivalence", "cwpa_mixture_gpff_better", "ung_gpff_beats_ekf_ukf", "bot_gpff_lowest",
                "ung_gpff_cheaper_than_pf_1000", "bot_gpff_stable")
-#: "grows more slowly" (Table 1): GPFF's growth factor (N = 100 -> 1000) below (1 - GROWTH_MARGIN) times the
+#: "grows more slowly" (Table 1) — GPFF's growth factor (N = 100 -> 1000) below (1 - GROWTH_MARGIN) times the
 #: PF's, fixed before counting (the paper's own factors are 3.5 and 15.5); within it, both grow alike
 GROWTH_MARGIN = 0.10
 #: sec 3.2 holds when the moment ODEs land on the Kalman posterior to this relative error (solve_ivp at

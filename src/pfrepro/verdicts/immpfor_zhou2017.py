@@ -33,7 +33,7 @@ from ..stats import paired_difference
 __all__ = ["MAIN_CLAIMS", "DEP_ALL", "WORD", "WORD_M", "MAIN_SCENARIO", "record_claims", "takeaway", "prose",
            "holds", "posterior_readings", "held_needs_more_runs", "scenario_needs_more_runs", "robust_ids"]
 
-#: the paper's main claims (abstract and conclusion): higher accuracy (Table 1 mean), smaller peak error,
+#: the paper's main claims (abstract and conclusion) — higher accuracy (Table 1 mean), smaller peak error,
 #: new particle sets that approximate the posterior, an RMSE curve that converges more strongly (sec 3)
 MAIN_CLAIMS = ("t1_or_smaller_mean", "t1_or_smaller_peak", "or_posterior_sets_closer", "or_converges_more_strongly")
 #: every free choice an ordering of Table 1 and Figs. 2-4 rests on (each is run as readings)

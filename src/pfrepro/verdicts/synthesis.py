@@ -334,7 +334,7 @@ def record_claims(reg: ClaimsRegistry, results) -> ClaimsRegistry:
     return reg
 
 
-#: the main claims (the findings list them first): each paper's method on its own paper's benchmark
+#: the main claims (the findings list them first) — each paper's method on its own paper's benchmark
 #: at its paper's N (GPFF: the scalar model of sec 5.2 and bearings-only of sec 5.3; CMS-PF: Table 2's
 #: N = 200; DPF: sec 5.1 at N_x = N_theta = 500; IMMPFOR: Table 1's N = 500 per mode), and Li 2012's PF vs EKF
 MAIN_CLAIMS = (_cid("ung_zhang", "GPFF eq43 unif."), _cid("bot", "GPFF eq41 unif."),
