@@ -20,7 +20,7 @@ def test_findings_html_lists_main_claims_with_links_counts_and_takeaway():
     assert out.count(f'href="{findings.RULE_HREF}"') == 3          # two verdict words and the counts' link
     assert 'href="#claim-ekf_pf_li2012-ratio"' in out and 'href="#claim-ekf_pf_li2012-cell"' in out
     assert "<strong>not reproduced</strong>" in out and "<strong>reproduced</strong>" in out
-    assert "ours 13.00 ± 0.50 against the printed 13.2" in out
+    assert "ours 13.00 ± 0.50 against the paper's 13.2" in out
     # counts of every claim, not only the main ones; the takeaway is escaped
     assert "Of 3 claims, 1 is reproduced" in out and "1 is inconclusive" in out
     assert "Use the PF &lt;here&gt;." in out

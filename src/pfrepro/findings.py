@@ -37,7 +37,7 @@ def _claim_line(paper: str, c: Claim) -> str:
     if c.published_text or c.published is not None:
         printed = c.published_text or _pm(c.published, c.published_se)
         if c.reproduced is not None:
-            parts.append(f" (ours {html.escape(_pm(c.reproduced, c.se))} against the printed "
+            parts.append(f" (ours {html.escape(_pm(c.reproduced, c.se))} against the paper's "
                          f"{html.escape(str(printed))})")
     return (f'<li>{"".join(parts)} <a class="pf-claim-link" href="#{claim_anchor(paper, c.claim_id)}">'
             "see the claim</a></li>")
