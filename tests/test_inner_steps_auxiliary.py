@@ -270,3 +270,22 @@ def test_apf_repr_and_name():
     assert AuxiliaryParticleFilter(SquareSpy(), 3).resampling == "systematic"
     with pytest.raises(ValueError, match=r"^n_particles must be >= 1"):
         AuxiliaryParticleFilter(SquareSpy(), 0)
+
+
+def test_apf_first_stage_collapse_falls_back_to_a_bootstrap_step():
+    """No look-ahead point explains y_1 = 6.5: p(y_1 | mu^i) = 0 for mu^2 = [9/4, 0, 9/4, 4]
+    (|6.5 - mu^2| >= 3/2), so the first stage collapses. The run then takes a bootstrap step:
+    ancestors from w_0 (uniform: each particle once), x_1 = [-3/2, 0, 3/2, 5/2],
+    p(y_1 | x_1) = [0, 0, 0, (1 - 1/6) / (3/2) = 5/9], so w_1 = [0, 0, 0, 1], estimate 5/2, ESS 1,
+    evidence (1/4)(5/9) = 5/36, and the step is flagged collapsed. Checked against the code before
+    this fix, where the second stage p(y|x) / p(y|mu) = (5/9) / 0 = +inf raised ValueError."""
+    model = SquareSpy()
+    rng = ScriptedNormals(np.reshape(X0, (1, 4, 1)), np.reshape([0.0, 0.0, 0.0, 0.5], (1, 4, 1)))
+    with pytest.warns(WeightCollapseWarning, match="^APF:"):
+        res = AuxiliaryParticleFilter(model, 4).filter(np.reshape([6.5], (1, 1, 1)), rng)
+    np.testing.assert_allclose(_cloud(model.inputs("transition", 1)[0]), X0)   # every particle once
+    assert res.x[0, 0, 0] == pytest.approx(2.5, rel=1e-12)
+    assert res.diagnostics["ess"][0, 0] == pytest.approx(1.0, rel=1e-12)
+    assert res.diagnostics["first_stage_ess"][0, 0] == pytest.approx(4.0, rel=1e-12)
+    assert res.diagnostics["log_evidence"][0] == pytest.approx(np.log(5 / 36), rel=1e-12)
+    assert res.diagnostics["collapsed"][0, 0] and res.diagnostics["collapsed"].dtype == bool

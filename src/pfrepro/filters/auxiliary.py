@@ -48,7 +48,10 @@ class AuxiliaryParticleFilter(Filter):
     Notes
     -----
     Diagnostics: ``ess`` (runs, T) of the second-stage weights, ``first_stage_ess`` (runs, T),
-    ``log_evidence`` (runs,), ``collapsed`` (runs, T) and ``n_collapsed``. Every draw has the
+    ``log_evidence`` (runs,), ``collapsed`` (runs, T) and ``n_collapsed``. A step at which no
+    look-ahead point explains the measurement (every first-stage weight zero) is flagged collapsed
+    and, in that run, taken as a bootstrap step (ancestors from the previous weights, second-stage
+    weight p(y_k | x_k)) instead of dividing by a zero look-ahead likelihood. Every draw has the
     runs axis first, so run i is bit-identical in any batch of runs.
     """
 
@@ -78,6 +81,12 @@ class AuxiliaryParticleFilter(Filter):
                 mu = model.f(x, k)
                 ll_mu = model.log_likelihood(y[:, k - 1], mu)                  # log p(y_k | mu^i)
                 lam, log_a, coll1 = normalize_log_weights(logw + ll_mu)        # first stage
+                if coll1.any():
+                    # no look-ahead point explains y_k (every p(y_k | mu^i) = 0; flagged): those runs take
+                    # a bootstrap step instead -- ancestors from w_{k-1}, second-stage weight p(y_k | x),
+                    # evidence (1/N) sum p(y_k | x) -- where p(y|x) / p(y|mu) would be x / 0
+                    lam, ll_mu, log_a = lam.copy(), ll_mu.copy(), log_a.copy()
+                    lam[coll1], ll_mu[coll1], log_a[coll1] = np.exp(logw[coll1]), 0.0, 0.0
                 ess1[:, k - 1] = 1.0 / np.einsum("rn,rn->r", lam, lam)
                 x, ll_mu = repeat_rows(counts_of(lam, rng), x, ll_mu)
                 x = model.sample_transition(x, k, rng)
