@@ -40,9 +40,10 @@ def optimal_bandwidth(n_particles: int, dim: int) -> float:
 def _weighted_cholesky(w, x):
     """Lower Cholesky factor of the weighted covariance of each run's cloud ``(runs, n, n)``.
 
-    A degenerate cloud (all particles equal, or fewer distinct particles than dimensions) gets
-    a ridge of 1e-12 times its scale (1 for a cloud of zeros), so that the factor exists; the
-    jitter is then (almost) zero, as it should be for a cloud with no spread.
+    A degenerate cloud (fewer distinct particles than dimensions) gets a ridge of 1e-12 times
+    its scale (the mean variance per dimension, floored at 1e-300 for a cloud without spread),
+    so that the factor exists; the jitter is then (almost) zero, as it should be for a cloud
+    with no spread.
     """
     m = np.einsum("rn,rni->ri", w, x)
     d = x - m[:, None, :]
