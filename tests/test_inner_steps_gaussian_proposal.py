@@ -51,8 +51,9 @@ class Bilinear:
     m0 = np.zeros(2)
     P0 = np.eye(2)
 
-    def __init__(self, dead_runs=()):
-        self.dead_runs = list(dead_runs)     # runs whose likelihood is 0 for every particle
+    def __init__(self, dead_runs=(), dead_from=1):
+        self.dead_runs = list(dead_runs)     # runs whose likelihood is 0 for every particle ...
+        self.dead_from = dead_from           # ... from the step whose measurement is >= this
 
     def f(self, x, k):
         return np.stack([x[..., 0] + k, 0.5 * x[..., 1]], axis=-1)
@@ -69,7 +70,8 @@ class Bilinear:
     def log_likelihood(self, y, x):
         r = y[:, None, 0] - x[..., 0] * x[..., 1]
         ll = -0.25 * r ** 2 - 0.5 * np.log(2 * np.pi * 2.0)
-        ll[self.dead_runs] = -np.inf
+        dead = [r for r in self.dead_runs if y[r, 0] >= self.dead_from]
+        ll[dead] = -np.inf
         return ll
 
 
@@ -214,6 +216,9 @@ def test_log_normal_with_shared_and_per_particle_factors_by_hand():
     np.testing.assert_allclose(per, [[-0.25 - np.log(2) - LOG2PI, -5.0 - np.log(3) - LOG2PI]], rtol=1e-14)
     # against scipy (the covariance L L^T)
     np.testing.assert_allclose(per[0, 1], logN(x[0, 1], m[0, 1], np.diag([1.0, 9.0])), rtol=1e-14)
+    # a (N, n, n) stack of factors for (N, n) points (no runs axis)
+    three = _log_normal(x[0], m[0], np.array([LQ, np.diag([1.0, 3.0])]))
+    np.testing.assert_allclose(three, per[0], rtol=1e-14)
 
 
 def test_log_weight_increment_by_hand():
@@ -287,7 +292,7 @@ def _reference_filter(y, normals, u, threshold, N=2):
     runs, T, _ = y.shape
     x = normals[0].copy()
     logw = np.full((runs, N), -np.log(N))
-    xs, ev, res = np.zeros((runs, T, 2)), np.zeros(runs), np.zeros((runs, T), bool)
+    xs, ev, res, ess = np.zeros((runs, T, 2)), np.zeros(runs), np.zeros((runs, T), bool), np.zeros((runs, T))
     for k in range(1, T + 1):
         for r in range(runs):
             lw = np.zeros(N)
@@ -306,14 +311,15 @@ def _reference_filter(y, normals, u, threshold, N=2):
             w = np.exp(a - logsumexp(a))
             xs[r, k - 1] = w @ x[r]
             logw[r] = np.log(w)
-            if threshold is None or 1 / np.sum(w ** 2) < threshold * N:
+            ess[r, k - 1] = 1 / np.sum(w ** 2)
+            if threshold is None or ess[r, k - 1] < threshold * N:
                 res[r, k - 1] = True
                 below = np.ceil(N * np.cumsum(w) - u).astype(int)
                 below[-1] = N
                 counts = np.diff(np.r_[0, below])
                 x[r] = np.repeat(x[r], counts, axis=0)
                 logw[r] = -np.log(N)
-    return xs, ev, res
+    return xs, ev, res, ess
 
 
 Y2 = np.array([[[5.0], [3.0]], [[-1.0], [2.0]]])                          # (runs, T = 2, 1)
@@ -335,11 +341,13 @@ def test_filter_two_steps_carries_resampled_and_kept_weights(threshold, resample
     # step-1 ESS: run 0 1.00002 < 0.7 * 2, run 1 1.574 >= 1.4; at step 2 (threshold 0.7) run 0
     # (resampled) 1.99999 >= 1.4, run 1 (kept) 1.092 < 1.4
     res = f.filter(Y2, ScriptedGenerator([Z0, Z1, Z2], u=0.3))
-    xs, ev, rs = _reference_filter(Y2, [Z0, Z1, Z2], 0.3, threshold)
+    xs, ev, rs, ess = _reference_filter(Y2, [Z0, Z1, Z2], 0.3, threshold)
     np.testing.assert_array_equal(res.diagnostics["resampled"], resampled)
     np.testing.assert_array_equal(rs, resampled)
     np.testing.assert_allclose(res.x, xs, rtol=1e-11)
     np.testing.assert_allclose(res.diagnostics["log_evidence"], ev, rtol=1e-11)
+    np.testing.assert_allclose(res.diagnostics["ess"], ess, rtol=1e-9)
+    assert res.diagnostics["resampled"].dtype == bool and res.diagnostics["collapsed"].dtype == bool
 
 
 def test_ess_threshold_boundary_does_not_resample():
@@ -374,6 +382,30 @@ def test_collapse_is_reported_under_the_filters_name_and_floating_point_errors_a
         assert res.diagnostics["n_collapsed"] == 2
         assert res.diagnostics["log_evidence"][1] == -np.inf and np.isfinite(res.diagnostics["log_evidence"][0])
         assert res.diagnostics["ess"][0, 0] == pytest.approx(1.0)
+        assert res.diagnostics["collapsed"].dtype == bool
+    # run 1 collapses at step 2 only (y_2 = 6 >= dead_from): the flag sits at step 2
+    f = GaussianProposalParticleFilter(Bilinear(dead_runs=[1], dead_from=6.0), 2)
+    with pytest.warns(WeightCollapseWarning, match=r"^EKF-proposal PF: weight collapse in 1 of 4 run-steps"):
+        res = f.filter(np.array([[[5.0], [5.0]], [[5.0], [6.0]]]), ScriptedGenerator([z0, z1, z1]))
+    np.testing.assert_array_equal(res.diagnostics["collapsed"], [[False, False], [False, True]])
+
+
+def test_a_far_particle_gets_weight_zero_without_floating_point_errors():
+    """UKF proposal, particle 1 starts at (1e100, 1e100): its likelihood's square overflows to
+    p = 0 (a legitimate -inf log-weight), so the estimate is particle 0's draw, the UKF mean
+    (5/4, 43/20) by hand (z = 0), and the evidence is its increment times 1/2; all under
+    np.errstate(all="raise"). Checked against the wrong formula once: errstate(over=None)."""
+    z0 = np.array([[[0.0, 4.0], [1e100, 1e100]]])
+    z1 = np.zeros((1, 2, 2))
+    f = GaussianProposalParticleFilter(Bilinear(), 2, proposal="unscented", ess_threshold=0.0)
+    with np.errstate(all="raise"):
+        res = f.filter(np.array([[[5.0]]]), ScriptedGenerator([z0, z1]))
+    np.testing.assert_allclose(res.x[0, 0], [5 / 4, 43 / 20], rtol=1e-14)
+    x = np.array([5 / 4, 43 / 20])
+    inc = (stats.norm(x[0] * x[1], np.sqrt(2)).logpdf(5.0) + logN(x, MU[0], Q)
+           - logN(x, UKF_MEAN[0, 0], UKF_COV[0]))
+    np.testing.assert_allclose(res.diagnostics["log_evidence"], [inc - np.log(2)], rtol=1e-12)
+    assert res.diagnostics["ess"][0, 0] == 1.0
 
 
 # ------------------------------------------------------------------------------ constructor
@@ -390,8 +422,27 @@ def test_constructor_settings_names_and_requirements():
     assert repr(ekf) == "GaussianProposalParticleFilter(N=7, proposal='linearized', resampling='systematic')"
     assert repr(ukf) == "GaussianProposalParticleFilter(N=3, proposal='unscented', resampling='residual')"
     np.testing.assert_array_equal(ekf._LQ, [[2.0, 0.0], [1.0, 1.0]])
-    assert ekf._Q.dtype == float and ekf._R.dtype == float
     np.testing.assert_array_equal(ekf._R, [[2.0]])
+    # integer Q and R given as lists are stored as float arrays
+    ints = Bilinear()
+    ints.Q, ints.R = [[4, 2], [2, 2]], [[2]]
+    f = GaussianProposalParticleFilter(ints, 2)
+    assert f._Q.dtype == float and f._R.dtype == float
+
+
+def test_initial_distribution_override_is_used():
+    """m0 = (1, 1), P0 = 4 I: the prior draw is m0 + 2 z, so z = (Z0 - m0) / 2 gives the hand case's
+    particles and the same step-1 results; the filter keeps the overrides. Checked against the
+    wrong formula once: super().__init__(model, m0, None) (the model's P0 = I: particles at
+    m0 + z)."""
+    m0, P0 = np.array([1.0, 1.0]), 4.0 * np.eye(2)
+    f = GaussianProposalParticleFilter(Bilinear(), 2, m0=m0, P0=P0)
+    np.testing.assert_array_equal(f.m0, m0)
+    np.testing.assert_array_equal(f.P0, P0)
+    res = f.filter(Y[:, None, :], ScriptedGenerator([(Z0 - m0) / 2, Z1]))
+    ref = GaussianProposalParticleFilter(Bilinear(), 2).filter(Y[:, None, :], ScriptedGenerator([Z0, Z1]))
+    np.testing.assert_allclose(res.x, ref.x, rtol=1e-14)
+    np.testing.assert_allclose(res.diagnostics["log_evidence"], ref.diagnostics["log_evidence"], rtol=1e-14)
 
 
 def test_constructor_refuses_bad_settings_with_exact_messages():
@@ -404,9 +455,9 @@ def test_constructor_refuses_bad_settings_with_exact_messages():
         GaussianProposalParticleFilter(Bilinear(), 5, proposal="unscented", kappa=-2.0)
     lam = GaussianProposalParticleFilter(Bilinear(), 5, proposal="unscented", kappa=-1.5)._ut[0]
     assert lam == -1.5
-    with pytest.raises(ValueError, match="n_particles"):
+    with pytest.raises(ValueError, match=r"^n_particles must be >= 1, got 0$"):
         GaussianProposalParticleFilter(Bilinear(), 0)
-    with pytest.raises(ValueError, match="ess_threshold"):
+    with pytest.raises(ValueError, match=r"^ess_threshold must lie in \[0, 1\], got 1.5$"):
         GaussianProposalParticleFilter(Bilinear(), 5, ess_threshold=1.5)
     with pytest.raises(ValueError, match="resampling scheme"):
         GaussianProposalParticleFilter(Bilinear(), 5, resampling="best")
