@@ -163,6 +163,10 @@ def _check_update(f, mean_expected, cov_expected):
     # the factor is lower-triangular, positive on its diagonal, and L L^T = Sigma (both runs)
     assert np.all(np.triu(L, 1) == 0) and np.all(np.diagonal(L, axis1=-2, axis2=-1) > 0)
     np.testing.assert_allclose(L @ np.swapaxes(L, -1, -2), np.stack([cov_expected] * 2), rtol=1e-12, atol=1e-14)
+    # one run of N = 3 particles (p0, p1, p0 again; N != n): the same numbers per particle
+    m3, L3 = f.local_update(MU[[0, 1, 0]][None], Y[:1])
+    np.testing.assert_allclose(m3[0], mean_expected[0, [0, 1, 0]], rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(L3[0], L[0, [0, 1, 0]], rtol=1e-12, atol=1e-14)
     return mean, L
 
 
@@ -219,6 +223,8 @@ def test_log_normal_with_shared_and_per_particle_factors_by_hand():
     # a (N, n, n) stack of factors for (N, n) points (no runs axis)
     three = _log_normal(x[0], m[0], np.array([LQ, np.diag([1.0, 3.0])]))
     np.testing.assert_allclose(three, per[0], rtol=1e-14)
+    # three points (N = 3 != n), shared factor: n is read from the last axis
+    np.testing.assert_allclose(_log_normal(x[:, [0, 1, 0]], m[:, [0, 1, 0]], LQ), shared[:, [0, 1, 0]], rtol=1e-14)
 
 
 def test_log_weight_increment_by_hand():
