@@ -380,6 +380,27 @@ def test_filter_by_hand_with_rejuvenations_in_each_run():
     assert 0 < acc1 < 1, keep1
     np.testing.assert_allclose(d["acceptance"], [[0.5, np.nan], [np.nan, acc1]])
     np.testing.assert_array_equal(d["pmmh_steps"], [1, 2])
+    assert d["rejuvenated"].dtype == bool and d["pmmh_steps"].dtype == np.int64
+
+
+def test_filter_state_estimate_averages_each_cloud():
+    """N_x = 2, no rejuvenation (ess_threshold 0): the state estimate at step 1 is
+    sum_m w_m (1/N_x) sum_n x_n^m over the resampled clouds. θ = (.25, .75) (prior U(0, 1)),
+    x_0 = (1, 3) and (0, 2) -> x_1 = (1.25, 1.75) and (1, 2.5); y_1 = 3. The PF resampling
+    (u = .5) keeps both particles of cloud 0 (weights .263/.737: N C - u = (.03, 1.5), counts
+    (1, 1)) and doubles particle 0 of cloud 1 (.964/.036: (1.43, 1.5), counts (2, 0)), so the
+    cloud means are 1.5 and 1.0. Checked against multiplying by N_x instead of dividing."""
+    f = SMC2(SquareObs(), 2, 2, ess_threshold=0.0)
+    script = [("random", [[0.25, 0.75]]), ("standard_normal", np.array([[[1.0, 3.0], [0.0, 2.0]]])[..., None]),
+              ("random", np.full((1, 2, 1), 0.5))]
+    res = f.filter(np.full((1, 1, 1), 3.0), ScriptedStreams(1, script))
+    x1 = np.array([[1.25, 1.75], [1.0, 2.5]])
+    lik = np.exp(ll(3.0, x1))
+    np.testing.assert_allclose(lik[:, 0] / lik.sum(axis=1), [0.26284184, 0.96377994], rtol=1e-7)
+    w = lik.mean(axis=1) / lik.mean(axis=1).sum()
+    np.testing.assert_allclose(res.x[0, 0, 0], w @ [1.5, 1.0], rtol=1e-12)
+    np.testing.assert_allclose(res.diagnostics["theta"][0, 0], w @ [0.25, 0.75], rtol=1e-12)
+    assert not res.diagnostics["rejuvenated"].any() and np.isnan(res.diagnostics["acceptance"]).all()
 
 
 def test_settings_errors_and_repr():
