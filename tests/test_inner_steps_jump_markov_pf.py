@@ -149,9 +149,9 @@ def test_draw_modes_is_the_first_index_whose_cumulative_exceeds_u():
 def test_mode_jump_and_per_mode_transition_by_hand():
     """Step 1 on one run, N = 4: the initial modes from the cumulative initial probabilities,
     the jump from the cumulative ROW of each particle's mode (Pi[from, :]), then each mode's
-    f(x, k = 1) on its own particles plus L_mode z with the Cholesky factor L (not L^T).
-    Checked against the column-wise cumulative (``cumsum(Pi, axis=0)``), against Pi^T and
-    against f(x, k - 1). (L z itself is pinned through x_2 in the resampling test below.)"""
+    f(x, k = 1) on its own particles (the recorded calls). Checked against the column-wise
+    cumulative (``cumsum(Pi, axis=0)``), against Pi^T and against f(x, k - 1). (The noise term
+    L_mode z is pinned through the estimates of the tests below.)"""
     sysm = system()
     rng = ScriptedStreams(1, _script_step1() + [("random", [[0.5]])])
     JumpMarkovParticleFilter(sysm, 4).filter(np.full((1, 1, 1), Y1), rng)
