@@ -269,14 +269,17 @@ def test_partial_resampling_carries_uniform_and_kept_weights():
 def test_resampling_threshold_is_strict():
     """N = 2, ess_threshold 0.5: the second particle's likelihood underflows to 0 (residual
     50), so w = (1, 0) and ESS = 1 = 0.5 * N exactly: not resampled (resample only when
-    ESS < threshold * N), and the zero weight is carried. Checked against ``<=``."""
+    ESS < threshold * N), and the zero weight is carried. Run under ``np.errstate(all="raise")``.
+    Checked against ``<=`` and against the filter's errstate without ``under``/``divide``."""
     z = [[0.0, 0.0], [0.0, 0.0]]
     script = [("standard_normal", [[[0.0, 0.0], [0.0, 100.0]]]), ("random", [[0.1, 0.1]]),
               ("random", [[0.1, 0.1]]), ("standard_normal", [z])]
     # both stay in mode 0: x_1 = (1, 0) and (1, 50) (f0 halves x1), h = 1 and 51, y = 1
-    res = JumpMarkovParticleFilter(system(), 2, ess_threshold=0.5).filter(np.ones((1, 1, 1)),
-                                                                          ScriptedStreams(1, script))
+    with np.errstate(all="raise"):      # the filter's own errstate silences the underflow and log(0)
+        res = JumpMarkovParticleFilter(system(), 2, ess_threshold=0.5).filter(np.ones((1, 1, 1)),
+                                                                              ScriptedStreams(1, script))
     assert res.diagnostics["ess"][0, 0] == 1.0
+    assert res.diagnostics["resampled"].dtype == bool and res.diagnostics["collapsed"].dtype == bool
     assert res.diagnostics["resampled"].tolist() == [[False]]
     np.testing.assert_array_equal(res.x[0, 0], [1.0, 0.0])
 
@@ -307,8 +310,10 @@ def test_settings_errors_and_repr():
 
     with pytest.raises(TypeError, match="^JumpMarkovParticleFilter needs a JumpMarkovSystem, got OnlyModels$"):
         JumpMarkovParticleFilter(OnlyModels(), 4)
-    with pytest.raises(ValueError, match="ess_threshold"):
+    with pytest.raises(ValueError, match="^ess_threshold must lie in"):
         JumpMarkovParticleFilter(sysm, 4, ess_threshold=1.5)
+    with pytest.raises(ValueError, match="^n_particles must be >= 1"):
+        JumpMarkovParticleFilter(sysm, 0)
     with pytest.raises(ValueError, match="resampling"):
         JumpMarkovParticleFilter(sysm, 4, resampling="bogus")
     f = JumpMarkovParticleFilter(sysm, 4, resampling="residual", ess_threshold=0.25)
@@ -330,3 +335,16 @@ def test_the_named_resampling_scheme_is_used():
     rng = ScriptedStreams(1, script)
     JumpMarkovParticleFilter(system(), 4, resampling="multinomial").filter(np.full((1, 1, 1), Y1), rng)
     assert rng.script == [] and rng.log[-1] == ("random", (1, 4))
+
+
+def test_prior_override_reaches_the_initial_draw():
+    """m0 = (1, 2), P0 = diag(4, 9): x_0 = m0 + chol(P0) z = (1 + 2 z_0, 2 + 3 z_1), seen by the
+    mode models at step 1 (the modes are those of the step-1 script). Checked against the
+    override dropped (the system's N(0, I))."""
+    sysm = system()
+    script = _script_step1() + [("random", [[0.5]])]
+    JumpMarkovParticleFilter(sysm, 4, m0=[1.0, 2.0], P0=np.diag([4.0, 9.0])).filter(np.full((1, 1, 1), Y1),
+                                                                                    ScriptedStreams(1, script))
+    x0 = np.array([1.0, 2.0]) + np.array(X_0) * [2.0, 3.0]
+    np.testing.assert_allclose(sysm.models[0].calls[0][1], x0[[0, 2]], rtol=1e-12)
+    np.testing.assert_allclose(sysm.models[1].calls[0][1], x0[[1, 3]], rtol=1e-12)

@@ -67,10 +67,11 @@ class SquareObs(ParameterizedModel):
     def __init__(self, bounds=(0.0, 1.0)):
         mid = 0.5 * (bounds[0] + bounds[1])
         super().__init__(1, 1, 1, 0.0, 1.0, [0.0], [0.0], 1.0, [mid], bounds)
-        self.calls = []
+        self.calls, self.thetas = [], []
 
     def f(self, x, k, theta):
         self.calls.append((k, np.shape(theta)))
+        self.thetas.append(np.array(theta))
         return theta * x + k
 
     def h(self, x):
@@ -201,6 +202,9 @@ def _rejuvenate_upper(**kw):
     rng = ScriptedStreams(1, script)
     out = f._rejuvenate(X_IN.copy(), TH_IN.copy(), LL_IN.copy(), W_IN.copy(), np.array([[[4.0]]]), rng)
     assert rng.script == []
+    # the fresh PFs run the model inside the prior's support only (the outside proposal at the bound)
+    top = max(t.max() for t in m.thetas)
+    assert top == 1.0 if not kw else top < 1.0
     return out
 
 
@@ -211,7 +215,9 @@ def test_pmmh_move_near_the_upper_bound_by_hand():
     - log p̂(y | θ) and only inside the prior's support (0, 1). Accepted particles carry θ',
     the new log p̂ and the fresh PF's cloud; rejected ones keep the resampled θ, log p̂ and
     cloud; the acceptance rate is 2/4.
-    Checked against: no support check (p2 accepted at θ' = 1.0066), the inverse ratio, the
+    The fresh PF of the outside proposal runs at the bound (the model never sees θ outside
+    the support). Checked against: no support check (p2 accepted at θ' = 1.0066), no clip at
+    the upper bound, the inverse ratio, the
     sample sd (ddof = 1), the sd of the cloud before resampling, and a rejected particle
     carrying the fresh cloud."""
     prop, ll_new = _upper_case()
@@ -244,7 +250,8 @@ def test_collapsed_cloud_at_the_lower_bound_moves_by_the_floor_two_moves():
     move 2 starts from the state move 1 left: θ = (1 + 1e-6, 1 + 5e-6, 1 + 1e-6), spread
     1.9e-6 < 4e-6 (floor again); ε = (.5, -.5, 1) -> all inside, p0 and p1 accepted, p2 not.
     Acceptance = mean over the moves of the accepted fraction = (1/3 + 2/3) / 2.
-    Checked against the floor 1e-6 (not scaled by hi - lo), (hi + lo), the acceptance summed
+    The outside proposal's PF runs at the lower bound.
+    Checked against no clip at the lower bound, the floor 1e-6 (not scaled by hi - lo), (hi + lo), the acceptance summed
     over the moves instead of averaged, and move 2 proposing from the state before move 1."""
     m = SquareObs((1.0, 5.0))
     f = SMC2(m, 3, 1, n_moves=2)
@@ -264,6 +271,7 @@ def test_collapsed_cloud_at_the_lower_bound_moves_by_the_floor_two_moves():
     x, theta, loglik, acc = f._rejuvenate(x_in.copy(), np.full((1, 3), t0), ll_in.copy(), np.full((1, 3), 1 / 3),
                                           y, rng)
     assert rng.script == []
+    assert min(t.min() for t in m.thetas) == 1.0          # the outside proposal's PF runs at the bound
     floor = 1e-6 * 4.0
     p1 = t0 + floor * z1
     assert p1[0] < 1.0 < p1[1]
@@ -418,3 +426,95 @@ def test_settings_errors_and_repr():
     assert f.name == "SMC²" and f.needs_rng
     with pytest.raises(TypeError, match="rng"):
         f.filter(np.ones((1, 1, 1)), None)
+
+
+# ------------------------------------------------------------------------------ 6. more cases
+class SquareObs2D(ParameterizedModel):
+    """dim_x = 2: x_k = θ x_{k-1} + k (Q = 0), y_k = x_{k,0}² + x_{k,1} + v, v ~ N(0, 1)."""
+
+    def __init__(self):
+        super().__init__(2, 1, 1, np.zeros((2, 2)), 1.0, [0.0, 0.0], [0.0, 0.0], np.eye(2), [0.5], (0.0, 1.0))
+
+    def f(self, x, k, theta):
+        return theta * x + k
+
+    def h(self, x):
+        return x[..., :1] ** 2 + x[..., 1:]
+
+
+def test_pf_step_resamples_whole_state_vectors():
+    """dim_x = 2, one run, M = 1, N_x = 2, k = 1, θ = .5: x' = (.5 x + 1) = (1, 1.5) and (2, 0);
+    h = 2.5 and 4; y = 4: w ∝ (e^-1.125, 1), N C = (.490, 2); u = .6: counts (0, 2): both
+    rows become (2, 0). Checked against ``np.repeat`` without ``axis=0`` (a flattened repeat
+    of the coordinates)."""
+    f = SMC2(SquareObs2D(), 2, 2)
+    x = np.array([[[[0.0, 1.0], [2.0, -2.0]]]])
+    xn, inc = f._pf_step(x, np.array([[0.5]]), np.array([[4.0]]), 1, ScriptedStreams(1, [("random", [[[0.6]]])]))
+    lik = np.exp(-0.5 * np.array([1.5, 0.0]) ** 2)
+    np.testing.assert_allclose(2 * lik[0] / lik.sum(), 0.49017, rtol=1e-4)
+    np.testing.assert_array_equal(xn[0, 0], [[2.0, 0.0], [2.0, 0.0]])
+    np.testing.assert_allclose(inc, [[np.log(lik.mean()) - LOG_2PI_2]], rtol=1e-12)
+
+
+def test_rejuvenate_two_runs_at_once_uses_each_runs_own_spread():
+    """Two runs in one call (every run rejuvenating draws from the whole rng): run 0 is the
+    upper-bound case above, run 1 the same cloud shifted down by .5 with twice the spread
+    (θ = (.35, .39, .43, .43) after resampling, sd = 2 SD_R). Each run's proposal uses ITS OWN
+    cloud's mean and spread, and its acceptance rate is its own. Checked against the mean, the
+    sd and the acceptance rate pooled over the runs (``axis=None``)."""
+    m = SquareObs((0.0, 1.0))
+    f = SMC2(m, 4, 1)
+    th_in = np.array([TH_IN[0], [0.30, 0.35, 0.39, 0.43]])
+    ll_in = np.array([LL_IN[0], LL_IN[0]])
+    x_in = np.concatenate([X_IN, X_IN])
+    w_in = np.array([W_IN[0], W_IN[0]])
+    u_acc_1 = np.array([1e-12, 1e-12, 0.999999, 1e-12])
+    script = [("random", [[0.5], [0.5]]), ("standard_normal", [Z_RW, Z_RW]),
+              ("standard_normal", np.ones((2, 4, 1, 1))), ("random", np.full((2, 4, 1), 0.5)),
+              ("random", [U_ACC, u_acc_1])]
+    x, theta, loglik, acc = f._rejuvenate(x_in, th_in, ll_in, w_in, np.array([[[4.0]], [[4.0]]]),
+                                          ScriptedStreams(2, script))
+    prop0, _ = _upper_case()
+    th_r1 = np.array([0.35, 0.39, 0.43, 0.43])
+    sd1 = np.sqrt(((th_r1 - th_r1.mean()) ** 2).mean())
+    np.testing.assert_allclose(sd1, 2 * SD_R, rtol=1e-12)
+    prop1 = th_r1 + sd1 * Z_RW
+    ll_new1 = np.array([pf1(p, 1.0, [4.0])[0] for p in prop1])
+    keep1 = np.log(u_acc_1) < ll_new1 - ll_in[0, [1, 2, 3, 3]]
+    assert keep1.tolist() == [True, True, False, True]
+    np.testing.assert_allclose(theta[0], [prop0[0], 0.97, 0.99, prop0[3]], rtol=1e-12)
+    np.testing.assert_allclose(theta[1], np.where(keep1, prop1, th_r1), rtol=1e-12)
+    np.testing.assert_allclose(acc, [0.5, 0.75])
+
+
+def test_rejuvenation_threshold_is_strict_and_runs_under_raise():
+    """M = 2, N_x = 1, ess_threshold .5: θ-particle 1's likelihood underflows to 0 (x_1 = 9,
+    residual 77), so the θ-weights are (1, 0) and ESS = 1 = .5 M exactly: no rejuvenation
+    (only ESS < threshold · M moves). The run happens under ``np.errstate(all="raise")``: the
+    filter's own ``errstate`` must silence the underflow and log(0) it meets. Checked against
+    ``<=`` and against the errstate without ``under``/``divide``."""
+    f = SMC2(SquareObs((0.0, 1.0)), 2, 1, ess_threshold=0.5)
+    script = [("random", [[0.5, 0.8]]), ("standard_normal", [[[[1.0]], [[10.0]]]]),
+              ("random", np.full((1, 2, 1), 0.5))]
+    with np.errstate(all="raise"):
+        res = f.filter(np.full((1, 1, 1), 2.25), ScriptedStreams(1, script))
+    # x_1 = .5 + 1 = 1.5 (h = 2.25 = y), .8 * 10 + 1 = 9 (h = 81)
+    assert res.diagnostics["theta_ess"][0, 0] == 1.0
+    assert not res.diagnostics["rejuvenated"].any()
+    np.testing.assert_allclose(res.diagnostics["theta"][0, 0], 0.5, rtol=1e-12)
+    np.testing.assert_allclose(res.diagnostics["log_evidence"], [np.log(0.5) - LOG_2PI_2], rtol=1e-12)
+
+
+def test_documented_defaults_and_exact_messages():
+    """The defaults (M = 200, N_x = 100, ess_threshold .5, c = 1, one move, systematic) and the
+    argument named at the start of each error message. Checked against a default changed by
+    one and a misnamed argument."""
+    f = SMC2(SquareObs())
+    assert (f.n_theta, f.n_x, f.ess_threshold, f.rw_scale, f.n_moves, f.resampling) == (200, 100, 0.5, 1.0, 1,
+                                                                                        "systematic")
+    m = SquareObs()
+    for kw, msg in (({"n_theta": 0}, "n_theta must be >= 1"), ({"n_x": 0}, "n_x must be >= 1"),
+                    ({"ess_threshold": 2.0}, "ess_threshold must lie in"), ({"rw_scale": -1.0}, "rw_scale must be"),
+                    ({"n_moves": 0}, "n_moves must be >= 1")):
+        with pytest.raises(ValueError, match="^" + msg):
+            SMC2(m, **{"n_theta": 4, "n_x": 5, **kw})
