@@ -13,8 +13,6 @@ to ``src/``, the test failed, reverted).
 """
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
 

@@ -414,7 +414,8 @@ def test_filter_state_estimate_averages_each_cloud():
 def test_settings_errors_and_repr():
     """Constructor checks and the repr. Checked against ``n_theta < 1`` for ``< 2``."""
     m = SquareObs()
-    with pytest.raises(ValueError, match=r"^n_theta must be >= 2 \(the random walk is scaled by the θ-cloud's spread\)$"):
+    msg = r"^n_theta must be >= 2 \(the random walk is scaled by the θ-cloud's spread\)$"
+    with pytest.raises(ValueError, match=msg):
         SMC2(m, 1, 5)
     for bad in ({"n_x": 0}, {"ess_threshold": 1.5}, {"n_moves": 0}, {"resampling": "bogus"}):
         with pytest.raises(ValueError, match=list(bad)[0]):
