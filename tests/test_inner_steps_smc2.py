@@ -24,42 +24,12 @@ import pytest
 
 from pfrepro.filters.smc2 import SMC2, _systematic_counts_nd
 from pfrepro.models.parameterized import ParameterizedModel
-from pfrepro.rng import RunStreams
+from scripted_streams import ScriptedStreams
 
 LOG_2PI_2 = 0.5 * np.log(2 * np.pi)
 
 
 # ------------------------------------------------------------------------------ stubs
-class ScriptedStreams(RunStreams):
-    """A RunStreams whose draws are scripted: each ``random``/``standard_normal`` call returns
-    the next ``(method, array)`` of the shared ``script`` (method and shape checked); ``subset``
-    logs the selected runs and returns a child that reads the same script."""
-
-    def __init__(self, runs, script, log=None):
-        super().__init__([np.random.default_rng(0)] * runs)
-        self.script = script
-        self.log = [] if log is None else log
-
-    def subset(self, sel):
-        idx = np.flatnonzero(sel) if np.asarray(sel).dtype == bool else np.asarray(sel).ravel()
-        self.log.append(("subset", idx.tolist()))
-        return ScriptedStreams(len(idx), self.script, self.log)
-
-    def _next(self, method, size):
-        assert self.script, f"unscripted draw {method}{size}"
-        m, a = self.script.pop(0)
-        a = np.asarray(a, dtype=float)
-        assert (m, a.shape) == (method, tuple(size)), f"draw {method}{tuple(size)}, script has {m}{a.shape}"
-        self.log.append((method, tuple(size)))
-        return a.copy()
-
-    def random(self, size=None, dtype=np.float64):
-        return self._next("random", size)
-
-    def standard_normal(self, size=None, dtype=np.float64):
-        return self._next("standard_normal", size)
-
-
 class SquareObs(ParameterizedModel):
     """x_k = θ x_{k-1} + k (Q = 0), y_k = x_k² + v, v ~ N(0, 1); prior N(0, 1); records the
     (k, θ shape) of every transition."""
