@@ -134,6 +134,10 @@ def test_scorecard_formats(fmt, li_run, capsys):
     elif fmt == "json":
         rows = json.loads(text)
         assert len(rows) == 10 and all("verdict" in r for r in rows)
+        # every number exactly as saved (pandas' to_json had kept 10 digits), a missing one null
+        saved = json.loads((out / "claims" / "ekf_pf_li2012.json").read_text())
+        for r, s in zip(rows, saved):
+            assert r["reproduced"] == s["reproduced"] and r["se"] == s["se"] and r["diff"] == s["diff"]
     else:
         assert "table1-pf-model2" in text and "verdict" in text
 

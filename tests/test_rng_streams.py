@@ -103,6 +103,8 @@ def test_every_draw_is_each_runs_own_generator_draw():
         ("gamma default", lambda s: s.gamma(2.0, size=(R, 4)), lambda g, i: g.gamma(2.0, 1.0, 4)),
         ("exponential", lambda s: s.exponential(scale[:, 0], (R, 4)), lambda g, i: g.exponential(scale[i, 0], 4)),
         ("exponential default", lambda s: s.exponential(size=(R, 4)), lambda g, i: g.exponential(1.0, 4)),
+        ("poisson", lambda s: s.poisson(3.0 * scale[:, 0], (R, 4)), lambda g, i: g.poisson(3.0 * scale[i, 0], 4)),
+        ("poisson default", lambda s: s.poisson(size=(R, 4)), lambda g, i: g.poisson(1.0, 4)),
         ("integers", lambda s: s.integers(2, 9, (R, 5)), lambda g, i: g.integers(2, 9, 5)),
         ("integers one bound", lambda s: s.integers(7, size=(R, 5)), lambda g, i: g.integers(0, 7, 5)),
         ("integers int8", lambda s: s.integers(0, 100, (R, 5), dtype=np.int8),

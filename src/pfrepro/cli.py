@@ -398,7 +398,14 @@ def cmd_scorecard(args) -> int:
     if args.format == "csv":
         sys.stdout.write(df.to_csv(index=False))
     elif args.format == "json":
-        sys.stdout.write(df.to_json(orient="records", indent=1) + "\n")
+        # every number as Python writes it (round-trips exactly, as in the CSV and the saved
+        # claims); pandas' to_json kept 10 digits. A missing number (NaN) is null.
+        import json
+        import math
+
+        rows = [{k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in r.items()}
+                for r in df.to_dict(orient="records")]
+        sys.stdout.write(json.dumps(rows, indent=1) + "\n")
     else:
         print(_claims_table(df))
         print()

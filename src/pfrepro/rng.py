@@ -8,8 +8,8 @@ without changing its numbers.
 
 :class:`RunStreams` holds one generator per run and answers the same draw calls
 as a ``Generator`` (``standard_normal``, ``random``, ``uniform``, ``normal``,
-``beta``, ``choice``, ``integers``, ``permuted``), filling slice ``[i]`` of the
-result from run i's own generator. Filters and models therefore stay written
+``beta``, ``gamma``, ``exponential``, ``poisson``, ``choice``, ``integers``,
+``permuted``), filling slice ``[i]`` of the result from run i's own generator. Filters and models therefore stay written
 against the ``Generator`` interface; the only rule they follow is
 
     **every draw has the runs axis first** (``size=(runs, ...)``), and a draw
@@ -279,6 +279,24 @@ class RunStreams:
             not depend on the other runs.
         """
         return self._per_run("exponential", size, scale)
+
+    def poisson(self, lam=1.0, size=None):
+        """``Generator.poisson`` per run, with the runs axis first (count models).
+
+        Parameters
+        ----------
+        lam : float or array_like
+            Rate λ >= 0; an array broadcasts against ``size``, run i uses slice ``[i]``.
+        size : tuple of int
+            ``(runs, ...)``; its first entry must equal ``len(self)`` (``ValueError`` otherwise).
+
+        Returns
+        -------
+        ndarray of int64
+            Shape ``size``; slice ``[i]`` is drawn from run i's Generator alone, so it does
+            not depend on the other runs.
+        """
+        return self._per_run("poisson", size, lam, dtype=np.int64)
 
     def integers(self, low, high=None, size=None, dtype=np.int64):
         """``Generator.integers`` per run, with the runs axis first.
