@@ -176,6 +176,21 @@ def test_every_bad_argument_exits_2_with_one_line(capsys, tmp_path):
         assert "Traceback" not in err and out == "", argv
 
 
+def test_out_of_another_paper_is_refused(tmp_path, capsys):
+    """A reused --out would mix two papers' table1.csv / fig1.png: refused in one line, exit 2,
+    before any work; rerunning the same paper into its own --out is allowed."""
+    (tmp_path / "claims").mkdir()
+    (tmp_path / "claims" / "gpff_zhang2016.json").write_text("[]")
+    code, out, err = run_cli(["run", "li2012", "--runs", "2", "--out", str(tmp_path)], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "another paper (gpff_zhang2016)" in err and "choose another --out" in err
+    assert not (tmp_path / "table1.csv").exists()
+    (tmp_path / "claims" / "gpff_zhang2016.json").unlink()
+    (tmp_path / "claims" / "ekf_pf_li2012.json").write_text("[]")        # the same paper: rerun in place
+    code, out, err = run_cli(["run", "li2012", "--runs", "2", "--out", str(tmp_path)], capsys)
+    assert code == 0, err
+
+
 def test_bad_paper_message_names_the_choices(capsys):
     code, _, err = run_cli(["run", "nosuchpaper"], capsys)
     assert code == 2 and "li2012" in err and "gpff" in err

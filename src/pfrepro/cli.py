@@ -209,6 +209,10 @@ def cmd_run(args) -> int:
     if args.out is not None and not args.out.strip():
         raise UsageError("--out must name a directory, got an empty string (use --out . for the current one)")
     out = _writable_dir(Path(args.out if args.out is not None else f"pfrepro-{paper.key}"))
+    others = sorted(p.stem for p in (out / "claims").glob("*.json") if p.stem != paper.key)
+    if others:   # tables and figures share names across papers (table1.csv, fig1.png): never mix two
+        raise UsageError(f"--out {str(out)!r} holds the results of another paper ({', '.join(others)}); "
+                         f"choose another --out for {paper.key}")
     import matplotlib
 
     if "matplotlib.pyplot" not in sys.modules:
