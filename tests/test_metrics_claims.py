@@ -266,7 +266,8 @@ def test_claims_table(tmp_path):
     reg.add("read", "a conclusion", readings={"R = 10": True, "R = 100": False})
     t = claims_table(reg)
     assert list(t.columns) == ["id", "claim", "ours", "published", "judged", "verdict", "test"]
-    assert t["verdict"].tolist() == ["reproduced", "inconclusive", "reproduced", "inconclusive"]
+    assert t["verdict"].tolist() == ["reproduced", "inconclusive (too few runs)", "reproduced",
+                                    "inconclusive (depends on the reading)"]
     # what was judged: a cost claim's numbers (0.5 vs 0.3) are context, its ordering decides
     assert t["judged"].tolist() == ["value", "ordering (paired)", "ordering, on counts (numbers: context)",
                                     "statement under every reading"]

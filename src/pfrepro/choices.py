@@ -12,6 +12,12 @@ coefficient, a noise level, a threshold, a reading of an ambiguous sentence) as
 ``reading``
     the chapter runs each admissible value (a *reading* of the paper) and every claim
     that depends on it is decided under every reading.
+``design choice``
+    a value we chose where the paper says nothing (its reason given); no verdict may rest on
+    it unless it is also run at another value (tagged readings, as for a reading).
+
+A row *fixed by the paper* cites the paper's place in ``source`` (a line, section, table,
+figure or equation); a value we chose is never *fixed by the paper*.
 
 The rule (CONTRIBUTING.md, *Free choices*): a claim that depends on a choice which
 is not fixed by the paper declares it (``depends_on=`` in
@@ -31,14 +37,15 @@ from pathlib import Path
 
 import pandas as pd
 
-__all__ = ["FreeChoice", "FIXED", "SWEEP", "READING", "STATUSES", "over", "choices_table",
+__all__ = ["FreeChoice", "FIXED", "SWEEP", "READING", "DESIGN", "STATUSES", "reading_values_of", "over", "choices_table",
            "as_choice_map", "check_claim", "FreeChoiceError", "save_choices", "load_choices"]
 
 FIXED = "fixed by the paper"
 SWEEP = "does not matter (sweep)"
 READING = "reading"
+DESIGN = "design choice"
 #: The statuses a row of an assumptions table can have.
-STATUSES = (FIXED, SWEEP, READING)
+STATUSES = (FIXED, SWEEP, READING, DESIGN)
 
 
 class FreeChoiceError(ValueError):
@@ -126,6 +133,22 @@ def _tags(keys) -> set:
     return tags
 
 
+def _norm(v) -> str:
+    return " ".join(str(v).strip().lower().split())
+
+
+def reading_values_of(choice: str, keys) -> set:
+    """The values of ``choice`` named by the reading names ``keys`` (``"<choice>=<value>"`` parts)."""
+    out = set()
+    for k in keys or ():
+        for part in str(k).split(","):
+            if "=" in part:
+                name, value = part.split("=", 1)
+                if name.strip() == choice:
+                    out.add(value.strip())
+    return out
+
+
 def check_claim(claim_id: str, depends_on, readings, reading_values, choices) -> None:
     """Raise :class:`FreeChoiceError` unless every free choice the claim depends on is covered.
 
@@ -145,6 +168,12 @@ def check_claim(claim_id: str, depends_on, readings, reading_values, choices) ->
             raise FreeChoiceError(
                 f"claim {claim_id!r} depends on the free choice {name!r} ({c.status}) but is decided under "
                 f"no value of it: pass readings=/reading_values= tagged '{name}=<value>' (pfrepro.choices.over)")
+        if c.status != FIXED:
+            values = reading_values_of(name, list(readings or ()) + list(reading_values or ()))
+            if values and all(_norm(v) == _norm(c.value) for v in values):
+                raise FreeChoiceError(
+                    f"claim {claim_id!r} depends on the free choice {name!r} but is decided only at its main "
+                    f"value {c.value!r}: run another value of it as a reading")
 
 
 def choices_table(choices) -> pd.DataFrame:

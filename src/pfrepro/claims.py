@@ -72,7 +72,8 @@ import pandas as pd
 # the paired-comparison statistics live in pfrepro.stats; re-exported here, where chapters found them
 from .stats import CommonRunsError, common_runs, paired_difference
 
-__all__ = ["Claim", "ClaimsRegistry", "verdict", "VERDICTS", "claims_dir", "load_all_claims",
+__all__ = ["Claim", "ClaimsRegistry", "verdict", "judge", "judge_ordering", "combine_readings", "Judgement",
+           "CAUSES", "CAUSE_READING", "CAUSE_RUNS", "CAUSE_TIE", "CAUSE_COUNT", "VERDICTS", "claims_dir", "load_all_claims",
            "DEFAULT_REL_TOL", "Z_CRIT", "ordering_holds", "weakest_ordering",
            "readings_hold", "claims_table", "BASES", "number_matches", "check_saved_claims"]
 
@@ -159,63 +160,253 @@ def _reading_pair(v):
     return value, se
 
 
-def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, qualitative=None,
-            diff=None, diff_se=None, published_se=None, basis="", readings=None,
-            reading_values=None, not_checkable="") -> str:
-    """The verdict rule (see module docstring). All inputs are numbers or None/bool.
+#: Why an inconclusive claim is inconclusive (:attr:`Judgement.cause`).
+CAUSE_READING = "depends on the reading"
+CAUSE_RUNS = "too few runs"
+CAUSE_TIE = "tie within the stated margin"
+CAUSE_COUNT = "the count does not decide"
+CAUSES = (CAUSE_READING, CAUSE_RUNS, CAUSE_TIE, CAUSE_COUNT)
+_POSITIVE = ("reproduced", "qualitatively reproduced")
 
-    ``diff``/``diff_se`` (an ordering decided on paired differences) or ``readings``
-    (a mapping reading -> holds; with a ``diff`` beside them the readings decide and the
-    diff is the main reading's, for display) take the place of ``qualitative`` when given; an
-    undecided ordering or disagreeing readings give ``inconclusive`` unless the
-    published number itself is matched. ``published_se`` (the paper's own standard
-    error) widens the interval: inside iff
-    ``|reproduced - published| <= Z_CRIT * sqrt(se**2 + published_se**2)``.
-    ``basis="count"``: a cost claim decided by ``qualitative`` alone (the count's answer);
-    ``None`` gives ``inconclusive``. ``reading_values`` (reading -> ``(ours, se)``): the
-    published number must be matched under the main reading and every other one
-    (mixed: ``inconclusive``). ``not_checkable`` (a reason): ``not checkable``.
+
+@dataclass(frozen=True)
+class Judgement:
+    """A verdict with what decided it.
+
+    Attributes
+    ----------
+    verdict : str
+        One of :data:`VERDICTS`.
+    cause : str
+        For ``inconclusive``: one of :data:`CAUSES`; else ``""``.
+    runs_needed : int or None
+        For ``too few runs``: the runs that would decide the undecided reading(s) with 80 % power
+        (:func:`pfrepro.stats.plan_runs` against the printed effect or the stated margin);
+        ``None`` when no size was stated.
+    per_reading : tuple
+        ``(reading, verdict, cause)`` of every admissible reading, when the claim has readings.
+    """
+
+    verdict: str
+    cause: str = ""
+    runs_needed: int | None = None
+    per_reading: tuple = ()
+
+    def under(self, kind: str) -> list:
+        """The readings under which the claim ``"holds"`` (reproduced or qualitatively reproduced),
+        ``"fails"`` (not reproduced), ``"ties"`` or is ``"undecided"`` (too few runs)."""
+        test = {"holds": lambda v, c: v in _POSITIVE, "fails": lambda v, c: v == "not reproduced",
+                "ties": lambda v, c: c == CAUSE_TIE,
+                "undecided": lambda v, c: v == "inconclusive" and c != CAUSE_TIE}[kind]
+        return [r for r, v, c in self.per_reading if test(v, c)]
+
+
+def _needed(diff_se, runs, size):
+    """Runs a plan asks for to resolve ``size`` given ``diff_se`` on ``runs`` runs (None if unknown)."""
+    from .stats import plan_runs
+
+    if not (_isnum(size) and size > 0 and _isnum(diff_se) and runs):
+        return None
+    return plan_runs(float(diff_se) * math.sqrt(int(runs)), float(size), z=Z_CRIT)
+
+
+def judge_ordering(diff, diff_se, *, effect=None, margin=None, rel_tol=DEFAULT_REL_TOL, runs=None) -> Judgement:
+    """The verdict of one ordering under one reading: the paired difference ``diff ± diff_se``
+    (the claim asserts ``diff > 0``) against the printed effect or the stated margin.
+
+    With a printed ``effect`` (> 0: the size the paper's own numbers give, oriented like ``diff``),
+    direction *and* size are judged (the truth table in CONTRIBUTING.md). "Shown" is
+    ``diff > Z_CRIT * diff_se``, "reversed" ``diff < -Z_CRIT * diff_se``, "attained"
+    ``|diff - effect| <= Z_CRIT * diff_se`` (or within ``rel_tol`` of the effect):
+
+    ========  ==========  ======================================
+    shown     attained    verdict
+    ========  ==========  ======================================
+    yes       yes         reproduced
+    yes       no          qualitatively reproduced
+    reversed  --          not reproduced
+    no        no          not reproduced (the printed size excluded)
+    no        yes         inconclusive, too few runs (0 and the effect both inside)
+    ========  ==========  ======================================
+
+    Without a printed effect: shown -> reproduced; reversed -> not reproduced; otherwise
+    inconclusive, a *tie within the stated margin* when ``diff ± Z_CRIT * diff_se`` lies inside
+    ``(-margin, margin)``, else *too few runs*. ``runs`` (the runs behind ``diff``) gives the runs a
+    plan would need (:attr:`Judgement.runs_needed`).
+    """
+    shown = ordering_holds(diff, diff_se)
+    if effect is not None:
+        if not (_isnum(effect) and effect > 0):
+            raise ValueError(f"a printed effect must be a finite number > 0 oriented like diff, got {effect!r}")
+        gap = abs(diff - effect)
+        attained = gap <= Z_CRIT * diff_se or gap <= (rel_tol or 0.0) * effect
+        if shown is True:
+            return Judgement("reproduced" if attained else "qualitatively reproduced")
+        if shown is False or not attained:
+            return Judgement("not reproduced")
+        return Judgement("inconclusive", CAUSE_RUNS, _needed(diff_se, runs, effect))
+    if shown is True:
+        return Judgement("reproduced")
+    if shown is False:
+        return Judgement("not reproduced")
+    if _isnum(margin) and margin > 0 and abs(diff) + Z_CRIT * diff_se < margin:
+        return Judgement("inconclusive", CAUSE_TIE)
+    return Judgement("inconclusive", CAUSE_RUNS, _needed(diff_se, runs, margin))
+
+
+def _statement(holds, basis="") -> Judgement:
+    if holds is None:
+        return Judgement("inconclusive", CAUSE_COUNT if basis == "count" else CAUSE_RUNS)
+    return Judgement("reproduced" if bool(holds) else "not reproduced")
+
+
+def combine_readings(per_reading: dict) -> Judgement:
+    """One verdict from the verdicts of the admissible readings (reading -> :class:`Judgement`).
+
+    * the same verdict (and cause) under every reading -> that verdict;
+    * the direction shown under every reading, the printed size under some only -> *qualitatively
+      reproduced* (the strongest statement true under every reading);
+    * the decided readings disagree (holds under some, fails or ties under others) -> *inconclusive*,
+      cause *depends on the reading* (:meth:`Judgement.under` names which);
+    * the decided readings agree and some reading is undecided -> *inconclusive*, cause *too few runs*
+      (``runs_needed``: the most any undecided reading needs), or the undecided reading's own cause.
+    """
+    if not per_reading:
+        raise ValueError("combine_readings needs at least one reading")
+    rows = tuple((str(r), j.verdict, j.cause) for r, j in per_reading.items())
+    js = list(per_reading.values())
+
+    def kind(j):
+        if j.verdict in _POSITIVE:
+            return "holds"
+        if j.verdict == "not reproduced":
+            return "fails"
+        return "ties" if j.cause == CAUSE_TIE else "undecided"
+
+    kinds = [kind(j) for j in js]
+    decided = {k for k in kinds if k != "undecided"}
+    if len(decided) > 1:
+        return Judgement("inconclusive", CAUSE_READING, None, rows)
+    if "undecided" in kinds:
+        und = [j for j in js if kind(j) == "undecided"]
+        causes = {j.cause for j in und}
+        cause = causes.pop() if len(causes) == 1 else CAUSE_RUNS
+        needs = [j.runs_needed for j in und if j.cause == CAUSE_RUNS]
+        need = max(needs) if needs and all(n is not None for n in needs) else None
+        return Judgement("inconclusive", cause, need, rows)
+    if decided == {"ties"}:
+        return Judgement("inconclusive", CAUSE_TIE, None, rows)
+    verdicts = {j.verdict for j in js}
+    if len(verdicts) == 1:
+        return Judgement(verdicts.pop(), "", None, rows)
+    return Judgement("qualitatively reproduced", "", None, rows)
+
+
+def _diff_triple(v):
+    """``(diff, se, runs)`` from a reading_diffs entry ``(diff, se)`` or ``(diff, se, runs)``."""
+    try:
+        vals = list(v)
+    except TypeError:
+        raise ValueError(f"reading_diffs entries must be (diff, se) or (diff, se, runs), got {v!r}") from None
+    if len(vals) not in (2, 3) or not (_isnum(vals[0]) and _isnum(vals[1]) and vals[1] >= 0):
+        raise ValueError(f"reading_diffs entries must be (diff, se[, runs]) with finite diff and se >= 0, got {v!r}")
+    runs = int(vals[2]) if len(vals) == 3 and vals[2] is not None else None
+    return float(vals[0]), float(vals[1]), runs
+
+
+def judge(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, qualitative=None,
+          diff=None, diff_se=None, published_se=None, basis="", readings=None,
+          reading_values=None, not_checkable="", effect=None, margin=None, runs=None,
+          reading_diffs=None, excluded=None) -> Judgement:
+    """The verdict rule with its cause (see the module docstring and CONTRIBUTING.md).
+
+    The ordering is judged per admissible reading: ``reading_diffs`` (reading -> ``(diff, se[, runs])``,
+    every reading including the main one) by :func:`judge_ordering` against ``effect`` / ``margin``;
+    ``readings`` (reading -> holds) as statements; otherwise the main ``diff``/``diff_se`` (or
+    ``qualitative``). Readings named in ``excluded`` (reading -> why the paper excludes it) are context
+    and not counted. The readings are combined by :func:`combine_readings`. A published number
+    (``published`` and ``reproduced``) is judged under the main reading and every ``reading_values``
+    entry: matched under all -> *reproduced*; under some -> *qualitatively reproduced* if the ordering
+    holds under every reading, else *inconclusive* (depends on the reading); under none -> the
+    ordering decides (*qualitatively reproduced* / *not reproduced* / its inconclusive cause).
     """
     if not_checkable:
-        return "not checkable"
+        return Judgement("not checkable")
     basis = basis or ""
     if basis not in BASES:
         raise ValueError(f"basis must be one of {BASES}, got {basis!r}")
-    undecided = False
     has_diff = diff is not None or diff_se is not None
-    if qualitative is not None and (has_diff or readings is not None):
+    if qualitative is not None and (has_diff or readings is not None or reading_diffs is not None):
         raise ValueError("give either qualitative or diff/diff_se or readings, not more than one")
-    if readings is not None:
-        # the readings decide (the main reading is one of them); a diff given beside them
-        # is the main reading's paired difference, shown but not deciding on its own
-        qualitative = readings_hold(readings)
-        undecided = qualitative is None
+    if effect is not None and not (_isnum(effect) and effect > 0):
+        raise ValueError(f"a printed effect must be a finite number > 0 oriented like diff, got {effect!r}")
+    if margin is not None and not (_isnum(margin) and margin > 0):
+        raise ValueError(f"a margin must be a finite number > 0, got {margin!r}")
+    if effect is not None and readings:
+        raise ValueError("a claim with a printed effect judges each reading on its difference: "
+                         "pass reading_diffs={reading: (diff, se, runs)}, not readings")
+    if effect is not None and not (has_diff or reading_diffs):
+        raise ValueError("a printed effect needs the paired difference (diff, diff_se or reading_diffs)")
+    skip = set(excluded or {})
+    kw = dict(effect=effect, margin=margin, rel_tol=rel_tol)
+    per = {}
+    for r, v in (readings or {}).items():
+        if r not in skip:
+            per[r] = _statement(v, basis)
+    for r, v in (reading_diffs or {}).items():
+        if r not in skip:
+            d, s, n = _diff_triple(v)
+            per[r] = judge_ordering(d, s, runs=n, **kw)
+    if readings or reading_diffs:
+        if not per:
+            raise ValueError("every reading of the claim is excluded: keep at least one admissible reading")
+        order = combine_readings(per)
     elif has_diff:
-        qualitative = ordering_holds(diff, diff_se)
-        undecided = qualitative is None
+        if not (_isnum(diff) and _isnum(diff_se)) or diff_se < 0:
+            raise ValueError(f"ordering needs finite diff and diff_se >= 0, got {diff!r}, {diff_se!r}")
+        order = judge_ordering(diff, diff_se, runs=runs, **kw)
+    elif qualitative is not None:
+        order = _statement(qualitative, basis)
+    else:
+        order = None
     if basis == "count":
-        if qualitative is None:
-            return "inconclusive"
-        return "reproduced" if bool(qualitative) else "not reproduced"
+        if order is None:
+            return Judgement("inconclusive", CAUSE_COUNT)
+        return order if order.verdict != "inconclusive" or order.cause else Judgement(
+            "inconclusive", CAUSE_COUNT, None, order.per_reading)
     if reading_values and not (_isnum(published) and _isnum(reproduced)):
         raise ValueError("reading_values judge a published number: give published and reproduced too")
     if _isnum(published) and _isnum(reproduced):
         matched = [number_matches(published, reproduced, se, published_se, rel_tol)]
-        for v in (reading_values or {}).values():
+        for r, v in (reading_values or {}).items():
+            if r in skip:
+                continue
             value, value_se = _reading_pair(v)
             matched.append(_isnum(value) and number_matches(published, value, value_se, published_se, rel_tol))
+        rows = order.per_reading if order is not None else ()
         if all(matched):
-            return "reproduced"
+            return Judgement("reproduced", "", None, rows)
+        holds_all = order is not None and order.verdict in _POSITIVE
+        if holds_all:
+            return Judgement("qualitatively reproduced", "", None, rows)
         if any(matched):
-            return "inconclusive"  # the readings disagree about the number
-        if qualitative is not None and bool(qualitative):  # also numpy.bool_(True)
-            return "qualitatively reproduced"
-        return "inconclusive" if undecided else "not reproduced"
-    if undecided:
-        return "inconclusive"
-    if qualitative is None:
-        return "not checkable"
-    return "reproduced" if bool(qualitative) else "not reproduced"
+            return Judgement("inconclusive", CAUSE_READING, None, rows)
+        if order is None or order.verdict == "not reproduced":
+            return Judgement("not reproduced", "", None, rows)
+        return order
+    if order is None:
+        return Judgement("not checkable")
+    return order
+
+
+def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, qualitative=None,
+            diff=None, diff_se=None, published_se=None, basis="", readings=None,
+            reading_values=None, not_checkable="", effect=None, margin=None, runs=None,
+            reading_diffs=None, excluded=None) -> str:
+    """The verdict word of :func:`judge` (see there and the module docstring)."""
+    return judge(published, reproduced, se, rel_tol, qualitative, diff, diff_se, published_se, basis,
+                 readings, reading_values, not_checkable, effect, margin, runs, reading_diffs,
+                 excluded).verdict
 
 
 @dataclass
@@ -241,13 +432,43 @@ class Claim:
     depends_on: list | None = None      # free choices (pfrepro.choices) the verdict rests on
     not_checkable: str = ""             # why the paper's unpublished settings decide this number
     published_text: str | None = None   # ``published`` exactly as the paper prints it (pfrepro.published.printed)
+    effect: float | None = None         # the printed effect, oriented like diff (> 0): its size is tested
+    margin: float | None = None         # smallest effect of interest, stated up front (no printed effect)
+    runs: int | None = None             # runs behind diff (the main reading)
+    reading_diffs: dict | None = None   # reading -> [diff, se, runs] of the ordering under it
+    excluded: dict | None = None        # reading -> why the paper excludes it (shown, not counted)
+
+    @property
+    def judgement(self) -> Judgement:
+        """The verdict with its cause, recomputed from the stored numbers by :func:`judge`."""
+        return judge(self.published, self.reproduced, self.se, self.rel_tol, self.qualitative,
+                     self.diff, self.diff_se, self.published_se, self.basis, self.readings,
+                     self.reading_values, self.not_checkable, self.effect, self.margin, self.runs,
+                     self.reading_diffs, self.excluded)
 
     @property
     def verdict(self) -> str:
         """The verdict, recomputed from the stored numbers by :func:`verdict` (never stored as text)."""
-        return verdict(self.published, self.reproduced, self.se, self.rel_tol, self.qualitative,
-                       self.diff, self.diff_se, self.published_se, self.basis, self.readings,
-                       self.reading_values, self.not_checkable)
+        return self.judgement.verdict
+
+    @property
+    def cause(self) -> str:
+        """Why an inconclusive claim is inconclusive (one of :data:`CAUSES`; ``""`` otherwise)."""
+        return self.judgement.cause
+
+    @property
+    def runs_needed(self) -> int | None:
+        """For *too few runs*: the runs a power plan says would decide the claim (else ``None``)."""
+        return self.judgement.runs_needed
+
+    def verdict_text(self) -> str:
+        """The verdict with its cause in words, e.g. ``"inconclusive (too few runs: 140 would decide)"``."""
+        j = self.judgement
+        if j.verdict != "inconclusive":
+            return j.verdict
+        if j.cause == CAUSE_RUNS and j.runs_needed:
+            return f"inconclusive ({j.cause}: {j.runs_needed} would decide)"
+        return f"inconclusive ({j.cause})" if j.cause else "inconclusive"
 
     def test_text(self) -> str:
         """The rule that decided this claim, in a few words (for the verdict tables)."""
@@ -265,11 +486,30 @@ class Claim:
                 f"{k}: {_pm(*_reading_pair(v))}" for k, v in self.reading_values.items()))
         if self.diff is not None:
             z = _z(self.diff, self.diff_se)
-            parts.append(f"paired diff {_fmt(self.diff)} ± {_fmt(self.diff_se)} (z = {z:.1f}; decided at |z| > {Z_CRIT:g})")
+            n = f" on {self.runs} runs" if self.runs else ""
+            parts.append(f"paired diff {_fmt(self.diff)} ± {_fmt(self.diff_se)}{n} (z = {z:.1f}; decided at |z| > {Z_CRIT:g})")
+        if _isnum(self.effect):
+            parts.append(f"printed effect {_fmt(self.effect)}: size tested (attained if inside ±{Z_CRIT:g} se)")
+        elif _isnum(self.margin):
+            parts.append(f"smallest effect of interest {_fmt(self.margin)}")
+        skip = self.excluded or {}
         if self.readings:
             word = {True: "holds", False: "fails", None: "undecided"}
             parts.append("readings: " + "; ".join(f"{k} → {word[None if v is None else bool(v)]}"
-                                                   for k, v in self.readings.items()))
+                                                   for k, v in self.readings.items() if k not in skip))
+        if self.reading_diffs:
+            per = {r: (v, c) for r, v, c in self.judgement.per_reading}
+            items = []
+            for k, v in self.reading_diffs.items():
+                if k in skip:
+                    continue
+                d, s_, n = _diff_triple(v)
+                vv, cc = per.get(k, ("", ""))
+                items.append(f"{k}: Δ {_pm(d, s_)}" + (f" on {n} runs" if n else "") + f" → {vv}"
+                             + (f" ({cc})" if cc else ""))
+            parts.append("readings: " + "; ".join(items))
+        if skip:
+            parts.append("not counted (the paper excludes them): " + "; ".join(f"{k}: {why}" for k, why in skip.items()))
         if self.note:
             parts.append(self.note)
         return "; ".join(parts)
@@ -293,15 +533,16 @@ class Claim:
                 " (numbers: context)" if _isnum(self.reproduced) or _isnum(self.published) else "")
         if _isnum(self.published) and _isnum(self.reproduced):
             out = "value" + (every if self.reading_values else "")
-            if self.readings:
+            if self.readings or self.reading_diffs:
                 out += ", else ordering" + every
             elif self.diff is not None or self.qualitative is not None:
                 out += ", else ordering"
             return out
-        if self.readings:
-            return ("ordering" if self.diff is not None else "statement") + every
+        if self.readings or self.reading_diffs:
+            size = " and size" if _isnum(self.effect) else ""
+            return ("ordering" + size if (self.diff is not None or self.reading_diffs) else "statement") + every
         if self.diff is not None or self.diff_se is not None:
-            return "ordering (paired)"
+            return "ordering and size (paired)" if _isnum(self.effect) else "ordering (paired)"
         if self.qualitative is not None:
             return "statement" + (" (number: context)" if _isnum(self.reproduced) else "")
         return "–"
@@ -309,7 +550,8 @@ class Claim:
     def as_row(self) -> dict:
         """The claim's fields and its verdict as a dict (one row of the scorecard / JSON file)."""
         d = asdict(self)
-        d["verdict"] = self.verdict
+        j = self.judgement
+        d["verdict"], d["cause"], d["runs_needed"] = j.verdict, j.cause, j.runs_needed
         return d
 
 
@@ -376,8 +618,9 @@ def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFra
             ours = _pm(c.reproduced, c.se)
         elif c.diff is not None:
             ours = "Δ " + _pm(c.diff, c.diff_se)
-        elif c.readings:
-            ours = f"{sum(bool(v) for v in c.readings.values() if v is not None)}/{len(c.readings)} readings hold"
+        elif c.readings or c.reading_diffs:
+            j = c.judgement
+            ours = f"{len(j.under('holds'))}/{len(j.per_reading)} readings hold"
         elif c.qualitative is not None:
             ours = "holds" if c.qualitative else "fails"
         else:
@@ -388,7 +631,7 @@ def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFra
         if ids:
             row["id"] = c.claim_id
         row.update({"claim": c.text, "ours": ours, "published": _published_cell(c),
-                    "judged": c.judged(), "verdict": c.verdict, "test": c.test_text()})
+                    "judged": c.judged(), "verdict": c.verdict_text(), "test": c.test_text()})
         rows.append(row)
     cols = ((["paper"] if paper else []) + (["id"] if ids else [])
             + ["claim", "ours", "published", "judged", "verdict", "test"])
@@ -430,7 +673,8 @@ class ClaimsRegistry:
     def add(self, claim_id: str, text: str, *, published=None, reproduced=None, se=None,
             rel_tol=DEFAULT_REL_TOL, qualitative=None, source="", note="", diff=None,
             diff_se=None, published_se=None, basis="", readings=None, reading_values=None,
-            depends_on=None, not_checkable="", published_text=None) -> Claim:
+            depends_on=None, not_checkable="", published_text=None, effect=None, margin=None,
+            runs=None, reading_diffs=None, excluded=None) -> Claim:
         """Record one claim of the paper and check now that its verdict can be computed.
 
         Parameters
@@ -475,6 +719,20 @@ class ClaimsRegistry:
             ``published`` exactly as the paper prints it (:func:`pfrepro.published.printed`),
             shown by :func:`claims_table` instead of a rounded number; must parse to
             ``published`` (``ValueError`` otherwise). Omitted: the table rounds the number.
+        effect : float, optional
+            The effect the paper printed (both sides of the comparison printed), in ``diff``'s units
+            and orientation (> 0): direction *and* size are judged (:func:`judge_ordering`).
+        margin : float, optional
+            Where no effect is printed: the smallest effect of interest, stated up front; an
+            interval inside ``(-margin, margin)`` is a tie, and the power plan resolves it.
+        runs : int, optional
+            The runs behind ``diff`` (for the runs a plan needs).
+        reading_diffs : dict, optional
+            Reading -> ``(diff, se, runs)`` of the ordering under it (every reading, the main one
+            included); each reading is judged by :func:`judge_ordering`, then combined
+            (:func:`combine_readings`).
+        excluded : dict, optional
+            Reading -> why the paper's text or printed numbers exclude it; shown, not counted.
 
         Returns
         -------
@@ -492,6 +750,15 @@ class ClaimsRegistry:
                               for k, v in dict(reading_values).items()}
         if depends_on is not None:
             depends_on = [depends_on] if isinstance(depends_on, str) else [str(d) for d in depends_on]
+        if reading_diffs is not None:
+            reading_diffs = {str(k): [_clean(x) for x in _diff_triple(v)] for k, v in dict(reading_diffs).items()}
+            reading_diffs = {k: v[:2] + [None if v[2] is None else int(v[2])] for k, v in reading_diffs.items()}
+        if excluded is not None:
+            excluded = {str(k): str(v) for k, v in dict(excluded).items()}
+            known = set(readings or {}) | set(reading_diffs or {}) | set(reading_values or {})
+            unknown = sorted(set(excluded) - known)
+            if unknown:
+                raise ValueError(f"claim {claim_id!r}: excluded readings {unknown} are not readings of the claim")
         if published_text is not None:
             published_text = str(published_text).strip()
             try:
@@ -504,11 +771,13 @@ class ClaimsRegistry:
                                  f"printed form of published={published!r}")
         from .choices import check_claim
 
-        check_claim(claim_id, depends_on, readings, reading_values, self.choices)
+        check_claim(claim_id, depends_on, {**(readings or {}), **(reading_diffs or {})}, reading_values,
+                    self.choices)
         c = Claim(self.paper, claim_id, text, _clean(published), _clean(reproduced), _clean(se),
                   _clean(rel_tol), qualitative, source, note, _clean(diff), _clean(diff_se),
                   _clean(published_se), basis, readings, reading_values, depends_on, str(not_checkable or ""),
-                  published_text or None)
+                  published_text or None, _clean(effect), _clean(margin), None if runs is None else int(runs),
+                  reading_diffs, excluded)
         c.verdict  # validate now (e.g. both qualitative and diff given), not at the scorecard
         self.claims.append(c)
         return c
@@ -554,9 +823,10 @@ def load_all_claims(directory: Path | None = None) -> pd.DataFrame:
     rows = []
     for path in sorted(d.glob("*.json")):
         for row in json.loads(path.read_text(encoding="utf-8")):
-            row.pop("verdict", None)
+            for computed in ("verdict", "cause", "runs_needed"):
+                row.pop(computed, None)
             rows.append(Claim(**row).as_row())
-    cols = list(Claim.__dataclass_fields__) + ["verdict"]
+    cols = list(Claim.__dataclass_fields__) + ["verdict", "cause", "runs_needed"]
     return pd.DataFrame(rows, columns=cols)
 
 
@@ -572,7 +842,8 @@ def check_saved_claims(directory: Path | None = None) -> int:
         paper = path.stem
         choices = load_choices(paper, d)
         for row in json.loads(path.read_text(encoding="utf-8")):
-            check_claim(f"{paper}:{row['claim_id']}", row.get("depends_on"), row.get("readings"),
+            check_claim(f"{paper}:{row['claim_id']}", row.get("depends_on"),
+                        {**(row.get("readings") or {}), **(row.get("reading_diffs") or {})},
                         row.get("reading_values"), choices)
             n += 1
     return n

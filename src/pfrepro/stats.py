@@ -10,7 +10,8 @@ once, so that every paper judges a paired difference, a ratio of means or a medi
 * :func:`median_paired`, :func:`std_difference` -- median and spread orderings over finite pairs;
 * :func:`equivalence` -- two one-sided tests at the 2-SE level against a margin;
 * :func:`heavy_tailed` -- does one run carry more than a share of the total?
-* :func:`p_two_sided`, :func:`holm` -- normal p-values and Holm's family-wise rule.
+* :func:`p_two_sided`, :func:`holm` -- normal p-values and Holm's family-wise rule;
+* :func:`plan_runs` -- the runs a paired comparison needs to show an effect of a given size.
 """
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 __all__ = ["CommonRunsError", "common_runs", "paired_difference", "ratio_of_means", "bootstrap_median",
-           "median_paired", "std_difference", "equivalence", "heavy_tailed", "p_two_sided", "holm"]
+           "median_paired", "std_difference", "equivalence", "heavy_tailed", "p_two_sided", "holm", "plan_runs", "Z_POWER"]
 
 
 class CommonRunsError(ValueError):
@@ -151,3 +152,24 @@ def holm(pvalues, alpha: float) -> np.ndarray:
             break
         reject[idx] = True
     return reject
+
+
+#: the one-sided normal quantile of the power every plan asks for (80 %)
+Z_POWER = 0.8416212335729143
+
+
+def plan_runs(sd_per_run: float, effect: float, z: float = 2.0, z_power: float = Z_POWER) -> int:
+    """Runs a paired comparison needs so that a true mean difference of size ``effect`` is shown
+    (``diff > z * se``) with 80 % power: ``ceil(((z + z_power) * sd_per_run / effect) ** 2)``, at least 2.
+
+    ``sd_per_run`` is the standard deviation of the per-run differences (``se * sqrt(runs)`` of a
+    pilot or of the main reading); ``effect`` the size to resolve (the paper's printed effect or the
+    claim's smallest effect of interest), in the same units. Raises ``ValueError`` for a non-positive
+    effect or a negative / non-finite spread.
+    """
+    sd_per_run, effect = float(sd_per_run), float(effect)
+    if not (math.isfinite(effect) and effect > 0):
+        raise ValueError(f"plan_runs needs an effect > 0, got {effect!r}")
+    if not (math.isfinite(sd_per_run) and sd_per_run >= 0):
+        raise ValueError(f"plan_runs needs a finite per-run sd >= 0, got {sd_per_run!r}")
+    return max(2, int(math.ceil(((z + z_power) * sd_per_run / effect) ** 2)))
