@@ -29,7 +29,11 @@ def test_dependency_on_a_reading_needs_tagged_readings():
     c = reg.add("c", "A beats B", diff=1.0, diff_se=0.1, depends_on=["d", "T"],
                 readings=over("d", {1: True, 0.1: False}))
     assert c.verdict == "inconclusive"  # the readings decide, not the main diff alone
-    assert reg.add("e", "A beats B", readings={**over("d", {1: True}), **over("eta", {0.5: True})},
+    # a "reading" run only at the main value covers nothing
+    with pytest.raises(FreeChoiceError, match="only at its main value"):
+        reg.add("e", "A beats B", readings={**over("d", {1: True}), **over("eta", {0.5: True})},
+                depends_on=("d", "eta"))
+    assert reg.add("e", "A beats B", readings={**over("d", {1: True, 3: True}), **over("eta", {0.1: True})},
                    depends_on=("d", "eta")).verdict == "reproduced"
 
 
