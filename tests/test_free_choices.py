@@ -47,7 +47,9 @@ def test_fixed_choice_needs_no_reading_and_unknown_name_is_an_error():
 
 
 def test_combined_tags_cover_each_choice():
-    check_claim("x", ["d", "eta"], {"d=1, eta=0.2": True}, None, CHOICES)
+    check_claim("x", ["d", "eta"], {"d=1, eta=0.2": True, "d=3, eta=0.5": True}, None, CHOICES)
+    with pytest.raises(FreeChoiceError, match="'d' but is decided only at its main value"):
+        check_claim("x", ["d", "eta"], {"d=1, eta=0.2": True}, None, CHOICES)
 
 
 def test_published_number_under_readings():
