@@ -130,3 +130,11 @@ def test_claims_of_the_last_build_respect_the_rule():
     if not any(d.glob("*.json")):
         pytest.skip("no book build in this checkout")
     assert check_saved_claims(d) > 0
+
+
+def test_readings_of_an_undeclared_choice_are_refused():
+    # the claim's own readings show that it rests on 'd': it must say so
+    with pytest.raises(FreeChoiceError, match="does not declare"):
+        check_claim("x", [], {"d=1": True, "d=3": False}, None, CHOICES)
+    with pytest.raises(FreeChoiceError, match="does not declare"):
+        check_claim("x", ["eta"], {"eta=0.1": True}, {"d=3": (1.0, 0.1)}, CHOICES)

@@ -169,3 +169,31 @@ def test_cost_claims_and_causes_in_the_saved_row():
     row = c.as_row()
     assert (row["verdict"], row["cause"], row["runs_needed"]) == ("inconclusive", CAUSE_RUNS, c.runs_needed)
     assert c.verdict_text() == f"inconclusive (too few runs: {c.runs_needed} would decide)"
+
+
+def test_causes_on_the_page_and_in_the_scorecard():
+    from pfrepro.claims import cause_text, causes_table, inconclusive_table
+    from pfrepro.findings import cause_sentence, findings_html
+
+    reg = ClaimsRegistry("p")
+    reg.add("num", "a number", published=10, reproduced=10.1, se=0.2, reading_values={"q=2": (20, 0.2)},
+            readings={"q=1": True, "q=2": False})
+    reg.add("runs", "A beats B", diff=0.1, diff_se=0.1, runs=12, margin=0.25)
+    reg.add("read", "A beats C", diff=1.0, diff_se=0.1, reading_diffs={"a=1, b=1": (1.0, 0.1, 30),
+                                                                        "a=2, b=1": (-1.0, 0.1, 30)})
+    reg.add("ok", "A beats D", diff=1.0, diff_se=0.1)
+    by = {c.claim_id: c for c in reg.claims}
+    assert cause_text(by["num"]) == ("depends on the reading: the number is matched under the main reading; "
+                                     "not matched under q=2")
+    assert cause_text(by["runs"]) == f"too few runs (12 runs, {by['runs'].runs_needed} would decide)"
+    assert cause_text(by["read"]) == "depends on the reading: holds under (a=1, b=1); fails under (a=2, b=1)"
+    assert cause_text(by["ok"]) == ""
+    t = causes_table(reg)
+    assert t.loc["p", CAUSE_READING] == 2 and t.loc["p", CAUSE_RUNS] == 1 and t.loc["all claims", "inconclusive"] == 3
+    assert inconclusive_table(reg)["id"].tolist() == ["num", "runs", "read"]
+    assert cause_sentence(reg.claims) == "of the 3 inconclusive claims, 2 depend on the reading and 1 needs more runs"
+    assert cause_sentence(reg.claims[:2]) == "of the 2 inconclusive claims, 1 depends on the reading and 1 needs more runs"
+    assert cause_sentence(reg.claims[1:2]) == "the inconclusive claim needs more runs"
+    assert cause_sentence(reg.claims[3:]) == ""
+    html = findings_html(reg, ["runs"], "take away")
+    assert "would decide" in html and "1 needs more runs" in html

@@ -75,7 +75,7 @@ from .stats import CommonRunsError, common_runs, paired_difference
 __all__ = ["Claim", "ClaimsRegistry", "verdict", "judge", "judge_ordering", "combine_readings", "Judgement",
            "CAUSES", "CAUSE_READING", "CAUSE_RUNS", "CAUSE_TIE", "CAUSE_COUNT", "VERDICTS", "claims_dir", "load_all_claims",
            "DEFAULT_REL_TOL", "Z_CRIT", "ordering_holds", "weakest_ordering",
-           "readings_hold", "claims_table", "BASES", "number_matches", "check_saved_claims"]
+           "readings_hold", "claims_table", "causes_table", "inconclusive_table", "cause_text", "as_claims", "BASES", "number_matches", "check_saved_claims"]
 
 VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive")
 #: relative tolerance for numeric claims when none is stated
@@ -167,6 +167,8 @@ CAUSE_TIE = "tie within the stated margin"
 CAUSE_COUNT = "the count does not decide"
 CAUSES = (CAUSE_READING, CAUSE_RUNS, CAUSE_TIE, CAUSE_COUNT)
 _POSITIVE = ("reproduced", "qualitatively reproduced")
+#: the name of the main reading where a published number is judged under several readings
+MAIN_READING = "the main reading"
 
 
 @dataclass(frozen=True)
@@ -377,20 +379,22 @@ def judge(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, qua
     if reading_values and not (_isnum(published) and _isnum(reproduced)):
         raise ValueError("reading_values judge a published number: give published and reproduced too")
     if _isnum(published) and _isnum(reproduced):
-        matched = [number_matches(published, reproduced, se, published_se, rel_tol)]
+        matched = {MAIN_READING: number_matches(published, reproduced, se, published_se, rel_tol)}
         for r, v in (reading_values or {}).items():
             if r in skip:
                 continue
             value, value_se = _reading_pair(v)
-            matched.append(_isnum(value) and number_matches(published, value, value_se, published_se, rel_tol))
+            matched[r] = bool(_isnum(value) and number_matches(published, value, value_se, published_se, rel_tol))
         rows = order.per_reading if order is not None else ()
-        if all(matched):
+        if all(matched.values()):
             return Judgement("reproduced", "", None, rows)
         holds_all = order is not None and order.verdict in _POSITIVE
         if holds_all:
             return Judgement("qualitatively reproduced", "", None, rows)
-        if any(matched):
-            return Judgement("inconclusive", CAUSE_READING, None, rows)
+        if any(matched.values()):
+            # the number is matched under some readings only: name them (the ordering's rows follow)
+            num_rows = tuple((r, "reproduced" if m else "not reproduced", "") for r, m in matched.items())
+            return Judgement("inconclusive", CAUSE_READING, None, num_rows)
         if order is None or order.verdict == "not reproduced":
             return Judgement("not reproduced", "", None, rows)
         return order
@@ -591,6 +595,68 @@ def _published_cell(c: Claim) -> str:
     return _pm(c.published, c.published_se)
 
 
+def as_claims(claims) -> list:
+    """:class:`Claim` objects from a :class:`ClaimsRegistry`, a list of claims or a DataFrame of claim
+    rows (e.g. :func:`load_all_claims`; the computed columns are dropped and recomputed)."""
+    if isinstance(claims, ClaimsRegistry):
+        return list(claims.claims)
+    if isinstance(claims, pd.DataFrame):
+        fields = set(Claim.__dataclass_fields__)
+        return [Claim(**{k: (None if (isinstance(v, float) and math.isnan(v)) else v)
+                         for k, v in row.items() if k in fields})
+                for row in claims.to_dict("records")]
+    return list(claims)
+
+
+def cause_text(c: Claim) -> str:
+    """Why ``c`` is inconclusive, for a reader: the cause and what it means for this claim.
+
+    *depends on the reading*: the readings under which it holds and those under which it fails
+    (or ties); *too few runs*: the runs it had and the runs a plan says would decide it; the
+    other causes as they are. ``""`` for a claim that is not inconclusive.
+    """
+    j = c.judgement
+    if j.verdict != "inconclusive":
+        return ""
+    if j.cause == CAUSE_READING:
+        number = any(r == MAIN_READING for r, _, _ in j.per_reading)
+        word = ({"holds": "the number is matched", "fails": "not matched"} if number else
+                {"holds": "holds", "fails": "fails", "ties": "ties", "undecided": "undecided"})
+        def names(rs):  # a joint reading "a=1, b=2" in parentheses, so the list stays readable
+            return ", ".join(f"({r})" if "," in r else r for r in rs)
+
+        parts = [f"{word[kind]} under {names(j.under(kind))}" for kind in word if j.under(kind)]
+        return j.cause + (": " + "; ".join(parts) if parts else "")
+    if j.cause == CAUSE_RUNS:
+        runs = c.runs or max((_diff_triple(v)[2] or 0 for v in (c.reading_diffs or {}).values()), default=0)
+        had = f"{runs} runs" if runs else ""
+        need = f"{j.runs_needed} would decide" if j.runs_needed else "no size stated to plan runs for"
+        return f"{j.cause} ({', '.join(x for x in (had, need) if x)})"
+    return j.cause
+
+
+def causes_table(claims, *, by: str = "paper") -> pd.DataFrame:
+    """The inconclusive claims counted by cause: one row per ``by`` value (a paper), one column per
+    cause of :data:`CAUSES`, plus ``inconclusive`` (their sum) and a last row ``all claims``."""
+    rows = [{by: getattr(c, by), "cause": c.cause} for c in as_claims(claims) if c.verdict == "inconclusive"]
+    df = pd.DataFrame(rows, columns=[by, "cause"])
+    keys = list(dict.fromkeys(getattr(c, by) for c in as_claims(claims)))
+    out = pd.crosstab(df[by], df["cause"]).reindex(index=keys, columns=list(CAUSES), fill_value=0)
+    out["inconclusive"] = out.sum(axis=1)
+    out.loc["all claims"] = out.sum(axis=0)
+    out.index.name = by
+    return out.astype(int)
+
+
+def inconclusive_table(claims) -> pd.DataFrame:
+    """Every inconclusive claim with its cause in words (:func:`cause_text`) and, for *too few runs*,
+    the runs a plan says would decide it: columns ``paper``, ``id``, ``claim``, ``cause``, ``why``,
+    ``runs needed``."""
+    rows = [{"paper": c.paper, "id": c.claim_id, "claim": c.text, "cause": c.cause, "why": cause_text(c),
+             "runs needed": c.runs_needed} for c in as_claims(claims) if c.verdict == "inconclusive"]
+    return pd.DataFrame(rows, columns=["paper", "id", "claim", "cause", "why", "runs needed"])
+
+
 def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFrame:
     """The compact verdict table every chapter and the scorecard show.
 
@@ -603,15 +669,7 @@ def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFra
     numbers that were not matched), ``verdict``, ``test`` (the rule applied and the
     claim's note).
     """
-    if isinstance(claims, ClaimsRegistry):
-        items = list(claims.claims)
-    elif isinstance(claims, pd.DataFrame):
-        fields = set(Claim.__dataclass_fields__)
-        items = [Claim(**{k: (None if (isinstance(v, float) and math.isnan(v)) else v)
-                          for k, v in row.items() if k in fields})
-                 for row in claims.to_dict("records")]
-    else:
-        items = list(claims)
+    items = as_claims(claims)
     rows = []
     for c in items:
         if _isnum(c.reproduced):

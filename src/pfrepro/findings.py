@@ -14,10 +14,10 @@ import html
 import json
 from pathlib import Path
 
-from .claims import Claim, ClaimsRegistry, _pm, claims_dir
+from .claims import Claim, ClaimsRegistry, _pm, cause_text, claims_dir
 from .prose import verdict_sentence
 
-__all__ = ["findings_html", "chapter_findings", "save_findings", "load_findings", "book_findings_html",
+__all__ = ["findings_html", "chapter_findings", "cause_sentence", "save_findings", "load_findings", "book_findings_html",
            "intro_coverage", "RULE_HREF", "verdict_link"]
 
 #: where the verdict words are defined (the scorecard's section "The rule")
@@ -34,6 +34,9 @@ def _claim_line(paper: str, c: Claim) -> str:
     from .bookinfo import claim_anchor
 
     parts = [f"{html.escape(c.text)}: {verdict_link(c.verdict)}"]
+    why = cause_text(c)
+    if why:
+        parts.append(f" ({html.escape(why)})")
     if c.published_text or c.published is not None:
         printed = c.published_text or _pm(c.published, c.published_se)
         if c.reproduced is not None:
@@ -55,12 +58,38 @@ def findings_html(reg: ClaimsRegistry, main_claims, takeaway: str) -> str:
         raise KeyError(f"main claims not recorded by {reg.paper}: {missing}")
     items = "".join(_claim_line(reg.paper, by_id[i]) for i in main_claims)
     counts = verdict_sentence([c.verdict for c in reg.claims], noun="claim")
+    causes = cause_sentence(reg.claims)
+    if causes:
+        counts += f"; {causes}"
     return ('<div class="pf-findings">'
             f'<ul class="pf-findings-main">{items}</ul>'
             f'<p class="pf-findings-counts">{html.escape(counts)} '
             f'(<a href="{RULE_HREF}">what the verdicts mean</a>).</p>'
             f'<p class="pf-findings-takeaway"><strong>For a practitioner:</strong> {html.escape(takeaway)}</p>'
             "</div>")
+
+
+def cause_sentence(claims) -> str:
+    """The inconclusive claims by cause in words, e.g. "of the 5 inconclusive, 3 depend on the reading
+    and 2 need more runs" (``""`` when none is inconclusive)."""
+    from .claims import CAUSE_COUNT, CAUSE_READING, CAUSE_RUNS, CAUSE_TIE
+    from .prose import plural
+
+    causes = [c.cause for c in claims if c.verdict == "inconclusive"]
+    if not causes:
+        return ""
+    words = {CAUSE_READING: ("depends on the reading", "depend on the reading"),
+             CAUSE_RUNS: ("needs more runs", "need more runs"),
+             CAUSE_TIE: ("is a tie within its stated margin", "are ties within their stated margins"),
+             CAUSE_COUNT: ("is not decided by the cost count", "are not decided by the cost count")}
+    parts = []
+    for cause, (one, many) in words.items():
+        n = causes.count(cause)
+        if n:
+            parts.append(f"{n} {one if n == 1 else many}")
+    listed = parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " and " + parts[-1]
+    return f"of the {plural(len(causes), 'inconclusive claim')}, {listed}" if len(causes) > 1 else (
+        f"the inconclusive claim {parts[0].split(' ', 1)[1]}")
 
 
 def save_findings(reg: ClaimsRegistry, main_claims, takeaway: str, directory: Path | None = None) -> Path:
@@ -71,7 +100,8 @@ def save_findings(reg: ClaimsRegistry, main_claims, takeaway: str, directory: Pa
     verdicts = [c.verdict for c in reg.claims]
     by_id = {c.claim_id: c for c in reg.claims}
     path.write_text(json.dumps({"paper": reg.paper, "counts": {v: verdicts.count(v) for v in dict.fromkeys(verdicts)},
-                                "main": [{"claim_id": i, "text": by_id[i].text, "verdict": by_id[i].verdict}
+                                "main": [{"claim_id": i, "text": by_id[i].text, "verdict": by_id[i].verdict,
+                                          "cause": cause_text(by_id[i])}
                                          for i in main_claims],
                                 "takeaway": takeaway}, indent=1), encoding="utf-8")
     return path
