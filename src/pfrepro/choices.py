@@ -159,7 +159,7 @@ def check_claim(claim_id: str, depends_on, readings, reading_values, choices) ->
     """
     cmap = as_choice_map(choices)
     tags = _tags(readings) | _tags(reading_values)
-    undeclared = sorted(tags - set(depends_on or ()))
+    undeclared = sorted((tags & set(cmap)) - set(depends_on or ()))
     if undeclared:
         raise FreeChoiceError(f"claim {claim_id!r} is decided under readings of {undeclared} but does not declare "
                               f"them in depends_on: a verdict that changes with a choice must say it rests on it")
