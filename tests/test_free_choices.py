@@ -138,3 +138,31 @@ def test_readings_of_an_undeclared_choice_are_refused():
         check_claim("x", [], {"d=1": True, "d=3": False}, None, CHOICES)
     with pytest.raises(FreeChoiceError, match="does not declare"):
         check_claim("x", ["eta"], {"eta=0.1": True}, {"d=3": (1.0, 0.1)}, CHOICES)
+
+
+PLACE = re.compile(r"\bl\.\s*\d|\blines?\s+\d|\bsec(tion)?s?\.?\s*\d|\btables?\s*\d|\bfig(ure)?s?\.?\s*\d|\beqs?\.?\s*\(?\d"
+                   r"|\bsteps?\s*\d|\babstract\b|\bconclusion\b", re.I)
+
+
+@pytest.mark.parametrize("paper", ["ekf_pf_li2012", "gpff_zhang2016", "cmspf_ning2011", "dpf_hou2008",
+                                   "immpfor_zhou2017", "synthesis"])
+def test_fixed_by_the_paper_cites_the_paper(paper):
+    """A row 'fixed by the paper' says where the paper fixes it; a value we chose is a design choice."""
+    import importlib
+
+    E = importlib.import_module(f"pfrepro.experiments.{paper}")
+    bad = [f"{c.name}: {c.source!r}" for c in E.CHOICES if c.status == FIXED and not PLACE.search(c.source)]
+    assert not bad, f"{paper}: rows fixed by the paper without the paper's place: {bad}"
+
+
+def test_orderings_state_their_size_and_runs():
+    from pfrepro.claims import plan_problems
+
+    reg = ClaimsRegistry("p")
+    reg.add("a", "A beats B", diff=1.0, diff_se=0.1)
+    reg.add("b", "A beats C", diff=1.0, diff_se=0.1, margin=0.5, runs=20)
+    reg.add("c", "A beats D", diff=1.0, diff_se=0.1, effect=0.5, reading_diffs={"x=1": (1, 0.1, 20), "x=2": (1, 0.1)})
+    reg.add("d", "cheaper", qualitative=True, basis="count")
+    assert plan_problems(reg) == ["p:a: an ordering without a printed effect or a stated margin",
+                                  "p:a: a difference without the runs behind it",
+                                  "p:c: a difference without the runs behind it"]

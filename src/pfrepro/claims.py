@@ -75,7 +75,7 @@ from .stats import CommonRunsError, common_runs, paired_difference
 __all__ = ["Claim", "ClaimsRegistry", "verdict", "judge", "judge_ordering", "combine_readings", "Judgement",
            "CAUSES", "CAUSE_READING", "CAUSE_RUNS", "CAUSE_TIE", "CAUSE_COUNT", "VERDICTS", "claims_dir", "load_all_claims",
            "DEFAULT_REL_TOL", "Z_CRIT", "ordering_holds", "weakest_ordering",
-           "readings_hold", "claims_table", "causes_table", "inconclusive_table", "cause_text", "as_claims", "BASES", "number_matches", "check_saved_claims"]
+           "readings_hold", "claims_table", "causes_table", "inconclusive_table", "cause_text", "as_claims", "plan_problems", "BASES", "number_matches", "check_saved_claims"]
 
 VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive")
 #: relative tolerance for numeric claims when none is stated
@@ -888,14 +888,36 @@ def load_all_claims(directory: Path | None = None) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=cols)
 
 
+def plan_problems(claims) -> list:
+    """What keeps a claim's evidence from being planned (empty when none): an ordering (``diff`` or
+    ``reading_diffs``, not a cost count) must state its size -- the printed ``effect`` or a ``margin``
+    -- and the runs behind each difference, so that an undecided one says how many runs would decide it."""
+    out = []
+    for c in as_claims(claims):
+        if c.not_checkable or c.basis == "count" or not (c.diff is not None or c.reading_diffs):
+            continue
+        if not (_isnum(c.effect) or _isnum(c.margin)):
+            out.append(f"{c.paper}:{c.claim_id}: an ordering without a printed effect or a stated margin")
+        runs = [c.runs] if c.diff is not None and not c.reading_diffs else [
+            _diff_triple(v)[2] for k, v in c.reading_diffs.items() if k not in (c.excluded or {})]
+        if not all(runs):
+            out.append(f"{c.paper}:{c.claim_id}: a difference without the runs behind it")
+    return out
+
+
 def check_saved_claims(directory: Path | None = None) -> int:
     """Check every saved claim's free-choice dependencies against its chapter's saved
-    assumptions (:func:`pfrepro.choices.check_claim`); returns the number of claims
-    checked, raises :class:`pfrepro.choices.FreeChoiceError` on the first uncovered one."""
+    assumptions (:func:`pfrepro.choices.check_claim`) and that every ordering can be planned
+    (:func:`plan_problems`); returns the number of claims checked, raises
+    :class:`pfrepro.choices.FreeChoiceError` on the first uncovered claim and ``ValueError`` listing
+    the orderings without a size or runs."""
     from .choices import check_claim, load_choices
 
     d = Path(directory) if directory is not None else claims_dir()
     n = 0
+    problems = plan_problems(load_all_claims(d))
+    if problems:
+        raise ValueError(f"{len(problems)} saved claim(s) cannot be planned:\n" + "\n".join(problems))
     for path in sorted(d.glob("*.json")):
         paper = path.stem
         choices = load_choices(paper, d)
