@@ -191,7 +191,8 @@ def cmd_list(args) -> int:
             sub = claims[claims["paper"] == p.key]
             print(f"  claims ({len(sub)}, verdicts of the build in {d}):")
             for _, c in sub.iterrows():
-                print(f"    [{c['verdict']}] {c['claim_id']}: {c['text']}")
+                why = f" ({c['cause']})" if isinstance(c.get("cause"), str) and c["cause"] else ""
+                print(f"    [{c['verdict']}{why}] {c['claim_id']}: {c['text']}")
         print()
     if claims is None:
         print(f"(no claims found in {d}: build the book, or `pfrepro run <paper>` and "
@@ -414,6 +415,11 @@ def cmd_scorecard(args) -> int:
         print(_claims_table(df))
         print()
         print(df["verdict"].value_counts().to_string())
+        inc = df[df["verdict"] == "inconclusive"]
+        if len(inc):
+            print()
+            print("inconclusive, by cause:")
+            print(inc["cause"].value_counts().to_string())
     return 0
 
 

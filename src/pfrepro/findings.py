@@ -100,6 +100,7 @@ def save_findings(reg: ClaimsRegistry, main_claims, takeaway: str, directory: Pa
     verdicts = [c.verdict for c in reg.claims]
     by_id = {c.claim_id: c for c in reg.claims}
     path.write_text(json.dumps({"paper": reg.paper, "counts": {v: verdicts.count(v) for v in dict.fromkeys(verdicts)},
+                                "causes": cause_sentence(reg.claims),
                                 "main": [{"claim_id": i, "text": by_id[i].text, "verdict": by_id[i].verdict,
                                           "cause": cause_text(by_id[i])}
                                          for i in main_claims],
@@ -150,6 +151,8 @@ def book_findings_html(directory: Path | None = None, root: Path | None = None) 
             rows.append(f'<li><a href="{href}">{title}</a>: no findings were saved in this build.</li>')
             continue
         counts = verdict_sentence(f["counts"], noun="claim")
+        if f.get("causes"):
+            counts += f"; {f['causes']}"
         rows.append(f'<li><a href="{href}">{title}</a>. {html.escape(counts)}. '
                     f'{html.escape(f["takeaway"])}</li>')
     out = f'<ul class="pf-findings-book">{"".join(rows)}</ul>'
