@@ -30,7 +30,7 @@ from ..claims import ordering_holds, paired_difference, verdict, weakest_orderin
 from ..experiments import ekf_pf_li2012 as E
 from ..metrics import mc_summary
 
-__all__ = ["RATIO_STRONG_MIN", "RATIO_WEAK_MAX", "COST_RATIO_MIN", "MAIN_CLAIMS", "ratio_diff", "ratio_claim_holds",
+__all__ = ["pf_beats_ekf", "printed_pf_gain", "RATIO_STRONG_MIN", "RATIO_WEAK_MAX", "COST_RATIO_MIN", "MAIN_CLAIMS", "ratio_diff", "ratio_claim_holds",
            "alternative_statistics", "record_claims", "takeaway", "prose", "timing_prose"]
 
 #: tests of the two ratio claims. Model 1 -- the paper's own words, "the EKF's RMSE is more
@@ -49,6 +49,40 @@ COST_RATIO_MIN = 10
 MAIN_CLAIMS = ("ratio-7x", "figs-pf-better", "close-weak-nonlinearity", "pf-cost")
 #: the Table 1 cells, in the registry's order
 _CELLS = tuple(f"table1-{n.lower()}-model{w}" for w in (1, 2) for n in ("EKF", "PF"))
+
+
+def printed_pf_gain(which: int) -> float:
+    """The PF's printed advantage on model ``which``: Table 1's EKF cell minus its PF cell (RMSE
+    units; model 1: 30.1709 - 3.9459, model 2: 1.1281 - 1.0479), computed from the published data."""
+    if which not in (1, 2) or isinstance(which, bool):
+        raise ValueError(f"Li et al. (2012) have models 1 and 2; got which={which!r}")
+    return _pub("EKF", which) - _pub("PF", which)
+
+
+def pf_beats_ekf(ekf_rmse, pf_rmse, which: int = 1) -> dict:
+    """Li et al. (2012)'s "the PF tracks better than the EKF" (l.181, Table 1) as the inputs of the
+    verdict rule: the one function every chapter that judges this comparison calls (this chapter's
+    ``figs-pf-better*`` claims and the synthesis chapter's), so the comparison carries one word.
+
+    Parameters
+    ----------
+    ekf_rmse, pf_rmse : array_like
+        Per-run RMSE (the root of the time-averaged squared error of one run, the paper's formula at
+        the end of sec 2) of the EKF and of the PF on the *same* runs (common truths).
+    which : {1, 2}
+        The paper's model the runs come from; it selects the printed effect.
+
+    Returns
+    -------
+    dict
+        ``diff`` (mean over runs of EKF - PF), ``diff_se``, ``runs`` and ``effect`` (the printed
+        Table 1 difference EKF - PF of that model, :func:`printed_pf_gain`): pass them to
+        :meth:`pfrepro.claims.ClaimsRegistry.add` (``**pf_beats_ekf(...)``) or, per reading, as the
+        triple ``(diff, diff_se, runs)`` of ``reading_diffs`` with ``effect``.
+    """
+    a, b = np.asarray(ekf_rmse, float).ravel(), np.asarray(pf_rmse, float).ravel()
+    d, se = paired_difference(a, b)
+    return {"diff": d, "diff_se": se, "runs": int(a.size), "effect": printed_pf_gain(which)}
 
 
 def ratio_diff(which: int, r: float) -> float:
