@@ -472,7 +472,7 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
     SIS) and the PF's ESS averaged over ``ESS_WINDOW`` (``SIS_ess``, ``PF_ess`` with SEs)
     and their paired difference PF - SIS (``ess_gain``, ``ess_gain_se``).
     """
-    from ..verdicts.ekf_pf_li2012 import ratio_diff   # the ratio claims' statements live with the claims
+    from ..verdicts.ekf_pf_li2012 import ratio_diff, ratio_effect   # the ratio claims' statements live there
 
     pub = published_table1()
     rows = []
@@ -490,7 +490,8 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
                "exact": float(res.rmse("Exact").mean()) if "Exact" in res.results else float("nan"),
                "EKF/PF": r, "EKF/PF_se": r_se, "diff": d, "diff_se": d_se,
                "verdict_EKF": verdict(pe, e.mean, e.se), "verdict_PF": verdict(pp, p.mean, p.se),
-               "verdict_ratio": verdict(pe / pp, r, r_se, diff=ratio_diff(which, r), diff_se=r_se)}
+               "verdict_ratio": verdict(pe / pp, r, r_se, diff=ratio_diff(which, r), diff_se=r_se,
+                                          effect=ratio_effect(which), runs=res.sim.runs)}
         if sis is not None:
             pf_late = late_ess(res, "PF")[:sis_runs]
             ps, ss, g = mc_summary(pf_late), mc_summary(sis), mc_summary(pf_late - sis)
