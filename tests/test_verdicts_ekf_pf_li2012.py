@@ -71,8 +71,8 @@ def _holding(run1):
                     "Exact": np.array([4.5, 5.0])})
     R.kf.update(max_dev=1e-5, mse={"KF": np.array([1.0, 1.1]), "Exact": np.array([1.0, 1.1]),
                                    "PF N=100": np.array([1.06, 1.17]), "PF N=1000": np.array([1.006, 1.107])})
-    R.degen_n[1000]["late"] = np.array([1.0, 1.1])
-    R.degen_n[10000]["late"] = np.array([50.0, 60.0])          # 10 N: 50 more effective particles, 5 x the share
+    for n, late in ((100, [1.0, 1.05]), (1000, [15.0, 16.0]), (10000, [200.0, 220.0])):
+        R.degen_n[n]["late"] = np.array(late)                  # each tenfold N: more particles and a larger share
     for n, d in R.degen_n.items():
         d["late_frac"] = d["late"] / n
     return R
@@ -375,8 +375,15 @@ def test_the_statements_of_secs_0_to_2(run1):
     v = _verdicts(R)
     assert all(v[k] == "reproduced" for k in V.STATEMENT_CLAIMS), {k: v[k] for k in V.STATEMENT_CLAIMS}
     # more particles that buy no effective particle: the degeneracy half fails, the cost half stays
-    R.degen_n[10000]["late"] = np.array([1.05, 1.15])
+    R.degen_n[10000]["late"] = np.array([15.05, 16.15])        # 1000 -> 10000 buys nothing, 100 -> 1000 does
     R.degen_n[10000]["late_frac"] = R.degen_n[10000]["late"] / 10000
+    c = _claims(R)["more-particles-less-degeneracy"]
+    assert c.verdict == "inconclusive" and c.cause == "depends on the reading"
+    assert c.judgement.under("fails") == ["degen_measure=count,degen_N=1000-10000",
+                                          "degen_measure=fraction,degen_N=1000-10000"]
+    for n in (100, 1000, 10000):
+        R.degen_n[n]["late"] = np.array([1.0, 1.1]) + n * 1e-6
+        R.degen_n[n]["late_frac"] = R.degen_n[n]["late"] / n
     v = _verdicts(R)
     assert v["more-particles-less-degeneracy"] == "not reproduced" and v["more-particles-cost"] == "reproduced"
     # a Gaussian filter with exact moments no better than the EKF: the error is not the truncation

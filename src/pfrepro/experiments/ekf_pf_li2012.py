@@ -157,8 +157,8 @@ CHOICES = [
                "(row 'plan: SIS readings'), at most the Table 1 runs", "not in the paper"),
     FreeChoice("degen_N", "N = " + ", ".join(str(n) for n in DEGEN_N) + f", first {SIS_RUNS} runs of model 1",
                DESIGN, "l.135 names no N: the paper's N = 1000 with a tenth and ten times as many particles "
-                       "(SIS, no resampling, its own stream per N); the claim compares the paper's N with ten "
-                       "times it", "l.135"),
+                       "(SIS, no resampling, its own stream per N); each tenfold step (100 to 1000, 1000 to "
+                       "10000) is run as a reading of the claim", "l.135"),
     FreeChoice("degen_measure", "count", READING,
                "l.135's 'reduce the degeneracy' read on the number of effective particles (SIS's late ESS "
                "gains at least one particle when N grows tenfold) or on their share of N (ESS/N grows); "

@@ -241,7 +241,7 @@ def power_plans(results) -> list:
         add("trunc", "ekf-error-truncation", "main only (model 1, Table 1 runs)", float(np.std(d, ddof=1)),
             truncation_margin(), f"the margin {truncation_margin():.2f}", d.size)
         dd = _degen_diffs(R)
-        add("degen", "more-particles-less-degeneracy", "degen_measure = count, fraction",
+        add("degen", "more-particles-less-degeneracy", "degen_measure = count, fraction; degen_N",
             max(_sd(v[1], v[2]) for v in dd.values()), DEGEN_MARGIN, f"the margin {DEGEN_MARGIN:g} particle",
             min(v[2] for v in dd.values()))
         g = [R.prop[w]["ess_opt"] - R.prop[w]["ess_prior"] for w in (1, 2)]
@@ -256,7 +256,7 @@ def plan_choices(results) -> list:
     for p in power_plans(results):
         ok = "" if p["run"] >= p["needed"] else f"; the budget pays {p['run']}: too few, see the verdict"
         out.append(FreeChoice(
-            f"plan_{p['key']}", f"{p['run']} runs per reading (plan: {p['needed']} for 80 % power against "
+            f"plan_{p['key']}", f"at least {p['run']} runs per reading (plan: {p['needed']} for 80 % power against "
             f"{p['basis']} at the main reading's per-run sd {p['sd']:.3g}){ok}", DESIGN,
             f"power plan of {p['claim']} (readings: {p['readings']}); stats.plan_runs, fixed from the main "
             "reading before the readings run; no run is added after a result is seen", "not in the paper"))
@@ -264,15 +264,20 @@ def plan_choices(results) -> list:
 
 
 def _degen_diffs(R) -> dict:
-    """more-particles-less-degeneracy per reading of ``degen_measure``: ``(diff, se, runs)`` in particles
-    at the paper's N, the statement being diff > 0 (l.135): ``count``: SIS's late ESS at 10 N minus at
-    N, minus :data:`DEGEN_MIN_GAIN`; ``fraction``: (ESS/N at 10 N minus at N) times N."""
+    """more-particles-less-degeneracy per reading: ``(diff, se, runs)``, the statement being diff > 0
+    (l.135), for each step N -> 10 N of ``E.DEGEN_N`` (``degen_N``) and each ``degen_measure``:
+    ``count``: SIS's late ESS at 10 N minus at N, minus :data:`DEGEN_MIN_GAIN`; ``fraction``: (ESS/N at
+    10 N minus at N) times N (particles at the smaller N). Tags ``"degen_measure=<m>,degen_N=<N>-<10N>"``."""
     dn = R.degen_n
-    n0, n1 = E.N_PARTICLES, 10 * E.N_PARTICLES
-    a, b = dn[n1]["late"], dn[n0]["late"]
-    c = paired_difference(a, b)
-    f = paired_difference(dn[n1]["late_frac"] * n0, dn[n0]["late_frac"] * n0)
-    return over("degen_measure", {"count": (c[0] - DEGEN_MIN_GAIN, c[1], a.size), "fraction": (f[0], f[1], a.size)})
+    out = {}
+    ns = sorted(dn)
+    for n0, n1 in zip(ns, ns[1:]):
+        a, b = dn[n1]["late"], dn[n0]["late"]
+        c = paired_difference(a, b)
+        f = paired_difference(dn[n1]["late_frac"] * n0, dn[n0]["late_frac"] * n0)
+        out[f"degen_measure=count,degen_N={n0}-{n1}"] = (c[0] - DEGEN_MIN_GAIN, c[1], a.size)
+        out[f"degen_measure=fraction,degen_N={n0}-{n1}"] = (f[0], f[1], a.size)
+    return out
 
 
 def record_claims(reg, results):
@@ -402,9 +407,10 @@ def _record_statements(reg, R):
     dd = _degen_diffs(R)
     dn = R.degen_n
     n0 = E.N_PARTICLES
+    main = dd[f"degen_measure=count,degen_N={n0}-{10 * n0}"]
     reg.add("more-particles-less-degeneracy", "Increasing the number of particles N reduces the degeneracy "
-            "(the most effective way)", diff=dd["degen_measure=count"][0], diff_se=dd["degen_measure=count"][1],
-            runs=dd["degen_measure=count"][2], margin=DEGEN_MARGIN, reading_diffs=dd, depends_on=["degen_measure"],
+            "(the most effective way)", diff=main[0], diff_se=main[1],
+            runs=main[2], margin=DEGEN_MARGIN, reading_diffs=dd, depends_on=["degen_measure", "degen_N"],
             source="l.135", note="SIS (no resampling) on model 1, late ESS (k = "
                                  f"{E.ESS_WINDOW[0]}..{E.ESS_WINDOW[1]}) at N = "
             + ", ".join(f"{n}: {dn[n]['late'].mean():.3f}" for n in dn)
