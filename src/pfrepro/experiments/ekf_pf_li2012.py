@@ -36,7 +36,7 @@ import numpy as np
 import pandas as pd
 
 from .. import published
-from ..choices import FIXED, READING, SWEEP, FreeChoice
+from ..choices import DESIGN, FIXED, READING, SWEEP, FreeChoice
 from ..claims import verdict
 from ..filters import BootstrapParticleFilter, ExtendedKalmanFilter, GridFilter, UnscentedKalmanFilter
 from ..filters.ekf_variants import PreviousEstimateJacobianEKF
@@ -56,7 +56,8 @@ __all__ = [
     "rmse_and_cost_vs_n", "cost_ratios", "jacobian_check", "literal_eq11_ekf",
     "eq9_linearisation_check", "resampling_after_estimate_effect", "published_table1",
     "cost_evidence", "cost_count_table", "CHOICES", "STATISTICS", "STATISTIC_LABELS", "statistic_reading", "ratio_reading",
-    "FEW_FRACTIONS", "SIS_RUNS", "ESS_WINDOW", "late_ess", "degeneracy", "N_SPREAD_SETS", "spread_seeds",
+    "FEW_FRACTIONS", "SIS_RUNS", "DEGEN_N", "KF_CHECK_N", "GH_NODES", "ADF_GRID", "linear_model",
+    "kf_linear_check", "gaussian_adf", "truncation_check", "proposal_check", "degeneracy_vs_n", "ESS_WINDOW", "late_ess", "degeneracy", "N_SPREAD_SETS", "spread_seeds",
     "ekf_seed_spread", "published_text", "FILTERS", "GRID_CONV_RUNS", "grid_convergence", "Li2012Results", "run_all"]
 
 PAPER = "ekf_pf_li2012"
@@ -101,6 +102,15 @@ FEW_FRACTIONS = (0.01, 0.05)
 ESS_WINDOW = (31, 60)
 #: runs of the SIS readings under the other priors P0 (the verdict is far from the bar)
 SIS_RUNS = 20
+#: the particle counts of the degeneracy-against-N check (l.135); SIS (no resampling) on model 1
+DEGEN_N = (100, 1000, 10000)
+#: the particle counts at which the PF is set beside the KF on the linear-Gaussian model (l.35)
+KF_CHECK_N = (100, 1000)
+#: Gauss-Hermite nodes of the exact predictive moments (no-truncation Gaussian filter) and of the
+#: optimal proposal's weight p(y_k | x_{k-1}) (l.137, l.145)
+GH_NODES = 48
+#: nodes of the no-truncation Gaussian filter's update grid (m_pred +- 10 sd_pred)
+ADF_GRID = 2001
 #: seed sets for the spread of the Table 1 EKF means over independent 100-run sets, fixed
 #: before running: the Table 1 seed and ten more (:func:`spread_seeds`)
 N_SPREAD_SETS = 10
@@ -109,36 +119,62 @@ N_SPREAD_SETS = 10
 #: (pfrepro.choices; CONTRIBUTING "Free choices").
 CHOICES = [
     FreeChoice("model", "Q = 10, R = 1, x0 = 0.1, T = 60, N = 1000; 100 runs (Table 1), 50 (Figs.)",
-               FIXED, "stated in the paper", "sec 2; Table 1 title; Figs. 2, 4 captions"),
+               FIXED, "stated in the paper",
+               "l.171 (Q = 10, R = 1, x0 = 0.1, 60 s at 1 s, N = 1000, 50 runs); l.175, l.179 (models); "
+               "l.181, l.188 (Table 1: 100 runs); l.197, l.205 (Figs. 2, 4: 50 runs)"),
     FreeChoice("P0", f"prior N(x0, P0), x0 = 0.1, P0 = {P0_DEFAULT:g}", SWEEP,
                "the filters' initial distribution is not stated; the MATLAB code of this benchmark that "
                "accompanies Simon (2006, ch. 15), which has the paper's x0 = 0.1 and cos(1.2(k-1)), starts "
                "EKF and PF from N(x0, 2); swept over P0 = " + ", ".join(f"{v:g}" for v in P0_SWEEP) +
                " for EKF, PF, exact and SIS (sensitivity table and figure)",
-               "not stated (sec 2 gives the truth's x0 only)"),
+               "not stated (l.171 gives the truth's x0 only)"),
     FreeChoice("resampling", RESAMPLING_DEFAULT + ", every step", SWEEP,
                "the paper lists four schemes and resamples every step; multinomial is the scheme of the "
                "same code and the simplest; swept over " + ", ".join(RESAMPLING_SWEEP),
-               "sec 1.3.2 lists multinomial, residual, stratified, systematic"),
+               "l.147 lists multinomial, residual, stratified, systematic; l.163 resamples every step"),
     FreeChoice("statistic", "mean_run_rmse", READING,
                "Table 1 prints 'RMSE over 100 independent runs' and defines the RMSE of one run; the mean "
                "over runs of that per-run RMSE is the natural reading; the pooled root mean square and the "
                "time average of the per-time RMSE of Figs. 2, 4 are run as readings (standard errors by "
-               "jackknife over runs)", "Table 1 title; formula at the end of sec 2"),
+               "jackknife over runs)", "l.188 (Table 1 title); formula at the end of sec 2"),
     FreeChoice("ekf_linearisation", "B_k at x_{k|k-1}", FIXED,
                "as eq (10) states; the circulating code's B_k at x_{k-1|k-1} is shown as context only",
-               "eq (10)"),
+               "l.101, eq (10)"),
     FreeChoice("estimate", "weighted mean before resampling", FIXED,
-               "step (5) writes the estimate with the weighted particles x_k^i of steps (2)-(3), not the "
-               "resampled ones of step (4); averaging the resampled particles instead would add "
-               "Var(x_k | y_1:k)/N to the squared error in expectation (computed in the chapter: a fraction "
-               "of a percent)", "sec 1.3.2, steps (4)-(5)"),
+               "step (5) writes the estimate with the particles x_k^i of steps (2)-(3), not the resampled "
+               "x~_k^i of step (4), so its weights are those of step (3); averaging the resampled particles "
+               "instead would add Var(x_k | y_1:k)/N to the squared error in expectation (computed in the "
+               "chapter: a fraction of a percent)", "l.165-167, steps (4)-(5)"),
     FreeChoice("fig_rmse", "per-time RMSE over the runs", FIXED,
-               "the figures' 'RMSE of 50 Monte Carlo runs' at each time step", "Figs. 2, 4 captions"),
+               "the figures' 'RMSE of 50 Monte Carlo runs' at each time step", "l.197, l.205 (Figs. 2, 4 captions)"),
     FreeChoice("few", "ESS < 1 % of N", READING,
                "'all but very few particles have negligible weight' (SIS) read as an ESS averaged over "
                f"k = {ESS_WINDOW[0]}..{ESS_WINDOW[1]} below 1 % or 5 % of N; both run",
-               "sec 1.3.2, first paragraph"),
+               "l.133"),
+    FreeChoice("sis_runs", f"at least {SIS_RUNS} runs, more if the plan asks", DESIGN,
+               "the runs of the SIS readings under the other priors: the first runs of the Table 1 truths; "
+               f"at least {SIS_RUNS}, and as many as the power plan of the degeneracy claims asks "
+               "(row 'plan: SIS readings'), at most the Table 1 runs", "not in the paper"),
+    FreeChoice("degen_N", "N = " + ", ".join(str(n) for n in DEGEN_N) + f", first {SIS_RUNS} runs of model 1",
+               DESIGN, "l.135 names no N: the paper's N = 1000 with a tenth and ten times as many particles "
+                       "(SIS, no resampling, its own stream per N); each tenfold step (100 to 1000, 1000 to "
+                       "10000) is run as a reading of the claim", "l.135"),
+    FreeChoice("degen_measure", "count", READING,
+               "l.135's 'reduce the degeneracy' read on the number of effective particles (SIS's late ESS "
+               "gains at least one particle when N grows tenfold) or on their share of N (ESS/N grows); "
+               "both run, each in particles at the paper's N", "l.133-135"),
+    FreeChoice("kf_check", "x_k = x_{k-1}/2 + w_k, y_k = x_k + v_k, Q = 10, R = 1, x0 = 0.1, P0 = 2; "
+               + ", ".join(f"PF N = {n}" for n in KF_CHECK_N) + f"; {RUNS_TABLE} runs", DESIGN,
+               "l.35 names no model: the paper's noise levels and start with the nonlinear terms removed; the "
+               "KF is set against the exact grid posterior mean (the MMSE estimate) and the bootstrap PF",
+               "l.35"),
+    FreeChoice("gaussian_exact", f"Gaussian filter, exact moments ({GH_NODES} Gauss-Hermite nodes, "
+               f"{ADF_GRID}-node update grid)", DESIGN,
+               "the filter that keeps the EKF's Gaussian form but drops its first-order truncation "
+               "(eqs 8-10): the test of l.181's 'the error comes from the truncation'", "l.181"),
+    FreeChoice("proposal_runs", f"the {RUNS_TABLE} Table 1 runs of each model, N = {N_PARTICLES}, own stream", DESIGN,
+               "the bootstrap PF that records, per step, the ESS of its prior-proposal weights and the ESS the "
+               "optimal proposal would give on the same particles (l.137, l.145)", "l.137-145"),
 ]
 
 FILTER_LABELS = {
@@ -436,7 +472,7 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
     SIS) and the PF's ESS averaged over ``ESS_WINDOW`` (``SIS_ess``, ``PF_ess`` with SEs)
     and their paired difference PF - SIS (``ess_gain``, ``ess_gain_se``).
     """
-    from ..verdicts.ekf_pf_li2012 import ratio_diff   # the ratio claims' statements live with the claims
+    from ..verdicts.ekf_pf_li2012 import ratio_diff, ratio_effect   # the ratio claims' statements live there
 
     pub = published_table1()
     rows = []
@@ -454,7 +490,8 @@ def sensitivity(sims: dict, seed: int, *, P0_values=P0_SWEEP, schemes=RESAMPLING
                "exact": float(res.rmse("Exact").mean()) if "Exact" in res.results else float("nan"),
                "EKF/PF": r, "EKF/PF_se": r_se, "diff": d, "diff_se": d_se,
                "verdict_EKF": verdict(pe, e.mean, e.se), "verdict_PF": verdict(pp, p.mean, p.se),
-               "verdict_ratio": verdict(pe / pp, r, r_se, diff=ratio_diff(which, r), diff_se=r_se)}
+               "verdict_ratio": verdict(pe / pp, r, r_se, diff=ratio_diff(which, r), diff_se=r_se,
+                                          effect=ratio_effect(which), runs=res.sim.runs)}
         if sis is not None:
             pf_late = late_ess(res, "PF")[:sis_runs]
             ps, ss, g = mc_summary(pf_late), mc_summary(sis), mc_summary(pf_late - sis)
@@ -702,6 +739,14 @@ class Li2012Results:
         wall time is measured here).
     grid_conv : float
         :func:`grid_convergence` on the Table 1 data.
+    trunc : dict
+        :func:`truncation_check` on model 1's Table 1 runs (l.181).
+    kf : dict
+        :func:`kf_linear_check` (l.35).
+    prop : dict
+        Model number -> :func:`proposal_check` (l.137, l.145).
+    degen_n : dict
+        :func:`degeneracy_vs_n` on model 1 (l.135).
     """
 
     runs: dict
@@ -714,6 +759,10 @@ class Li2012Results:
     spread: pd.DataFrame
     cnt: dict
     grid_conv: float
+    trunc: dict | None = None
+    kf: dict | None = None
+    prop: dict | None = None
+    degen_n: dict | None = None
 
     @property
     def settings(self) -> dict:
@@ -773,11 +822,176 @@ def run_all(runs: int | None = None, seeds=None, executor=None, steps=None) -> L
         figs[w] = run(w, counts["figures"], seeds["figures"], ("EKF", "PF", "Exact"), executor=executor)
     step("grid convergence")
     conv = grid_convergence(sims)
+    if runs is None:
+        # the SIS readings' runs: the power plan of the degeneracy claims, from the spread of their main
+        # reading (the Table 1 runs, already run), fixed before any reading runs
+        from ..verdicts.ekf_pf_li2012 import sis_plan
+
+        counts["sis"] = min(counts["table"], max(SIS_RUNS, sis_plan(res)))
     step("sensitivity: priors, resampling schemes, EKF linearisation, SIS")
     sens = sensitivity(sims, seeds["table"], sis_runs=counts["sis"], executor=executor)
     step("EKF means over independent seed sets")
     spread = ekf_seed_spread(spread_seeds(seeds), runs=counts["spread"], executor=executor)
     step("cost counts")
     cnt = {w: cost_count_table(w, sims[w], include=FILTERS, seed=seeds["table"]) for w in (1, 2)}
-    return Li2012Results(runs=counts, seeds=seeds, sims=sims, res=res, figs=figs, sens=sens,
-                         deg={w: degeneracy(res[w]) for w in (1, 2)}, spread=spread, cnt=cnt, grid_conv=conv)
+    few = min(SIS_RUNS, counts["table"]) if runs is None else counts["sis"]
+    step("statements of secs 0-2: truncation (l.181), KF (l.35), proposals (l.137, l.145), N (l.135)")
+    trunc = truncation_check(res[1], 1)
+    kf = kf_linear_check(counts["table"], seeds["table"] + 19, executor=executor)
+    prop = {w: proposal_check(w, sims[w], seeds["table"], counts["table"]) for w in (1, 2)}
+    degen_n = degeneracy_vs_n(1, sims[1], seeds["table"], few, executor=executor)
+    return Li2012Results(runs={**counts, "checks": few}, seeds=seeds, sims=sims, res=res, figs=figs, sens=sens,
+                         deg={w: degeneracy(res[w]) for w in (1, 2)}, spread=spread, cnt=cnt, grid_conv=conv,
+                         trunc=trunc, kf=kf, prop=prop, degen_n=degen_n)
+
+
+# --------------------------------------------------------------------------------------
+# the statements of secs 0-2 that Table 1 does not test (issue 31: l.35, l.135, l.137, l.145, l.181)
+# --------------------------------------------------------------------------------------
+
+
+def linear_model(P0: float = P0_DEFAULT):
+    """The linear-Gaussian counterpart of the paper's models for l.35: x_k = x_{k-1}/2 + w_k,
+    y_k = x_k + v_k, Q = 10, R = 1, x_0 = 0.1, filters from N(0.1, P0) (our choice: the paper's
+    noise levels and start, its models with the nonlinear terms removed)."""
+    from ..models.linear import LinearGaussianModel
+
+    return LinearGaussianModel(F=[[0.5]], H=[[1.0]], Q=[[10.0]], R=[[1.0]], x0=[0.1], m0=[0.1], P0=[[P0]])
+
+
+def kf_linear_check(runs: int, seed: int, n_values=KF_CHECK_N, executor=None) -> dict:
+    """l.35, "for linear-Gaussian models the Kalman filter gives the optimal solution", on
+    :func:`linear_model`: the KF against the exact (grid) posterior mean and the bootstrap PF at each
+    N of ``n_values``, on the same ``runs`` runs (seed ``seed``).
+
+    Returns ``{"max_dev": max |x_KF - x_exact| / sqrt(P_exact) over runs and steps, "mse": {name:
+    per-run MSE}}`` (names ``KF``, ``Exact``, ``PF N=<n>``)."""
+    from ..filters import KalmanFilter
+
+    model = linear_model()
+    sim = model.simulate(T, runs, truth_streams(seed, runs))
+    filters = {"KF": KalmanFilter(model), "Exact": GridFilter(model, bounds=(-40.0, 40.0), n_grid=1601)}
+    filters.update({f"PF N={n}": BootstrapParticleFilter(model, n, resampling=RESAMPLING_DEFAULT) for n in n_values})
+    res = run_monte_carlo(model, filters, T, runs, seed, sim=sim, executor=executor)
+    ex = res.results["Exact"]
+    dev = np.abs(res.results["KF"].x - ex.x)[..., 0] / np.sqrt(ex.P[..., 0, 0])
+    return {"max_dev": float(dev.max()), "mse": {n: res.mse(n) for n in filters}, "runs": runs}
+
+
+def _gh(n: int = GH_NODES):
+    z, w = np.polynomial.hermite_e.hermegauss(n)
+    return z, w / w.sum()
+
+
+def gaussian_adf(model, y) -> np.ndarray:
+    """The Gaussian filter *without* first-order truncation (l.181): the posterior is still carried as
+    a Gaussian N(m, P), but its moments are exact -- the predictive mean and variance of f(x) + w under
+    N(m, P) by Gauss-Hermite quadrature, the update's by quadrature of N(m-, P-) p(y_k | x) on a grid of
+    ``ADF_GRID`` nodes over m- +- 10 sd. The EKF differs from it only by the Taylor truncation of
+    eqs (8)-(10); the exact grid posterior differs from it only by the Gaussian form. Scalar models;
+    ``y`` (runs, T, 1) -> estimates (runs, T)."""
+    y = np.asarray(y, float)
+    runs, Tn, _ = y.shape
+    z, wz = _gh()
+    Q, Rm = float(model.Q[0, 0]), float(model.R[0, 0])
+    m = np.full(runs, float(model.m0[0]))
+    P = np.full(runs, float(model.P0[0, 0]))
+    u = np.linspace(-10.0, 10.0, ADF_GRID)
+    out = np.empty((runs, Tn))
+    for k in range(1, Tn + 1):
+        xs = m[:, None] + np.sqrt(P)[:, None] * z[None, :]
+        fx = model.f(xs[..., None], k)[..., 0]
+        mp = fx @ wz
+        Pp = ((fx - mp[:, None]) ** 2) @ wz + Q
+        g = mp[:, None] + np.sqrt(Pp)[:, None] * u[None, :]
+        # additive Gaussian measurement noise (both models): log p(y_k | x) up to a constant
+        logp = -0.5 * u[None, :] ** 2 - 0.5 * (y[:, k - 1, :] - model.h(g[..., None])[..., 0]) ** 2 / Rm
+        logp -= logp.max(axis=1, keepdims=True)
+        w = np.exp(logp)
+        w /= w.sum(axis=1, keepdims=True)
+        m = (w * g).sum(axis=1)
+        P = np.maximum((w * (g - m[:, None]) ** 2).sum(axis=1), 1e-12)
+        out[:, k - 1] = m
+    return out
+
+
+def truncation_check(res: MonteCarloResult, which: int = 1) -> dict:
+    """Per-run RMSE of the EKF, the no-truncation Gaussian filter (:func:`gaussian_adf`) and the exact
+    posterior mean on the runs of ``res`` (model 1's Table 1 runs): how much of the EKF's excess error
+    over the exact posterior the first-order truncation accounts for (l.181)."""
+    adf = gaussian_adf(make_model(which), res.sim.y)
+    r_adf = np.sqrt(((adf - res.x_true[..., 0]) ** 2).mean(axis=1))
+    return {"EKF": res.rmse("EKF"), "Gaussian, exact moments": r_adf, "Exact": res.rmse("Exact"),
+            "UKF": res.rmse("UKF")}
+
+
+def proposal_check(which: int, sim: Simulation, seed: int, runs: int, n_particles: int = N_PARTICLES) -> dict:
+    """l.137 and l.145 on the first ``runs`` runs of ``sim``: a bootstrap PF (prior proposal, eq 15,
+    multinomial resampling every step, its own stream ``seed``) that records, at each step and for its
+    resampled particles x_{k-1}^i,
+
+    * the ESS of its own weights p(y_k | x_k^i) (the prior proposal, which ignores y_k) and the ESS the
+      optimal proposal p(x_k | x_{k-1}^i, y_k) would give on the same particles (its weights are
+      p(y_k | x_{k-1}^i), by Gauss-Hermite quadrature over w_k), both as a per-run mean over k;
+    * whether the optimal proposal is bimodal: p(x | x_{k-1}, y) ∝ exp(-(x - mu)^2/2Q - (y - x^2/20)^2/2R)
+      has two maxima iff the cubic g'(x) = 0 has three real roots (negative discriminant test).
+
+    Returns per-run arrays ``ess_prior``, ``ess_opt``, ``bimodal_share`` (share of particle-steps).
+    """
+    model = make_model(which)
+    rng = np.random.default_rng([int(seed), 31, int(which)])
+    N, Q, R, a_h = n_particles, float(model.Q[0, 0]), float(model.R[0, 0]), float(model.obs_coeff)
+    y = sim.y[:runs, :, 0]
+    z, wz = _gh()
+    x = float(model.m0[0]) + math.sqrt(float(model.P0[0, 0])) * rng.standard_normal((runs, N))
+    ess_p, ess_o, bim = np.zeros(runs), np.zeros(runs), np.zeros(runs)
+
+    def ess(logw):
+        w = np.exp(logw - logw.max(axis=1, keepdims=True))
+        return w.sum(axis=1) ** 2 / (w * w).sum(axis=1)
+
+    for k in range(1, T + 1):
+        mu = model.f(x[..., None], k)[..., 0]
+        yk = y[:, k - 1][:, None]
+        # optimal proposal's weight p(y_k | x_{k-1}) = E_w N(y_k; h(mu + w), R)
+        xs = mu[..., None] + math.sqrt(Q) * z
+        ll = -0.5 * (yk[..., None] - a_h * xs * xs) ** 2 / R
+        lmax = ll.max(axis=-1)
+        lopt = lmax + np.log(np.exp(ll - lmax[..., None]) @ wz)
+        ess_o += ess(lopt)
+        # bimodality: -g'(x) Q = c3 x^3 + c1 x + c0 with c3 = 2 a^2 Q / R, c1 = 1 - 2 a y Q / R, c0 = -mu
+        c3, c1, c0 = 2 * a_h * a_h * Q / R, 1.0 - 2 * a_h * yk * Q / R, -mu
+        bim += (-4 * c3 * c1 ** 3 - 27 * c3 * c3 * c0 ** 2 > 0).mean(axis=1)
+        # the bootstrap step: propagate by the prior, weight by the likelihood, resample (multinomial)
+        x = mu + math.sqrt(Q) * rng.standard_normal((runs, N))
+        lw = -0.5 * (yk - a_h * x * x) ** 2 / R
+        ess_p += ess(lw)
+        w = np.exp(lw - lw.max(axis=1, keepdims=True))
+        c = np.cumsum(w, axis=1)
+        c /= c[:, -1:]
+        idx = np.minimum(np.stack([np.searchsorted(c[r], rng.random(N)) for r in range(runs)]), N - 1)
+        x = np.take_along_axis(x, idx, axis=1)
+    return {"ess_prior": ess_p / T, "ess_opt": ess_o / T, "bimodal_share": bim / T, "runs": runs}
+
+
+def degeneracy_vs_n(which: int, sim: Simulation, seed: int, runs: int, n_values=DEGEN_N, executor=None) -> dict:
+    """l.135, "increasing N reduces the degeneracy, at a computational cost": SIS (eq 16 without
+    resampling) at each N of ``n_values`` on the first ``runs`` runs of ``sim`` (its own stream per N),
+    and the bootstrap PF's cost per step in model evaluations (deterministic count).
+
+    Returns ``{N: {"late": per-run ESS averaged over ESS_WINDOW, "late_frac": the same / N,
+    "evals": model evaluations per step}}``."""
+    from ..cost import cost_counts
+
+    model = make_model(which)
+    sub = Simulation(sim.x[:runs], sim.y[:runs])
+    out = {}
+    for n in n_values:
+        name = f"SIS N={n}"
+        f = BootstrapParticleFilter(model, n, resampling=RESAMPLING_DEFAULT, ess_threshold=0.0)
+        r = run_monte_carlo(model, {name: f}, T, runs, seed, sim=sub, executor=executor)
+        late = late_ess(r, name)
+        pf = BootstrapParticleFilter(model, n, resampling=RESAMPLING_DEFAULT)
+        evals = float(cost_counts({"PF": pf}, sub.y[:1], rng_seed=seed)["model_evaluations"].iloc[0]) / T
+        out[n] = {"late": late, "late_frac": late / n, "evals": evals}
+    return out

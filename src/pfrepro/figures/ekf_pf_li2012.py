@@ -7,6 +7,7 @@ this module only draws their results: the chapter's figures and tables, and the 
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from ..experiments import ekf_pf_li2012 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
@@ -309,6 +310,31 @@ def nsweep_plot(nsweep: dict, res: dict):
     axes[2].legend(fontsize=8)
     fig.tight_layout()
     return fig
+
+
+def degeneracy_vs_n_table(degen_n: dict):
+    """l.135 shown: SIS (no resampling) on model 1 at each N of the degeneracy check -- the per-run ESS
+    averaged over ``E.ESS_WINDOW`` (mean ± se over runs), its share of N, and the bootstrap PF's model
+    evaluations per step (deterministic count)."""
+    rows = []
+    for n in sorted(degen_n):
+        d = degen_n[n]
+        late = np.asarray(d["late"], float)
+        rows.append({"N": n, "late ESS (particles)": f"{late.mean():.3f} ± {late.std(ddof=1) / np.sqrt(late.size):.3f}",
+                     "late ESS / N": f"{late.mean() / n:.2e}", "model evals / step": f"{d['evals']:.0f}"})
+    return pd.DataFrame(rows).set_index("N")
+
+
+def statements_table(reg, results):
+    """The statements of secs 0-2 that Table 1 does not test: paper line, what judges it, the verdict."""
+    from ..verdicts.ekf_pf_li2012 import STATEMENT_CLAIMS
+
+    by_id = {c.claim_id: c for c in reg.claims}
+    rows = []
+    for cid, line in STATEMENT_CLAIMS.items():
+        c = by_id[cid]
+        rows.append({"paper": line, "claim": c.text, "judged by": c.note, "verdict": c.verdict_text()})
+    return pd.DataFrame(rows)
 
 
 def tables(results) -> dict:
