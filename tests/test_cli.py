@@ -100,7 +100,9 @@ def test_run_li2012_writes_tables_figures_claims(li_run):
     # the chapter's claims, all of them (pfrepro.verdicts.ekf_pf_li2012), not only the table cells
     assert [c["claim_id"] for c in claims] == [
         "table1-ekf-model1", "table1-pf-model1", "table1-ekf-model2", "table1-pf-model2", "ratio-7x",
-        "close-weak-nonlinearity", "figs-pf-better", "sis-degenerates", "resampling-limits-degeneracy", "pf-cost"]
+        "close-weak-nonlinearity", "figs-pf-better", "figs-pf-better-model2", "sis-degenerates",
+        "resampling-limits-degeneracy", "pf-cost", "kf-optimal-linear", "more-particles-less-degeneracy",
+        "more-particles-cost", "optimal-proposal-hard", "prior-ignores-y", "ekf-error-truncation"]
 
 
 def test_run_uses_the_chapter_experiment(li_run):
@@ -117,7 +119,7 @@ def test_run_uses_the_chapter_experiment(li_run):
 def test_run_prints_the_verdict_summary(li_run):
     _, out = li_run
     text = (out / "stdout.txt").read_text()
-    assert "verdicts of the 10 claims (the chapter's claims" in text
+    assert "verdicts of the 17 claims (the chapter's claims" in text
     assert "table1-ekf-model1" in text and "seed (figures): 4" in text
 
 
@@ -130,10 +132,10 @@ def test_scorecard_formats(fmt, li_run, capsys):
         from io import StringIO
 
         df = pd.read_csv(StringIO(text))
-        assert len(df) == 10 and "verdict" in df.columns
+        assert len(df) == 17 and "verdict" in df.columns
     elif fmt == "json":
         rows = json.loads(text)
-        assert len(rows) == 10 and all("verdict" in r for r in rows)
+        assert len(rows) == 17 and all("verdict" in r for r in rows)
         # every number exactly as saved (pandas' to_json had kept 10 digits), a missing one null
         saved = json.loads((out / "claims" / "ekf_pf_li2012.json").read_text())
         for r, s in zip(rows, saved):
