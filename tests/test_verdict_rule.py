@@ -95,8 +95,8 @@ def test_the_five_printed_effects_of_the_audit_are_not_reproduced_when_excluded(
 
 
 def test_runs_needed_is_the_power_plan():
-    j = judge_ordering(0.1, 0.1, effect=0.3, runs=20)
-    assert j.cause == CAUSE_RUNS and j.runs_needed == plan_runs(0.1 * math.sqrt(20), 0.3)
+    j = judge_ordering(0.1, 0.2, effect=0.3, runs=20)
+    assert j.cause == CAUSE_RUNS and j.runs_needed == plan_runs(0.2 * math.sqrt(20), 0.3) > 20
     assert judge_ordering(0.1, 0.1, runs=20).runs_needed is None  # no size stated: no plan
     assert judge_ordering(0.1, 0.1, margin=0.2, runs=20).runs_needed == plan_runs(0.1 * math.sqrt(20), 0.2)
     assert judge_ordering(0.1, 0.1, margin=0.5, runs=20).cause == CAUSE_TIE  # [-0.1, 0.3] inside ±0.5
@@ -105,6 +105,11 @@ def test_runs_needed_is_the_power_plan():
     assert Z_CRIT * 1.0 / math.sqrt(n) < 0.3
     with pytest.raises(ValueError):
         plan_runs(1.0, 0.0)
+    # the plan already met and still undecided (an observed difference below the margin): the runs
+    # that would show the observed difference, always more than the runs it had
+    j = judge_ordering(0.06, 0.04, margin=0.1, runs=250)
+    assert j.cause == CAUSE_RUNS and plan_runs(0.04 * math.sqrt(250), 0.1) <= 250
+    assert j.runs_needed == plan_runs(0.04 * math.sqrt(250), 0.06) > 250
 
 
 def _j(v, c=""):

@@ -203,13 +203,23 @@ class Judgement:
         return [r for r, v, c in self.per_reading if test(v, c)]
 
 
-def _needed(diff_se, runs, size):
-    """Runs a plan asks for to resolve ``size`` given ``diff_se`` on ``runs`` runs (None if unknown)."""
+def _needed(diff_se, runs, size, gap=None):
+    """Runs that would decide an undecided ordering (None if unknown).
+
+    The plan for ``size`` (the printed effect or the margin) given ``diff_se`` on ``runs`` runs; when
+    the runs already met that plan, the runs that would resolve what is left, ``gap`` (the observed
+    difference, or its distance to the printed effect, whichever is larger), so that the number is
+    always more than the runs the claim had.
+    """
     from .stats import plan_runs
 
     if not (_isnum(size) and size > 0 and _isnum(diff_se) and runs):
         return None
-    return plan_runs(float(diff_se) * math.sqrt(int(runs)), float(size), z=Z_CRIT)
+    sd = float(diff_se) * math.sqrt(int(runs))
+    need = plan_runs(sd, float(size), z=Z_CRIT)
+    if need <= int(runs):
+        need = plan_runs(sd, float(gap), z=Z_CRIT) if _isnum(gap) and gap > 0 else None
+    return need
 
 
 def judge_ordering(diff, diff_se, *, effect=None, margin=None, rel_tol=DEFAULT_REL_TOL, runs=None) -> Judgement:
@@ -233,8 +243,9 @@ def judge_ordering(diff, diff_se, *, effect=None, margin=None, rel_tol=DEFAULT_R
 
     Without a printed effect: shown -> reproduced; reversed -> not reproduced; otherwise
     inconclusive, a *tie within the stated margin* when ``diff ± Z_CRIT * diff_se`` lies inside
-    ``(-margin, margin)``, else *too few runs*. ``runs`` (the runs behind ``diff``) gives the runs a
-    plan would need (:attr:`Judgement.runs_needed`).
+    ``(-margin, margin)``, else *too few runs*. ``runs`` (the runs behind ``diff``) gives the runs that
+    would decide it (:attr:`Judgement.runs_needed`): the power plan for the effect or the margin, or,
+    where the claim already ran that plan, the plan for the difference left to resolve.
     """
     shown = ordering_holds(diff, diff_se)
     if effect is not None:
@@ -246,14 +257,14 @@ def judge_ordering(diff, diff_se, *, effect=None, margin=None, rel_tol=DEFAULT_R
             return Judgement("reproduced" if attained else "qualitatively reproduced")
         if shown is False or not attained:
             return Judgement("not reproduced")
-        return Judgement("inconclusive", CAUSE_RUNS, _needed(diff_se, runs, effect))
+        return Judgement("inconclusive", CAUSE_RUNS, _needed(diff_se, runs, effect, max(abs(diff), abs(effect - diff))))
     if shown is True:
         return Judgement("reproduced")
     if shown is False:
         return Judgement("not reproduced")
     if _isnum(margin) and margin > 0 and abs(diff) + Z_CRIT * diff_se < margin:
         return Judgement("inconclusive", CAUSE_TIE)
-    return Judgement("inconclusive", CAUSE_RUNS, _needed(diff_se, runs, margin))
+    return Judgement("inconclusive", CAUSE_RUNS, _needed(diff_se, runs, margin, abs(diff)))
 
 
 def _statement(holds, basis="") -> Judgement:
