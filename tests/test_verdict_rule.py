@@ -107,9 +107,9 @@ def test_runs_needed_is_the_power_plan():
         plan_runs(1.0, 0.0)
     # the plan already met and still undecided (an observed difference below the margin): the runs
     # that would show the observed difference, always more than the runs it had
-    j = judge_ordering(0.06, 0.04, margin=0.1, runs=250)
-    assert j.cause == CAUSE_RUNS and plan_runs(0.04 * math.sqrt(250), 0.1) <= 250
-    assert j.runs_needed == plan_runs(0.04 * math.sqrt(250), 0.06) > 250
+    j = judge_ordering(0.05, 0.03, margin=0.1, runs=250)
+    assert j.cause == CAUSE_RUNS and plan_runs(0.03 * math.sqrt(250), 0.1) <= 250
+    assert j.runs_needed == plan_runs(0.03 * math.sqrt(250), 0.05) > 250
 
 
 def _j(v, c=""):
