@@ -611,8 +611,10 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
     """The one thing a practitioner should take away, generated from the verdicts and numbers.
 
     The first sentence weighs the DPF against the DEKF on the growth model (sec 5.1 state accuracy,
-    Fig. 4, and the initial-guess sensitivity of Fig. 5, the abstract's two claims); the second
-    against a joint Liu-West filter at the same number of likelihood evaluations (sec 1, our test).
+    Fig. 4, and the initial-guess sensitivity of Fig. 5, the abstract's two claims): *reproduced* and
+    *qualitatively reproduced* both mean the advantage holds (the second: its printed size does not);
+    the second sentence weighs it against a joint Liu-West filter at the same number of likelihood
+    evaluations (sec 1, our test).
 
     Parameters
     ----------
@@ -628,13 +630,15 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
     """
     v = reg.verdicts()
     acc, guess, lw = v["s51_dpf_beats_dekf_x"], v["fig5_dpf_robust_to_guess"], v["dpf_beats_liu_west_theta"]
-    if acc == "reproduced" and guess == "reproduced":
+    pos = ("reproduced", "qualitatively reproduced")
+    size = " (by a margin other than the paper's printed one)" if acc == "qualitatively reproduced" else ""
+    if acc in pos and guess in pos:
         first = ("On the paper's growth model the dual PF is the safer of the two dual filters: it tracks the state "
-                 "better than the dual EKF and does not depend on the initial parameter guess")
-    elif acc == "reproduced":
-        first = ("The dual PF tracks the state better than the dual EKF on the paper's growth model, but its "
+                 f"better than the dual EKF{size} and does not depend on the initial parameter guess")
+    elif acc in pos:
+        first = (f"The dual PF tracks the state better than the dual EKF on the paper's growth model{size}, but its "
                  f"insensitivity to the initial parameter guess is {guess}")
-    elif guess == "reproduced":
+    elif guess in pos:
         first = ("The dual PF does not depend on the initial parameter guess, but its state accuracy against the dual "
                  f"EKF is {acc}")
     else:
@@ -642,7 +646,7 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
                  f"insensitivity to the initial guess: {guess})")
     d, se = liu_west_vs_dpf(results)["θ"]
     z = z_of((d, se))
-    if lw == "reproduced":
+    if lw in pos:
         second = ("It also learns θ better than a joint Liu–West filter at the same number of likelihood "
                   "evaluations, so the dual scheme is worth its cost.")
     elif ordering_holds(d, se) is False:
@@ -682,6 +686,7 @@ def prose(reg: ClaimsRegistry, results) -> dict:
            "dpf_conv_band": S51["conv_band"],
            "dpf_runs": S51["runs"], "dpf_T": S51["T"], "dpf_sens_runs": S51["sens_runs"],
            "dpf_grid_runs": S51["grid_runs"], "dpf_cap": S51["cap"], "dpf_runs52": S52["runs"],
+           "dpf_fig5_runs": next(iter(R.f5.values())).sim.y.shape[0], "dpf_theta_runs": S51["theta_runs"],
            "dpf_n52": S52["n_x"], "dpf_T52": S52["T"], "dpf_lit_runs": S52["literal_runs"]}
 
     # sec 5.1, the RMSE table
@@ -789,6 +794,7 @@ def prose(reg: ClaimsRegistry, results) -> dict:
             if n == "DPF":
                 out[f"dpf_52q_{q}_{k}_alt"] = float(tq.loc[n, "altitude (ft)"])
     out["dpf_52_LiuWest_alt_ok"] = float(tab52.loc["Liu-West", "altitude, runs not lost (ft)"])
+    out["dpf_stab_d"], out["dpf_stab_se"] = R52_main["stab"]
     out["dpf_52_dpf_coll_sd"] = float(np.median(np.sqrt(r52.results["DPF"].P[:, -1, 0, 0])))
     rm_lit = {n: E.rmse_over_time_52(R.r52_lit, n) for n in ("DPF", "DEKF")}
     for n in ("DPF", "DEKF"):
