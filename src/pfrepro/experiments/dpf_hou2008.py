@@ -194,7 +194,7 @@ CHOICES = [
                "Not the paper's filter (our baseline): 2N likelihoods per step = the DPF's N_x + N_θ. δ = 0.99 (main), "
                "the upper end of Liu & West's 0.95-0.99; δ = 0.95, the lower end, is run on every run of both "
                "sections and the Liu-West claims are decided under both.", "l.39 (ref [8])"),
-    FreeChoice("exact", "81 θ nodes × 241 x nodes on [-30, 30], first 40 runs", SWEEP,
+    FreeChoice("exact", "81 θ nodes × 241 x nodes on [-30, 30], first 40 runs", DESIGN,
                "Our reference, not the paper's: grid error is checked against a fine grid in the tests (lost mass "
                "shown); its cost limits it to 40 runs, and every comparison with it uses those 40 runs.", ""),
     FreeChoice("units52", "feet; drag −θ x2² exp(−γ x1) (Athans et al. 1968)", READING,
