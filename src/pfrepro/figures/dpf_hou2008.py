@@ -413,8 +413,8 @@ def errata_table(ratio_3d: float, literal_spread: float) -> pd.DataFrame:
         ("l.101", "by Neyman-Fisher, T = {α, β} is a sufficient statistic of the Beta law",
          "loose: α, β are the Beta's parameters; a Beta sample's sufficient statistic is (Σ log y, Σ log(1 − y)); "
          "{α_k, β_k} summarise p(θ | z_1:k) exactly only if it is a Beta",
-         "checks above: two samples with the same two sums have the same likelihood over (α, β); the exact posterior "
-         "differs from its moment-matched Beta (total variation at T)"),
+         "checks above: two samples with the same two sums have the same likelihood over (α, β); the moment-matched "
+         "Beta is close to the exact posterior at T (total variation in the checks) but an approximation"),
         ("eqs (15)-(16)", "w ~ N(0, 10⁶), N(0, 4·10⁶)", "a reading, not a proven misprint: P₀ = diag(10⁶, 4·10⁶), Q = 0 (main)",
          "the classic problem's initial covariance; the printed values as the filters' Q, and a small Q, are run as readings "
          "(sec 5.2): the conclusions that change with it are marked there"),
