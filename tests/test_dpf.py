@@ -544,8 +544,11 @@ def test_choices_cover_the_chapter_and_statuses_are_valid():
     from pfrepro.experiments import dpf_hou2008 as E
 
     cm = as_choice_map(E.CHOICES)
-    for name in ("T51", "theta51", "weight", "cap", "dekf", "Q52", "horizon52", "liu_west", "roughening"):
+    for name in ("T51", "weight", "cap", "dekf", "Q52", "horizon52", "liu_west", "roughening", "resampling",
+                 "range51", "dekf52", "runs51", "runs52"):
         assert cm[name].status != FIXED, name
+    # the true θ of sec 5.1 is the paper's (l.200, l.211); its other values are context, not readings
+    assert cm["theta51"].status == FIXED and "l.211" in cm["theta51"].source
     assert set(E.Q52) == {"0", "small", "printed"} and E.Q52["0"] is None
     np.testing.assert_array_equal(E.model_52(Q="printed").Q, np.diag([1e6, 4e6]))
     assert not E.model_52().has_process_noise

@@ -28,14 +28,14 @@ from ..filters.theta_grid import ThetaGridReference
 from ..models.reentry import FT, Reentry
 from ..models.ungm_theta import UNGMTheta
 from ..models.base import Simulation
-from ..choices import FIXED, READING, SWEEP, FreeChoice, choices_table
-from ..stats import CommonRunsError, paired_difference
+from ..choices import DESIGN, FIXED, READING, SWEEP, FreeChoice, choices_table
+from ..stats import CommonRunsError, paired_difference, plan_runs
 from ..montecarlo import run_monte_carlo, truth_streams
 
 __all__ = ["PAPER", "SEEDS", "SEED_51", "SEED_52", "Run", "Hou2008Results", "run_all", "scaled_settings", "STEPS",
-           "RUN_COUNTS", "S51", "S52", "Q52", "CHOICES", "assumptions_table", "model_51",
+           "RUN_COUNTS", "S51", "S52", "Q52", "CHOICES", "PILOT", "PLANS", "plan_rows", "assumptions_table", "model_51",
            "model_52", "simulate_51", "simulate_52", "dpf_51", "dekf_51", "liu_west_51", "grid_51",
-           "run_51", "run_fig5", "run_dpf_sensitivity", "run_dekf_sensitivity",
+           "run_51", "run_51_range", "dekf_start_52", "run_fig5", "run_dpf_sensitivity", "run_dekf_sensitivity",
            "run_52", "run_52_readings", "run_51_theta", "run_51_extra", "rmse_eq14", "rmse_usual", "mean_se",
            "coverage", "crb_theta_52", "per_run", "paired", "rmse_51", "rmse_52", "lost_51", "lost_52",
            "errors_52", "table_52", "convergence_time", "first_runs", "merge"]
@@ -48,16 +48,50 @@ SEEDS = {"sec51": 200851, "sec52": 200852}
 SEED_51 = SEEDS["sec51"]
 SEED_52 = SEEDS["sec52"]
 
+#: Power plans (issue 31). The per-run spread of each claim's paired difference under its MAIN reading,
+#: measured in the chapter's build before this plan existed (commit 2c2f16b: 100 runs in 5.1, 50 in 5.2,
+#: 30 in the 5.1 sweep; the same seeds), and the size each plan resolves: the printed effect where the paper
+#: printed both sides, else the larger of the claim's stated margin (``pfrepro.verdicts.dpf_hou2008.MARGINS``)
+#: and the pilot's own |difference|. Fixed here before any reading runs; never updated from a later build.
+#: ``claim: (sd per run, size, what the size is)``.
+PILOT = {
+    "s51_dpf_beats_dekf_x": (0.1104, 0.4489, "the printed relative effect 1 − 0.345/0.626"),
+    "s51_dpf_beats_dekf_theta": (0.2992, 0.4632, "the printed relative effect 1 − 0.00314/0.00585"),
+    "fig5_dpf_robust_to_guess": (0.1085, 0.1236, "the pilot's difference (> the margin 0.01)"),
+    "no_parameter_impoverishment": (0.0706, 0.2231, "the pilot's difference (> the margin log 1.25)"),
+    "cap_keeps_flexible": (0.5561, 0.10, "the margin 0.1 (pilot 0.033)"),
+    "dpf_beats_liu_west_theta": (0.0410, 0.0127, "the pilot's |difference| (> the margin 0.01)"),
+    "beta_sampling_efficiency": (3.473, 5.0, "the margin 5 draws (pilot 0.62)"),
+    "beta_speeds_convergence": (25.75, 5.0, "the margin 5 steps (pilot 2.3)"),
+    "s52_dpf_beats_dekf_alt": (4284.0, 1039.0, "the pilot's difference (> the margin 100 ft)"),
+    "s52_dpf_beats_dekf_vel": (361.1, 218.3, "the pilot's difference (> the margin 100 ft/s)"),
+    "s52_dpf_beats_dekf_th": (1.497e-4, 1e-4, "the margin 10⁻⁴ ft⁻¹ (pilot 0.99·10⁻⁴)"),
+    "s52_dpf_beats_dekf_th_10_20": (2.562e-4, 1e-4, "the margin 10⁻⁴ ft⁻¹ (pilot 0.25·10⁻⁴)"),
+    "s52_dpf_beats_dekf_alt_10_20": (2641.0, 1604.0, "the pilot's difference (> the margin 100 ft)"),
+    "s52_dpf_beats_dekf_vel_10_20": (815.2, 551.8, "the pilot's difference (> the margin 100 ft/s)"),
+    "dual_more_stable_than_joint": (0.4046, 0.86, "the pilot's |difference| (> the margin 0.1)"),
+    "dpf_beats_liu_west_theta_reentry": (1.457e-4, 2.298e-4, "the pilot's |difference| (> the margin 10⁻⁴)"),
+}
+#: the runs each plan asks for (:func:`pfrepro.stats.plan_runs`, 80 % power at |z| > 2)
+PLANS = {k: plan_runs(sd, size) for k, (sd, size, _) in PILOT.items()}
+#: what the budget pays: sec 5.1 main runs and its sweep/readings (the largest 5.1 plan, the cap's, capped by
+#: nothing: 250), sec 5.2 main runs and every 5.2 reading (the largest 5.2 plan, the altitude's)
+RUNS_51 = max(PLANS[k] for k in ("cap_keeps_flexible", "beta_speeds_convergence", "dpf_beats_liu_west_theta",
+                                 "s51_dpf_beats_dekf_x", "s51_dpf_beats_dekf_theta", "fig5_dpf_robust_to_guess"))
+RUNS_52 = max(PLANS[k] for k in PLANS if k.startswith(("s52", "dpf_beats_liu_west_theta_reentry", "dual_")))
+
 #: Sec 5.1 settings
 S51 = dict(
     T=100,              # horizon: not given; the classic UNGM horizon of Kitagawa (ref [17]) and most PF studies
-    runs=100,           # paper: one run; we use 100 Monte Carlo runs
+    runs=RUNS_51,       # paper: one run; our power plan (PLANS): the largest sec 5.1 plan
     bounds=(0.0, 1.0),  # [r_l, r_u]: not given; the unit interval of sec 3.2 (eq 6)
     theta_true=0.5,
     n_x=500, n_theta=500,
     cap=500.0,          # = n_theta: the Beta's pseudo-count may not exceed the draws it is fitted from
     theta0=0.5,         # the uniform prior's mean: DPF's θ̂_0 and DEKF's start (same prior information)
-    sens_runs=30,       # runs of the sweeps (weight readings, caps): budget
+    sens_runs=RUNS_51,  # runs of the sweep and readings (weight, caps, resampling, range, Liu-West δ): the plan
+    theta_runs=30,      # the true-θ rows (context: the paper excludes them, l.200, l.211)
+    fig5_runs=100,      # Fig. 5's guesses: plan PLANS["fig5_dpf_robust_to_guess"] (a few runs); 100 for the figure
     caps=(50.0, 500.0, 5000.0, None),
     guesses=(0.2, 0.5, 0.7),
     lw_delta=0.99,      # Liu & West's discount factor, the upper end of their 0.95-0.99
@@ -70,7 +104,9 @@ S51 = dict(
 #: Sec 5.2 settings (feet internally)
 S52 = dict(
     T=60,                 # 60 s of 1 s range samples, as in the classic problem (KalmTool)
-    runs=50, n_x=2000, n_theta=2000,
+    runs=RUNS_52,         # the paper's 50 (l.228) raised to the power plan (PLANS); Figs. 7-9 drawn on the first 50
+    fig_runs=50,
+    n_x=2000, n_theta=2000,
     cap=2000.0,           # = n_theta, the same rule as in 5.1
     theta0=3e-5,          # the classic filter start, far from θ = 1e-3
     P_theta0=1e-4,        # the classic initial variance of θ (DEKF)
@@ -84,12 +120,14 @@ S52 = dict(
 #: truth is the classic noise-free trajectory under every reading (the printed variances on the
 #: truth would move the body by ~5·10⁵ ft in 60 s: no re-entry left)
 Q52 = {"0": None, "small": np.diag([1e2**2, 1e2**2]), "printed": np.diag([1e6, 4e6])}
-S52.update(q_runs=50,            # runs of each extra 5.2 reading (Q, weight, δ, K): the paper's 50 (fewer left the orderings undecided)
+S52.update(q_runs=RUNS_52,       # runs of each extra 5.2 reading (Q, weight, δ, K, resampling, DEKF start): the plan
            lw_deltas=(0.99, 0.95), roughenings=(0.2, 0.1),
            horizons=(60, 30),    # 30 s: the readings' horizon by truncating the 60 s runs (causal filters)
            lost_ft=1e3)          # lost: final altitude error > 10 measurement sd (100 ft)
 S51.update(horizons=(100, 50),   # 50: Arulampalam et al.'s UNGM horizon (ref [11], whose eq (14) the paper cites)
-           thetas=(0.5, 0.2, 0.7),  # θ readings for the sec 5.1 RMSEs (0.2, 0.7: the paper's own guesses)
+           thetas=(0.5, 0.2, 0.7),  # true θ rows (0.2, 0.7: the paper's own guesses; context, excluded l.200, l.211)
+           ranges=((0.0, 1.0), (-1.0, 1.0)),  # [r_l, r_u] of sec 5.1: main, and the reading [-1, 1]
+           resamplings=("systematic", "multinomial"),
            lost_theta=0.1,       # lost: |θ̂_T − θ| > 0.1 (7 exact posterior sd at T)
            conv_band=0.05)       # convergence: |θ̂_k − θ| ≤ 0.05 from k on (Beta vs Gaussian)
 
@@ -98,79 +136,110 @@ CHOICES = [
                "Sec 5.1 gives no horizon. 100 (Kitagawa, ref [17]) is the main reading; 50 (Arulampalam et al., "
                "ref [11], whose eq (14) the paper cites) is run by truncating the 100-step runs (the filters are "
                "causal: bit-identical to 50-step runs). Every sec 5.1 claim is decided under both.",
-               "Sec 5.1: not stated"),
-    FreeChoice("theta51", "0.5", READING,
-               "True θ of the sec 5.1 RMSEs and Fig. 4: the paper states θ = 0.5 only for Fig. 5. 0.5 (the classic UNGM "
-               "value, Fig. 5's) is the main reading; 0.2 and 0.7 (the paper's own Fig. 5 guesses) are run for the "
-               "DPF and the DEKF on the first 30 runs, and the four RMSE numbers and the two Fig. 4 orderings are "
-               "decided under each.", "Sec 5.1 text (Fig. 5 only)"),
-    FreeChoice("range51", "[0, 1]", FIXED, "[r_l, r_u] for sec 5.1 is not printed, but sec 3.2 fits the Beta on "
-               "the unit interval and the UNGM's θ lies in it.", "Sec 3.2, eq (6)"),
+               "Sec 5.1 (l.190-211): not stated"),
+    FreeChoice("theta51", "0.5", FIXED,
+               "The true θ of every sec 5.1 run: l.200 says the one simulation's results are Figs. 4 and 5, and l.211 "
+               "gives Fig. 5's θ = 0.5. The rows θ = 0.2 and 0.7 (the paper's initial guesses, l.211, not true values) "
+               "are run on 30 runs and shown as context, not counted (under θ = 0.2 the printed DPF θ RMSE 0.00314 also "
+               "lies outside our single runs).", "l.200, l.211"),
+    FreeChoice("range51", "[0, 1]", DESIGN,
+               "[r_l, r_u] of sec 5.1 is not printed (sec 3.2, l.103 and l.117, only says a range is mapped onto "
+               "[0, 1]). [0, 1] (stable, positive AR coefficient, holding the classic 0.5) is our choice; [-1, 1] (every "
+               "stable AR coefficient) is run as a reading for the DPF and the DEKF (each starts at its prior's mean and "
+               "variance) and the four sec 5.1 numbers and the two Fig. 4 orderings are decided under both.",
+               "Sec 5.1: not stated (l.103, l.117)"),
     FreeChoice("ungm", "v, w ~ N(0, 1); x_0 ~ N(0, 5) (5 a variance); forcing 8 cos(1.2k)", FIXED,
-               "as printed (the text defines N(μ, σ²))", "Eqs (12)-(13)"),
-    FreeChoice("particles", "N_x = N_θ = 500 (5.1), 2000 (5.2); 50 runs (5.2)", FIXED, "as printed",
-               "Secs 5.1, 5.2"),
-    FreeChoice("runs51", "100 runs", FIXED,
-               "The paper prints one run; our 100 runs give the distribution of single runs its numbers are "
-               "compared with (a published number is inside when it lies in our central 95 % of single runs).",
-               "Sec 5.1 (one run)"),
-    FreeChoice("prior", "α_0 = β_0 = 1 (uniform on [r_l, r_u])", FIXED, "as printed", "Sec 4.2"),
+               "as printed (the text defines N(μ, σ²))", "Eqs (12)-(13), l.194-198"),
+    FreeChoice("particles", "N_x = N_θ = 500 (5.1), 2000 (5.2)", FIXED, "as printed", "l.200 (5.1), l.226 (5.2)"),
+    FreeChoice("runs51", f"{RUNS_51} runs (sweep and readings too); exact reference on 40", DESIGN,
+               "The paper prints one run (l.205-209, '单次实验'); our runs give the distribution of single runs its "
+               "numbers are compared with, and the count is the largest sec 5.1 power plan (rows plan_*).",
+               "l.205-209 (one run)"),
+    FreeChoice("runs52", f"{RUNS_52} runs (every reading too); Figs. 7-9 drawn on the first 50", DESIGN,
+               "The paper's 50 runs (l.228) raised to the largest sec 5.2 power plan (rows plan_*); the figures keep the "
+               "paper's 50.", "l.228 (50 runs)"),
+    FreeChoice("prior", "α_0 = β_0 = 1 (uniform on [r_l, r_u])", FIXED, "as printed", "l.152, l.184"),
     FreeChoice("weight", "predictive: N(z_k; h(f(x̂_{k-1}, θ)), H P⁻ Hᵀ + R)", READING,
                "Eq (11) is read three ways: the predictive density of its second line (main), the plug-in of its "
-               "third line (variance R only; run: sec 5.1 on the sweep's 30 runs, sec 5.2 on all 50 runs) and the "
-               "literal p(z_k | θ, x̂_k) of its last line and step 3(b), which is the same for every θ (the filter "
-               "learns nothing, contradicting Figs. 4, 5 and 9; shown in the sweep table, not a reading).",
-               "Eq (11), step 3(b)"),
+               "third line (variance R only; run in both sections on every run) and the literal p(z_k | θ, x̂_k) of its "
+               "last line and step 3(b), which is the same for every θ (the filter learns nothing, contradicting "
+               "Figs. 4, 5 and 9; shown in the sweep table, not a reading).",
+               "Eq (11), l.139; step 3(b), l.174"),
     FreeChoice("theta0", "prior mean 0.5 (5.1); 3·10⁻⁵ (5.2)", SWEEP,
                "The Beta starts uniform whatever the guess; the guess enters only as θ̂_0 of the state filter at "
-               "k = 1. Swept over the paper's guesses 0.2 / 0.5 / 0.7 in Fig. 5; 5.2 uses the classic start.",
-               "Sec 4.2, Fig. 5"),
+               "k = 1. Swept over the paper's guesses 0.2 / 0.5 / 0.7 in Fig. 5 (l.211); 5.2 uses the classic start.",
+               "l.211 (Fig. 5)"),
     FreeChoice("cap", "max(α, β) ≤ N_θ, mean kept", SWEEP,
-               "The paper caps α, β without a value. N_θ: a pseudo-count above the number of draws claims more "
-               "precision than they carry. Swept over 50, 500, 5000 and no cap (sec 5.1, 30 runs): the sec 5.1 "
-               "DPF claims are decided at every finite cap (no cap contradicts the paper's own capping: shown, "
-               "not a reading). Not varied in 5.2 (cap 2000 = N_θ).", "Sec 5.2, last paragraph"),
-    FreeChoice("guards", "ν = α + β floored at 2 when σ² ≥ μ(1 − μ); capped when σ² = 0", FIXED,
-               "Eq (7) has no solution there; the floor is the uniform prior's ν (binds in the share of steps "
-               "the sweep table's 'guards' column shows).", "Eq (7)"),
-    FreeChoice("step3d", "σ² = Σ w (θ − θ̂)²", FIXED, "the printed extra factor θ^i is a misprint (errata)",
-               "Step 3(d)"),
-    FreeChoice("resampling", "systematic, every step", FIXED, "every step as printed; the scheme is not "
-               "named (systematic, the book's default)", "Step 2(e)"),
+               "The paper caps α, β without a value (l.244). N_θ: a pseudo-count above the number of draws claims more "
+               "precision than they carry. Swept over 50, 500, 5000 (sec 5.1, every run): the sec 5.1 DPF claims are "
+               "decided at every finite cap; no cap contradicts the paper's own capping (l.244): shown, not counted. "
+               "Not varied in 5.2 (cap 2000 = N_θ).", "l.244"),
+    FreeChoice("guards", "ν = α + β floored at 2 when σ² ≥ μ(1 − μ); capped when σ² = 0", DESIGN,
+               "Eq (7) has no solution there, so any value is ours; the floor is the uniform prior's ν. It binds in "
+               "under 1 % of the steps (the sweep table's 'guards' column); no claim is declared on it (there is no "
+               "paper's value to read).", "Eq (7), l.111: no guard"),
+    FreeChoice("step3d", "σ² = Σ w (θ − θ̂)²", FIXED,
+               "l.109 and l.113 call σ_θ² the variance that eq (7) inverts; the printed extra factor θ^i (l.178) is a "
+               "misprint (errata)", "l.109, l.113, l.178"),
+    FreeChoice("resampling", "systematic", DESIGN,
+               "Step 2(e) (l.168) resamples at every step (as printed) but names no scheme: systematic is our choice "
+               "(the book's default); multinomial is run as a reading for the DPF in both sections, and every DPF "
+               "ordering is decided under both.", "l.168: scheme not named"),
     FreeChoice("dekf", "Q^θ_k = max(10⁻³ P_θ0 · 0.995^k, 10⁻⁶ P_θ0), θ̂ projected on [r_l, r_u]", SWEEP,
                "DEKF tuning is not given (ReBEL-style annealing, fixed before any run). Swept: q_0 = 0, 10⁻⁴, 10⁻³, "
-               "10⁻² P_θ0 and unprojected, 100 runs; the sec 5.1 DPF-vs-DEKF claims are decided at every value. "
+               "10⁻² P_θ0 and unprojected, every run; the sec 5.1 DPF-vs-DEKF claims are decided at every value. "
                "5.1 start θ̂_0 = 0.5, P_θ0 = 1/12 (the uniform prior's moments); the parameter 'measurement' noise "
-               "is the innovation covariance S (prediction-error form).", "Sec 5.1 (DEKF, ref [10])"),
+               "is the innovation covariance S (prediction-error form).", "l.188 (DEKF, ref [10]): no tuning"),
     FreeChoice("liu_west", "δ = 0.99, auxiliary form; N = 500 (5.1), 2000 (5.2); θ_0 ~ U[r_l, r_u]", READING,
                "Not the paper's filter (our baseline): 2N likelihoods per step = the DPF's N_x + N_θ. δ = 0.99 (main), "
-               "the upper end of Liu & West's 0.95-0.99; δ = 0.95, the lower end, is run (5.1: 30 runs, 5.2: 50 runs) "
-               "and the Liu-West claims are decided under both.", "Sec 1 (ref [8])"),
-    FreeChoice("exact", "81 θ nodes × 241 x nodes on [-30, 30], first 40 runs", SWEEP,
+               "the upper end of Liu & West's 0.95-0.99; δ = 0.95, the lower end, is run on every run of both "
+               "sections and the Liu-West claims are decided under both.", "l.39 (ref [8])"),
+    FreeChoice("exact", "81 θ nodes × 241 x nodes on [-30, 30], first 40 runs", DESIGN,
                "Our reference, not the paper's: grid error is checked against a fine grid in the tests (lost mass "
                "shown); its cost limits it to 40 runs, and every comparison with it uses those 40 runs.", ""),
-    FreeChoice("units52", "feet; drag −θ x2² exp(−γ x1) (Athans et al. 1968)", FIXED,
-               "Fixed by the paper's own description of the trajectory (sharp deceleration in 10-20 s, Fig. 6): the "
-               "printed metric state with foot constants and no square makes the body hit the ground at 6 km/s "
-               "(run on 10 runs and shown, Fig. 6 below), so it is not an admissible reading.", "Sec 5.2, eq (16)"),
+    FreeChoice("units52", "feet; drag −θ x2² exp(−γ x1) (Athans et al. 1968)", READING,
+               "The paper prints a metric state with foot constants and drag ∝ x₂ (l.218-226); its own text says the "
+               "body decelerates sharply in 10-20 s (l.242). Under the literal reading it hits the ground at 6 km/s "
+               "(Fig. 6 below), so the literal reading (run on 10 runs) is shown as context, not counted, in every "
+               "sec 5.2 claim.", "l.218-226, l.242"),
     FreeChoice("Q52", "0: the printed 10⁶, 4·10⁶ are the initial covariance P_0", READING,
-               "Eqs (15)-(16) print 10⁶, 4·10⁶ as process noise; the classic problem has them as P_0 and no process "
-               "noise (main). Readings run (filters only, 50 runs each): Q = diag(10⁴, 10⁴) ('small': 100 ft and "
+               "Eqs (15)-(16) print 10⁶, 4·10⁶ as process noise (l.226); the classic problem has them as P_0 and no "
+               "process noise (main). Readings run (filters only, every run): Q = diag(10⁴, 10⁴) ('small': 100 ft and "
                "100 ft/s per s) and Q = diag(10⁶, 4·10⁶) ('printed'). Every sec 5.2 claim is decided under all three.",
-               "Eqs (15)-(16)"),
+               "l.226"),
     FreeChoice("horizon52", "60 s, 1 s sampling", READING,
-               "The horizon is not printed (Figs. 7-9 are missing): 60 s is the classic problem's (main); 30 s is "
-               "run by truncating the 60 s runs.", "Sec 5.2"),
-    FreeChoice("start52", "truth x_0 = (3·10⁵ ft, 2·10⁴ ft/s), θ = 10⁻³; filter θ̂_0 = 3·10⁻⁵, DEKF P_θ0 = 10⁻⁴, "
-               "Q^θ = 0", FIXED, "the classic problem (ref [19]); the paper prints x_0 in km and the θ range only",
-               "Sec 5.2"),
+               "The horizon is not printed (Figs. 7-9 are missing; l.218 gives the 1 s sampling): 60 s is the classic "
+               "problem's (main); 30 s is run by truncating the 60 s runs.", "l.218"),
+    FreeChoice("start52", "truth x_0 = (3·10⁵ ft, 2·10⁴ ft/s)", FIXED,
+               "l.226 prints 91.5 km and 6.1 km/s, the classic problem's 3·10⁵ ft and 2·10⁴ ft/s (units: row units52)",
+               "l.226"),
+    FreeChoice("truth52", "true θ = 10⁻³ ft⁻¹, noise-free trajectory", DESIGN,
+               "Not printed (l.226 gives only the range [0, 2·10⁻³]); the classic problem's value (ref [19], l.218), the "
+               "middle of the printed range. Not varied: a second truth is another experiment, and no reading of the "
+               "text offers one.", "l.226: range only"),
+    FreeChoice("dekf52", "θ̂_0 = 3·10⁻⁵, P_θ0 = 10⁻⁴, Q^θ = 0 (the classic filter start)", DESIGN,
+               "Not printed (the paper gives no DEKF settings, l.226-228). The classic start is our main choice; the "
+               "DEKF started from the DPF's own prior (θ̂_0 = 10⁻³, P_θ0 = (2·10⁻³)²/12, the uniform's moments) is run "
+               "as a reading on every run, and every sec 5.2 DPF-vs-DEKF claim is decided under both.",
+               "l.226-228: not stated"),
     FreeChoice("integration", "RK4, 64 substeps (truth), 4 (filters)", SWEEP,
                "Swept in the integration-error table (2 ... 64 substeps): 4 substeps err by ~0.01 ft, 10⁻⁴ of the "
                "measurement sd; no claim can move.", ""),
     FreeChoice("roughening", "K = 0.2 (Gordon et al. 1993), 5.2 state PF", READING,
                "The paper is silent; with Q = 0 a bootstrap PF collapses to one particle. K = 0.2 (main); K = 0.1 is "
-               "run for the DPF (50 runs) and the sec 5.2 DPF claims are decided under both.", ""),
+               "run for the DPF (every run) and the sec 5.2 DPF claims are decided under both.", "l.226: not stated"),
 ]
+
+
+def plan_rows() -> list:
+    """The power plans as assumptions-table rows (status design choice): one per claim of :data:`PILOT`."""
+    return [FreeChoice(f"plan_{k}", f"{PLANS[k]} runs per reading; run: {RUNS_52 if k.startswith(('s52', 'dpf_beats_liu_west_theta_', 'dual_')) else RUNS_51}",
+                       DESIGN, f"80 % power at |z| > 2 for {why}, at the main reading's per-run sd {sd:.4g} (pilot: the "
+                               f"chapter's build before issue 31, same seeds)", "")
+            for k, (sd, size, why) in PILOT.items()]
+
+
+CHOICES = CHOICES + plan_rows()
 
 
 def assumptions_table() -> pd.DataFrame:
@@ -204,9 +273,11 @@ def coverage(lo, hi, truth):
 
 
 # --------------------------------------------------------------------------- 5.1
-def model_51(theta_true=None) -> UNGMTheta:
-    """The sec 5.1 model (eqs 12-13) with true θ ``theta_true`` (default 0.5, the main reading)."""
-    return UNGMTheta(theta_true=S51["theta_true"] if theta_true is None else theta_true, bounds=S51["bounds"])
+def model_51(theta_true=None, bounds=None) -> UNGMTheta:
+    """The sec 5.1 model (eqs 12-13) with true θ ``theta_true`` (default 0.5) and prior range ``bounds``
+    (default [0, 1], the main reading; the range does not change the simulated truth)."""
+    return UNGMTheta(theta_true=S51["theta_true"] if theta_true is None else theta_true,
+                     bounds=S51["bounds"] if bounds is None else tuple(bounds))
 
 
 def _seed(section: str, seed=None) -> int:
@@ -229,8 +300,12 @@ def dpf_51(model=None, **over):
 
 
 def dekf_51(model=None, theta0=None, q_rel=None, clip=True):
-    """The sec 5.1 DEKF: P_θ0 = the uniform prior's variance, annealed parameter noise q_rel·P_θ0."""
-    P0 = (S51["bounds"][1] - S51["bounds"][0]) ** 2 / 12.0
+    """The sec 5.1 DEKF: P_θ0 = the uniform prior's variance on the model's range, annealed parameter noise
+    q_rel·P_θ0; start ``theta0`` (default 0.5 on the main range, the range's midpoint on another)."""
+    lo, hi = (model.bounds if model is not None else S51["bounds"])
+    P0 = (hi - lo) ** 2 / 12.0
+    if theta0 is None and (lo, hi) != tuple(S51["bounds"]):
+        theta0 = 0.5 * (lo + hi)
     q_rel = S51["dekf_q_rel"] if q_rel is None else q_rel
     return DualExtendedKalmanFilter(model or model_51(), S51["theta0"] if theta0 is None else theta0, P0,
                                     q0=q_rel * P0, anneal=S51["dekf_anneal"],
@@ -296,31 +371,38 @@ def run_fig5(main: Run | None = None, executor=None, runs=None, seed=None) -> di
     result, whose guess is 0.5, run with the same ``seed``) is reused for 0.5 and gives the truths:
     it is the same computation. Returns {guess: Run}."""
     m = model_51()
-    sim = simulate_51(runs, seed=seed) if main is None else main.sim
+    if main is not None:
+        n = min(S51["fig5_runs"] if runs is None else runs, main.sim.y.shape[0])
+        main = first_runs(main, n, ("DPF", "DEKF"))
+    sim = simulate_51(S51["fig5_runs"] if runs is None else runs, seed=seed) if main is None else main.sim
     out = {}
     for g0 in S51["guesses"]:
         if main is not None and g0 == S51["theta0"]:
-            keep = ("DPF", "DEKF")
-            out[g0] = Run(sim=sim, results={k: main.results[k] for k in keep},
-                          seconds={k: main.seconds[k] for k in keep}, filters={k: main.filters[k] for k in keep})
+            out[g0] = main
         else:
             out[g0] = _run({"DPF": dpf_51(m, theta0=g0), "DEKF": dekf_51(m, theta0=g0)}, sim,
                            _seed("sec51", seed), executor)
     return out
 
 
-def run_dpf_sensitivity(executor=None, runs=None, seed=None) -> Run:
+def run_dpf_sensitivity(executor=None, runs=None, seed=None, main: Run | None = None) -> Run:
     """One sweep on the first ``runs`` (default ``sens_runs``) runs: the three readings of the parameter
-    weight (cap N_θ) and the Beta caps (predictive weight). "DPF" is the working setting; every variant
-    uses its own named stream."""
+    weight (cap N_θ), the Beta caps (predictive weight) and multinomial resampling (the reading
+    ``resampling``). "DPF" is the working setting: taken from ``main`` (a :func:`run_51` result with the
+    same seed: the same stream, the same numbers) when given, else run; every variant uses its own
+    named stream."""
     m = model_51()
-    sim = simulate_51(S51["sens_runs"] if runs is None else runs, seed=seed)
-    filters = {"DPF": dpf_51(m), "plugin weight": dpf_51(m, weight="plugin"),
-               "literal weight": dpf_51(m, weight="literal")}
+    n = S51["sens_runs"] if runs is None else runs
+    sim = simulate_51(n, seed=seed)
+    filters = {"plugin weight": dpf_51(m, weight="plugin"), "literal weight": dpf_51(m, weight="literal")}
     for c in S51["caps"]:
         if c != S51["cap"]:
             filters[f"cap {c:g}" if c else "no cap"] = dpf_51(m, cap=c)
-    return _run(filters, sim, _seed("sec51", seed), executor)
+    filters["multinomial resampling"] = dpf_51(m, resampling="multinomial")
+    if main is None:
+        filters = {"DPF": dpf_51(m), **filters}
+        return _run(filters, sim, _seed("sec51", seed), executor)
+    return merge(first_runs(main, n, ("DPF",)), _run(filters, sim, _seed("sec51", seed), executor))
 
 
 def run_dekf_sensitivity(executor=None, runs=None, seed=None) -> Run:
@@ -333,11 +415,21 @@ def run_dekf_sensitivity(executor=None, runs=None, seed=None) -> Run:
 
 
 def run_51_theta(theta_true, executor=None, runs=None, seed=None) -> Run:
-    """The reading ``theta51``: DPF and DEKF on the first ``runs`` (default ``sens_runs``) runs with true
-    θ = ``theta_true`` (same seeds and stream names as the main runs)."""
+    """The true-θ rows (context: the paper fixes θ = 0.5, l.200, l.211): DPF and DEKF on the first ``runs``
+    (default ``theta_runs``) runs with true θ = ``theta_true`` (same seeds and stream names as the main runs)."""
     m = model_51(theta_true)
-    sim = simulate_51(S51["sens_runs"] if runs is None else runs, theta_true, seed=seed)
+    sim = simulate_51(S51["theta_runs"] if runs is None else runs, theta_true, seed=seed)
     return _run({"DPF": dpf_51(m), "DEKF": dekf_51(m)}, sim, _seed("sec51", seed), executor)
+
+
+def run_51_range(bounds, executor=None, runs=None, seed=None) -> Run:
+    """The reading ``range51``: DPF and DEKF with the prior range ``bounds`` (each started from that
+    uniform prior's mean and variance) on the first ``runs`` (default ``sens_runs``) main truths, under
+    the main runs' stream names (common random numbers)."""
+    m = model_51(bounds=bounds)
+    sim = simulate_51(S51["sens_runs"] if runs is None else runs, seed=seed)
+    return _run({"DPF": dpf_51(m, theta0=0.5 * (bounds[0] + bounds[1])), "DEKF": dekf_51(m)}, sim,
+                _seed("sec51", seed), executor)
 
 
 def run_51_extra(executor=None, runs=None, lw_runs=None, seed=None) -> Run:
@@ -369,7 +461,8 @@ def simulate_52(runs=None, reading="feet", seed=None):
 
 
 def run_52(reading="feet", runs=None, executor=None, Q=None, names=("DPF", "DEKF", "Liu-West"),
-           weight="predictive", delta=None, roughening=None, seed=None) -> Run:
+           weight="predictive", delta=None, roughening=None, seed=None, resampling="systematic",
+           dekf_start="classic") -> Run:
     """Sec 5.2: DPF (2000 + 2000 particles), DEKF and Liu-West (2000 joint particles) on the re-entry problem.
 
     The truth is always the classic noise-free trajectory (``simulate_52``); ``Q`` (a key of
@@ -383,12 +476,23 @@ def run_52(reading="feet", runs=None, executor=None, Q=None, names=("DPF", "DEKF
     make = {
         "DPF": lambda: DualParticleFilter(m, S52["n_x"], S52["n_theta"], cap=S52["cap"], theta0=S52["theta0"],
                                           roughening=S52["roughening"] if roughening is None else roughening,
-                                          weight=weight),
-        "DEKF": lambda: DualExtendedKalmanFilter(m, S52["theta0"], S52["P_theta0"], clip_to_bounds=True),
+                                          weight=weight, resampling=resampling),
+        "DEKF": lambda: DualExtendedKalmanFilter(m, *dekf_start_52(m, dekf_start), clip_to_bounds=True),
         # joint (not dual) reference at the DPF's likelihood count: 2 x 2000 = 2000 + 2000
         "Liu-West": lambda: LiuWestFilter(m, S52["n_x"], delta=S51["lw_delta"] if delta is None else delta),
     }
     return _run({n: make[n]() for n in names}, sim, _seed("sec52", seed), executor)
+
+
+def dekf_start_52(model, start="classic"):
+    """``(θ̂_0, P_θ0)`` of the sec 5.2 DEKF: "classic" (3·10⁻⁵, 10⁻⁴; row ``dekf52``) or "prior" (the
+    uniform prior's mean and variance on the model's range)."""
+    if start == "classic":
+        return S52["theta0"], S52["P_theta0"]
+    if start == "prior":
+        lo, hi = model.bounds
+        return 0.5 * (lo + hi), (hi - lo) ** 2 / 12.0
+    raise ValueError(f"dekf_start must be 'classic' or 'prior', got {start!r}")
 
 
 def run_52_readings(executor=None, runs=None, seed=None) -> dict:
@@ -402,6 +506,9 @@ def run_52_readings(executor=None, runs=None, seed=None) -> dict:
                                                         roughening=S52["roughenings"][1], seed=seed)
     out[("liu_west", S52["lw_deltas"][1])] = run_52(runs=n, executor=executor, names=("Liu-West",),
                                                     delta=S52["lw_deltas"][1], seed=seed)
+    out[("resampling", "multinomial")] = run_52(runs=n, executor=executor, names=("DPF",), resampling="multinomial",
+                                                seed=seed)
+    out[("dekf52", "prior")] = run_52(runs=n, executor=executor, names=("DEKF",), dekf_start="prior", seed=seed)
     return out
 
 
@@ -697,16 +804,17 @@ def convergence_time(theta_hat, truth, band):
 
 # --------------------------------------------------------------------------- everything the chapter runs
 #: the run counts of the chapter (settings dict, key), the ones :func:`scaled_settings` replaces
-RUN_COUNTS = (("S51", "runs"), ("S51", "grid_runs"), ("S51", "sens_runs"),
-              ("S52", "runs"), ("S52", "q_runs"), ("S52", "literal_runs"))
+RUN_COUNTS = (("S51", "runs"), ("S51", "grid_runs"), ("S51", "sens_runs"), ("S51", "theta_runs"), ("S51", "fig5_runs"),
+              ("S52", "runs"), ("S52", "q_runs"), ("S52", "literal_runs"), ("S52", "fig_runs"))
 
 
 def scaled_settings(runs=None) -> tuple[dict, dict]:
     """Copies of :data:`S51` and :data:`S52` with every Monte Carlo run count replaced by ``runs``.
 
-    ``runs=None`` keeps the chapter's counts (100 runs in sec 5.1, the exact reference on 40 and the
-    sweeps and readings on 30; 50 in sec 5.2, every reading too, the literal reading on 10). An int
-    replaces all six counts of :data:`RUN_COUNTS` (main runs, exact reference, sweeps and readings),
+    ``runs=None`` keeps the chapter's counts (the power plans of :data:`PLANS`: :data:`RUNS_51` runs in
+    sec 5.1, its sweep and readings too, the exact reference on 40, Fig. 5 on 100, the true-θ context rows
+    on 30; :data:`RUNS_52` in sec 5.2, every reading too, the literal reading on 10, Figs. 7-9 on 50). An
+    int replaces every count of :data:`RUN_COUNTS` (main runs, exact reference, sweeps and readings),
     so that ``runs=2`` is a quick run of every experiment; at least 2 (the paired comparisons need
     two runs). The module's own dicts are never changed.
     """
@@ -744,7 +852,7 @@ class Hou2008Results:
     r52_lit
         Sec 5.2 under the literal (metric) reading.
     th51 : dict
-        The true-θ readings of sec 5.1, by θ (:func:`run_51_theta`).
+        The true-θ rows of sec 5.1 by θ (:func:`run_51_theta`; context).
     x51
         The Gaussian-law DPF and Liu-West at δ = 0.95 on the sec 5.1 truths (:func:`run_51_extra`).
     rd52 : dict
@@ -763,6 +871,8 @@ class Hou2008Results:
         The paper's sec 5.1 numbers (``published.table``).
     seconds : dict
         Wall time of the main 5.1 and 5.2 runs and of the readings (context only, never in a claim).
+    rg51 : dict
+        The range reading of sec 5.1 by its bounds tuple (:func:`run_51_range`).
     """
 
     s51: dict
@@ -784,12 +894,14 @@ class Hou2008Results:
     integ: pd.DataFrame
     pub: pd.DataFrame
     seconds: dict = field(default_factory=dict)
+    rg51: dict = field(default_factory=dict)
 
     @property
     def settings(self) -> dict:
         """The run counts and seeds used (printed by ``pfrepro run``)."""
         return {"runs (5.1)": self.s51["runs"], "runs (exact reference)": self.r51.results["exact"].x.shape[0],
-                "runs (5.1 sweeps and readings)": self.s51["sens_runs"], "runs (5.2)": self.s52["runs"],
+                "runs (5.1 sweeps and readings)": self.s51["sens_runs"], "runs (5.1 true-θ rows)": self.s51["theta_runs"],
+                "runs (Fig. 5)": self.s51["fig5_runs"], "runs (5.2)": self.s52["runs"],
                 "runs (5.2 readings)": self.s52["q_runs"], "runs (5.2 literal)": self.s52["literal_runs"],
                 "seed (5.1)": self.seeds["sec51"], "seed (5.2)": self.seeds["sec52"]}
 
@@ -838,9 +950,9 @@ def run_all(runs=None, seeds=None, executor=None, steps=None) -> Hou2008Results:
     r51 = run_51(executor, runs=s51["runs"], grid_runs=s51["grid_runs"], seed=a)
     t_51 = time.perf_counter() - t0
     say()
-    f5 = run_fig5(r51, executor=executor, seed=a)
+    f5 = run_fig5(r51, executor=executor, runs=s51["fig5_runs"], seed=a)
     say()
-    sens = run_dpf_sensitivity(executor, runs=s51["sens_runs"], seed=a)
+    sens = run_dpf_sensitivity(executor, runs=s51["sens_runs"], seed=a, main=r51)
     say()
     dekf_sens = run_dekf_sensitivity(executor, runs=s51["runs"], seed=a)
     say()
@@ -852,7 +964,8 @@ def run_all(runs=None, seeds=None, executor=None, steps=None) -> Hou2008Results:
     # the readings beyond the main one (fewer runs, stated in the chapter)
     t0 = time.perf_counter()
     say()
-    th51 = {th: run_51_theta(th, executor, runs=s51["sens_runs"], seed=a) for th in s51["thetas"][1:]}
+    th51 = {th: run_51_theta(th, executor, runs=s51["theta_runs"], seed=a) for th in s51["thetas"][1:]}
+    rg51 = {tuple(b_): run_51_range(b_, executor, runs=s51["sens_runs"], seed=a) for b_ in s51["ranges"][1:]}
     say()
     x51 = run_51_extra(executor, runs=s51["runs"], lw_runs=s51["sens_runs"], seed=a)
     say()
@@ -864,5 +977,5 @@ def run_all(runs=None, seeds=None, executor=None, steps=None) -> Hou2008Results:
         th51=th51, x51=x51, rd52=rd52, tr_ft=truth_trajectory_52("feet"), tr_lit=truth_trajectory_52("literal"),
         crb_ft=crb_theta_52("feet"), crb_lit=crb_theta_52("literal"), integ=integration_error_52(),
         pub=published.table(PAPER, "Sec 5.1"),
-        seconds={"5.1": t_51, "5.2": t_52, "readings": t_readings})
+        seconds={"5.1": t_51, "5.2": t_52, "readings": t_readings}, rg51=rg51)
     return out

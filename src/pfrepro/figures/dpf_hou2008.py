@@ -15,7 +15,7 @@ from ..experiments import dpf_hou2008 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
 
-__all__ = ["pm", "rmse_table", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "fig_exact", "legend_below", "tables",
+__all__ = ["pm", "rmse_table", "fig1", "fig3", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "fig_exact", "legend_below", "tables",
            "figures", "chapter_figures", "TABLES", "FIGURES", "N_STEPS", "paper_row_51", "sweeps_51",
            "integration_error", "errata_table", "readings_51_table", "sensitivity_display", "dekf_sensitivity_display",
            "law_table", "coverage_display", "table_52_display", "readings_52_table"]
@@ -192,6 +192,59 @@ def fig6(tr_ft, tr_lit_m):
     return fig
 
 
+#: the (α, β) pairs of the regenerated Fig. 1 (sec 3.1, l.89: the uniform at α = β = 1, shapes moved by the
+#: ratio of α to β, concentrated by their size)
+FIG1_PAIRS = ((1, 1), (0.5, 0.5), (2, 2), (2, 5), (5, 2), (20, 20), (50, 150))
+
+
+def fig1(pairs=FIG1_PAIRS):
+    """Fig. 1 regenerated: the Beta density (eq 4) for several (α, β) (sec 3.1, l.89): α = β = 1 is the
+    uniform on [0, 1], the ratio α : β moves the mass, their size α + β concentrates it."""
+    from scipy.stats import beta as beta_dist
+
+    u = np.linspace(0.0005, 0.9995, 1000)
+    fig, ax = new_figure(figsize=(5.6, 3.0))
+    for i, (a, b) in enumerate(pairs):
+        ax.plot(u, beta_dist.pdf(u, a, b), color=SERIES_COLORS[i % len(SERIES_COLORS)],
+                ls=("-", "--", ":", "-.")[i // len(SERIES_COLORS) % 4] if len(pairs) > len(SERIES_COLORS) else "-",
+                lw=1.1, label=f"α = {a:g}, β = {b:g}")
+    ax.set_ylim(0, 6); ax.set_xlim(0, 1)
+    ax.set_xlabel("y"); ax.set_ylabel("f(y; α, β)")
+    ax.legend(fontsize=8, frameon=False, ncol=2)
+    fig.tight_layout()
+    return fig
+
+
+def fig3():
+    """Fig. 3 regenerated (the paper's block diagram of dual estimation, sec 4.1, l.143): a state filter
+    that uses the current parameter estimate and a parameter filter that uses the state estimate, both fed
+    by z_k, alternating at every step. As implemented (``pfrepro.filters.DualParticleFilter``), the
+    parameter filter scores each θ by the one-step prediction from (x̂_{k-1}, P_{k-1}) (eq 11, second line)."""
+    from matplotlib.patches import FancyArrowPatch, FancyBboxPatch
+
+    fig, ax = new_figure(figsize=(6.4, 2.8))
+    ax.set_xlim(0, 10); ax.set_ylim(0, 4.4); ax.axis("off")
+    boxes = {"state": (3.2, 2.6, "state filter (step 2)\nbootstrap PF, N_x particles\np(x_k | z_1:k, θ̂_{k-1})"),
+             "param": (3.2, 0.3, "parameter filter (step 3)\nBeta(α_k, β_k), N_θ draws\np(θ | z_1:k)")}
+    for key, (x0, y0, text) in boxes.items():
+        ax.add_patch(FancyBboxPatch((x0, y0), 3.6, 1.4, boxstyle="round,pad=0.05", fc="0.93", ec="0.3"))
+        ax.text(x0 + 1.8, y0 + 0.7, text, ha="center", va="center", fontsize=8)
+
+    def arrow(a, b, text, xy, **kw):
+        ax.add_patch(FancyArrowPatch(a, b, arrowstyle="-|>", mutation_scale=10, lw=0.9, color="0.2", **kw))
+        ax.text(*xy, text, fontsize=8, ha="center", va="center")
+
+    arrow((0.6, 2.2), (3.15, 3.3), "", (0, 0))
+    arrow((0.6, 2.2), (3.15, 1.0), "", (0, 0))
+    ax.text(0.45, 2.2, "z_k", fontsize=9, ha="right", va="center")
+    arrow((6.85, 3.3), (9.2, 3.3), "x̂_k", (8.0, 3.55))
+    arrow((6.85, 1.0), (9.2, 1.0), "θ̂_k", (8.0, 1.25))
+    arrow((5.6, 2.55), (5.6, 1.75), "x̂_k, P_k (used at k + 1)", (7.35, 2.15))
+    arrow((4.4, 1.75), (4.4, 2.55), "θ̂_k (used at k + 1)", (2.75, 2.15))
+    fig.tight_layout()
+    return fig
+
+
 def fig2(outside_over_time=None, cases=((0.5, 1 / 12), (0.12, 0.01))):
     """Fig. 2 regenerated: a Beta law and the Gaussian with the same mean and variance on [0, 1].
 
@@ -316,18 +369,25 @@ def tables(results) -> dict:
 
 def figures(results) -> dict:
     """The paper's figures (``pfrepro run``): Fig. 4, Fig. 5 and Figs. 7-9 from ``run_all``'s results."""
-    return {"Fig. 4": fig4(results.r51), "Fig. 5": fig5(results.f5), "Figs. 7-9": figs_7_9(results.r52, results.crb_ft)}
+    return {"Fig. 4": fig4(results.r51), "Fig. 5": fig5(results.f5), "Figs. 7-9": figs_7_9(_fig_runs_52(results), results.crb_ft)}
+
+
+def _fig_runs_52(results):
+    """The sec 5.2 runs Figs. 7-9 are drawn on: the first ``fig_runs`` (the paper's 50, l.228) of the main runs."""
+    n = min(results.s52.get("fig_runs", results.s52["runs"]), results.r52.sim.y.shape[0])
+    return E.first_runs(results.r52, n)
 
 
 def chapter_figures(results) -> dict:
-    """Every figure of the chapter, by its glue key (the paper's Figs. 2, 4-9, the sweeps, the exact
+    """Every figure of the chapter, by its glue key (the paper's Figs. 1-9, the sweeps, the exact
     posterior and the integration error)."""
     R = results
     st, sd = E.sensitivity_table(R.sens), E.sensitivity_table(R.dekf_sens)
-    return {"dpf_fig4": fig4(R.r51, 0), "dpf_fig5": fig5(R.f5, 0), "dpf_sweeps51": sweeps_51(st, sd),
+    return {"dpf_fig1": fig1(), "dpf_fig3": fig3(),
+            "dpf_fig4": fig4(R.r51, 0), "dpf_fig5": fig5(R.f5, 0), "dpf_sweeps51": sweeps_51(st, sd),
             "dpf_fig2": fig2(R.x51.results["DPF Gaussian θ"].diagnostics["outside"].mean(0)),
             "dpf_fig_exact": fig_exact(R.r51, R.s51["grid_runs"]), "dpf_fig6": fig6(R.tr_ft, R.tr_lit),
-            "dpf_fig789": figs_7_9(R.r52, R.crb_ft), "dpf_integration": integration_error(R.integ)}
+            "dpf_fig789": figs_7_9(_fig_runs_52(R), R.crb_ft), "dpf_integration": integration_error(R.integ)}
 
 
 def errata_table(ratio_3d: float, literal_spread: float) -> pd.DataFrame:
@@ -343,6 +403,18 @@ def errata_table(ratio_3d: float, literal_spread: float) -> pd.DataFrame:
          f"checks above: the literal weight's spread over θ is {literal_spread:.1f}"),
         ("eq (16)", "−θ x₂ e^{−γ x₁}", "−θ x₂² e^{−γ x₁}", "Athans et al. (1968); drag ∝ speed²"),
         ("sec 5.2 units", "91.5 km, 6.1 km/s, 30.5 km", "3·10⁵ ft, 2·10⁴ ft/s, 10⁵ ft", "γ, var v and θ are foot values"),
+        ("sec 3.2 (l.117) vs step 3 (l.172-174)", "l.117: θ = (ϕ − r_l)/(r_u − r_l) is the Beta variable, ϕ the "
+         "parameter; l.172: θ^i = ϕ^i (r_u − r_l) + r_l, ϕ the Beta variable, θ the parameter; l.174: f(θ^i; α, β)",
+         "one naming (step 3's, which the chapter and eqs (8)-(13) use): ϕ ~ Beta(α, β) on [0, 1], θ = r_l + ϕ (r_u − r_l) "
+         "the model's parameter; l.174's density is f(ϕ^i; α, β)",
+         "θ is the model's parameter in eqs (8)-(13) and sec 5.2's θ ∈ [0, 2·10⁻³] (l.226) is not in [0, 1], so sec 3.2's "
+         "naming is the swapped one; with π_θ = f(·; α_{k-1}, β_{k-1}) (draws from the Beta) the ratio in l.174 is 1 "
+         "and the weight is the likelihood alone (as implemented)"),
+        ("l.101", "by Neyman-Fisher, T = {α, β} is a sufficient statistic of the Beta law",
+         "loose: α, β are the Beta's parameters; a Beta sample's sufficient statistic is (Σ log y, Σ log(1 − y)); "
+         "{α_k, β_k} summarise p(θ | z_1:k) exactly only if it is a Beta",
+         "checks above: two samples with the same two sums have the same likelihood over (α, β); the moment-matched "
+         "Beta is close to the exact posterior at T (total variation in the checks) but an approximation"),
         ("eqs (15)-(16)", "w ~ N(0, 10⁶), N(0, 4·10⁶)", "a reading, not a proven misprint: P₀ = diag(10⁶, 4·10⁶), Q = 0 (main)",
          "the classic problem's initial covariance; the printed values as the filters' Q, and a small Q, are run as readings "
          "(sec 5.2): the conclusions that change with it are marked there"),
@@ -351,7 +423,9 @@ def errata_table(ratio_3d: float, literal_spread: float) -> pd.DataFrame:
 
 def readings_51_table(results) -> pd.DataFrame:
     """Sec 5.1 under every reading (``pfrepro.verdicts.dpf_hou2008.readings_51``): medians of single-run
-    eq-(14) RMSEs ("in": the published value inside our central 95 %), failures, paired z, and the paper."""
+    eq-(14) RMSEs ("in": the published value inside our central 95 %), failures, the paired relative
+    difference 1 − DPF/DEKF (± se) beside the paper's printed one, and whether the reading is counted
+    (the paper's text excludes some: shown, not counted)."""
     from ..verdicts import dpf_hou2008 as V
 
     R51, pub = V.readings_51(results), V.published_51(results)
@@ -366,10 +440,13 @@ def readings_51_table(results) -> pd.DataFrame:
         "failures DPF / DEKF": f"{st['fail'][0]} / {st['fail'][1]}",
         "DPF x": cell(st, "DPF", "x"), "DEKF x": cell(st, "DEKF", "x"),
         "DPF θ": cell(st, "DPF", "theta"), "DEKF θ": cell(st, "DEKF", "theta"),
-        "z (x)": f"{V.z_of(st[('order', 'x')]):.1f}", "z (θ)": f"{V.z_of(st[('order', 'theta')]):.1f}"}
+        "1 − DPF/DEKF (x)": pm(*st[("rel", "x")], 2), "1 − DPF/DEKF (θ)": pm(*st[("rel", "theta")], 2),
+        "counted": "no: " + V.EXCLUDED[(ch, val)].split(":")[0] if (ch, val) in V.EXCLUDED else "yes"}
         for (ch, val), st in R51.items()])
+    eff = V.effects_51(results)
     tab.loc[len(tab)] = ["paper (1 run)", 1, "—", f"{pub[('DPF', 'x')]:.3f}", f"{pub[('DEKF', 'x')]:.3f}",
-                         f"{pub[('DPF', 'theta')]:.5f}", f"{pub[('DEKF', 'theta')]:.5f}", "—", "—"]
+                         f"{pub[('DPF', 'theta')]:.5f}", f"{pub[('DEKF', 'theta')]:.5f}", f"{eff['x']:.2f}",
+                         f"{eff['theta']:.2f}", "—"]
     return tab
 
 
@@ -449,4 +526,5 @@ def readings_52_table(results) -> pd.DataFrame:
         "θ at T (% of θ)": trio(st, "θ (10⁻³/ft)", lambda v: f"{100 * v:.1f}"),
         "z DEKF−DPF: alt, speed, θ": ", ".join(f"{V.z_of(st[(k, 'all')]):.1f}" for k in ("alt", "vel", "th")),
         "z 10–20 s": ", ".join(f"{V.z_of(st[(k, '10_20')]):.1f}" for k in ("alt", "vel", "th")),
-        "z LW−DPF θ": f"{V.z_of(st['lw']):.1f}"} for (ch, val), st in V.readings_52(results).items()])
+        "z LW−DPF θ": f"{V.z_of(st['lw']):.1f}",
+        "lost LW − DPF": pm(*st["stab"], 2)} for (ch, val), st in V.readings_52(results).items()])
