@@ -340,7 +340,7 @@ def table3_per_run(t3: pd.DataFrame) -> pd.DataFrame:
 def mechanism_table(mech: pd.DataFrame) -> pd.DataFrame:
     """The mechanism's sets (``E.mechanism()``): distinct fraction, repeated particles and KS distance
     from uniform, each averaged over the runs."""
-    tab = mech.mean().unstack()[["distinct", "duplicates", "ks"]]
+    tab = mech.mean().unstack()[["distinct", "duplicates", "ks"]].dropna(how="all")
     tab.columns = ["distinct fraction", "repeated particles", "KS distance from uniform"]
     return tab
 
