@@ -180,6 +180,7 @@ def _plan(parts, base, cap, what):
     part needs for 80 % power (:func:`pfrepro.stats.plan_runs`) at the main reading's spread on
     ``base`` runs (``parts``: ``(diff, se, size)``), at least ``base`` and at most ``cap``."""
     need = max(plan_runs(float(se) * np.sqrt(base), float(size), z=Z_CRIT) for _, se, size in parts)
+    cap = max(cap, base)
     return {"runs": int(min(max(base, need), cap)), "need": int(need), "base": int(base), "cap": int(cap),
             "basis": f"{what}, at the main reading's spread on its first {base} runs"}
 
@@ -244,7 +245,8 @@ def plan_f6(R):
     c = f6_choice(R)
     n_judged = len(c["eta_runs"]) - c["half"]
     need = plan_runs(c["se"] * np.sqrt(n_judged), f6_margin(), z=Z_CRIT)
-    cap, base = R.n["power"], R.n["f6"]
+    base = R.n["f6"]
+    cap = max(R.n["power"], base)
     return {"runs": int(min(max(base, 2 * need), cap)), "need": int(2 * need), "base": int(base), "cap": int(cap),
             "basis": "Fig. 6's margin (5 % of Table 2's printed CMS-PF RMSE), at the spread of the main reading's "
                      "judged half; twice the judged runs (half pick, half judge)"}
