@@ -851,21 +851,29 @@ def takeaway(reg, R) -> str:
     str
         One or two sentences.
     """
-    v = reg.verdicts()
-    better, equal = v.get("t1_cms_better_than_pf"), v.get("abstract_equal_computation")
+    by = {c.claim_id: c for c in reg.claims}
+    better, equal = by.get("t1_cms_better_than_pf"), by.get("abstract_equal_computation")
+    bv = better.verdict if better else None
+    ev = equal.verdict if equal else None
     bias = _cons_bias(R.cons)
-    if better == "not reproduced":
+    if bv == "not reproduced":
         first = ("On the paper's benchmark CMS-PF was not more accurate than a bootstrap PF with the same particles "
                  "under any reading we ran")
-        first += ", nor at equal computation" if equal == "not reproduced" else ""
+        first += ", nor at equal computation" if ev == "not reproduced" else ""
         first += ": a plain bootstrap PF is the better choice."
-    elif better == "reproduced":
-        first = "CMS-PF beat the bootstrap PF at every particle number under every reading we ran"
+    elif bv in ("reproduced", "qualitatively reproduced"):
+        size = "" if bv == "reproduced" else " (though not by the margins the paper printed)"
+        first = f"CMS-PF beat the bootstrap PF at every particle number under every reading we ran{size}"
         first += (", but not at equal computation (a PF with 2N particles does as well)."
-                  if equal != "reproduced" else ", also at equal computation.")
+                  if ev not in ("reproduced", "qualitatively reproduced") else ", also at equal computation.")
+    elif better is not None and better.cause == "depends on the reading":
+        holds_ = better.judgement.under("holds")
+        first = ("Whether CMS-PF beats the bootstrap PF depends on settings the paper does not give (it holds only "
+                 "under " + ", ".join(holds_) + "), so it is no safe replacement for a plain PF.")
     else:
-        first = ("Whether CMS-PF beats the bootstrap PF depends on settings the paper does not give "
-                 "(the claim is inconclusive), so it is no safe replacement for a plain PF.")
+        need = f" ({better.runs_needed} runs per reading would decide it)" if better is not None and better.runs_needed else ""
+        first = ("Whether CMS-PF beats the bootstrap PF is not decided by our runs" + need
+                 + ", so it is no safe replacement for a plain PF.")
     r, N = f"{bias['ratio']:.0f}", bias["N"]
     if bias["kind"] == "shrinks":
         second = (f"Its likelihood-selected map particles carry improper weights: its estimate stays {r} times "
