@@ -1041,6 +1041,9 @@ def _prose_mechanism(R) -> dict:
         out[f"cms_mech_{key}_distinct"] = float(tab.loc[k, "distinct"])
         out[f"cms_mech_{key}_ks"] = float(tab.loc[k, "ks"])
     out["cms_mech_pf_dups"] = float(tab.loc["PF resampled set", "duplicates"])
+    mm = R.mech["main"]
+    out["cms_xhat_kept"] = float(mm["x̂-centred map particles", "kept"].mean())
+    out["cms_big_kept"] = float(mm["big-centred map particles", "kept"].mean())
     out["cms_mech_carried_dups"] = float(tab.loc["CMS-PF carried set", "duplicates"])
     for key, mk in (("randn", "carrier=randn"), ("log", "main"), ("eq6", "carrier=eq (6)")):
         out[f"cms_mech_ks_{key}"] = float(R.mech[mk]["CMS-PF map particles", "ks"].mean())
@@ -1116,10 +1119,12 @@ def _prose_verdicts(reg, R) -> dict:
         out[f"cms_n_{v.replace(' ', '_')}"] = verdicts.count(v)
     out["cms_n_claims"] = len(verdicts)
     out["cms_verdict_sentence"] = Md(verdict_sentence(verdicts))
-    vs = reg.verdicts()
     for v in ["reproduced", "qualitatively reproduced", "not reproduced", "inconclusive"]:
-        ids = [k for k, vv in vs.items() if vv == v and not k.startswith(("t1_pf_", "t1_cms_mean", "t2_rmse_", "t3_mean_"))]
-        out[f"cms_ids_{v.replace(' ', '_')}"] = Md(", ".join(f"`{i}`" for i in ids) if ids else "none")
+        cs = [c for c in reg.claims if c.verdict == v
+              and not c.claim_id.startswith(("t1_pf_", "t1_cms_mean", "t2_rmse_", "t3_mean_"))]
+        txt = ", ".join(f"`{c.claim_id}`" + (f" ({c.verdict_text()[len('inconclusive ('):-1]})" if v == "inconclusive" else "")
+                        for c in cs)
+        out[f"cms_ids_{v.replace(' ', '_')}"] = Md(txt or "none")
     return out
 
 
