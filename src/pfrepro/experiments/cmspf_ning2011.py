@@ -121,6 +121,12 @@ CHOICES = [
                "sec 2.3 note 1 replaces the true state of Step 2.2 by big-weight particles and x̂_k (a "
                "filter cannot use the truth; the oracle that does is run separately and labelled)",
                "l.73-75 (Step 2.2), l.106 (sec 2.3 note 1)"),
+    FreeChoice("map_slots", "slot j on centre j mod (n_big + 1)", DESIGN,
+               "our choice (the paper does not say how the N map particles are shared among the centres, nor "
+               "which big − small spread the x̂_k centre uses): equal shares, the x̂_k centre with the spread of the "
+               "best/worst pair (pfrepro.filters.cmspf.map_particles). Not run at another value: the filter has "
+               "no switch for it; the claim on x̂_k-centred particles (l.106) says so in its note",
+               "l.70-73, l.106 (not specified)"),
     FreeChoice("map_particles", "N", FIXED, "Step 2.2: x2 has N elements; 2N candidates, N kept (Step 2.4)",
                "l.73 (Step 2.2: i = 1..N), l.79 (Step 2.4: the upper half kept)"),
     FreeChoice("N_t23", "200", READING,

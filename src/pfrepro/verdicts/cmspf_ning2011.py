@@ -760,7 +760,8 @@ def record_claims(reg, R):
          depends_on=["sigma_w2", "eta", "carrier", "carrier_init"], source="Sec 2.3 note 1 (l.106)",
          note="per run, mean over the 50 steps of the share of x̂_k-centred map particles kept by Step 2.4 minus the "
               f"share of big-particle-centred ones, paired, in units of the margin ({MARGIN_FRACTION:g}); "
-              f"{nm} runs per reading")
+              f"{nm} runs per reading; the x̂_k centre takes the widest (best/worst) spread, our design choice "
+              "(map_slots), not run at another value")
     ck = R.checks
     _add(reg, "eq6_white", "Sec 3.3: the eq-(6) sequence has zero mean, delta autocorrelation and zero cross-correlation",
          qualitative=eq6_white(ck), source="Sec 3.3, eq (6)",
