@@ -217,8 +217,7 @@ def plan_t3(R):
 def plan_f3(R):
     """Fig. 3's readings: the trend margins at the spread of Fig. 3's own 50 runs."""
     return _plan(_parts(f3_pairs(R.f3_runs), f3_margins()), R.n["fig3"], R.n["power"],
-                 "Fig. 3's margin (a fall of 5 % of the printed CMSR2-PF mean across the sweep), at the spread "
-                 "of Fig. 3's 50 runs")
+                 "Fig. 3's margin (a fall of 5 % of the printed CMSR2-PF mean across the sweep)")
 
 
 def plan_mech(R):
@@ -249,7 +248,8 @@ def plan_f6(R):
     cap = max(R.n["power"], base)
     return {"runs": int(min(max(base, 2 * need), cap)), "need": int(2 * need), "base": int(base), "cap": int(cap),
             "basis": "Fig. 6's margin (5 % of Table 2's printed CMS-PF RMSE), at the spread of the main reading's "
-                     "judged half; twice the judged runs (half pick, half judge)"}
+                     f"judged half (runs {c['half'] + 1}-{len(c['eta_runs'])} of the sensitivity sweep); twice the judged "
+                     f"runs (half pick, half judge); {base} runs at least"}
 
 
 def plan_choices(R):
@@ -262,7 +262,7 @@ def plan_choices(R):
                 f"there says how many runs would decide it (pfrepro run cmspf --runs R)" if p["need"] > p["cap"] else "")
         rows.append(FreeChoice(f"plan_{k}", f"{p['runs']} runs per reading",
                                DESIGN, f"power plan of {names.get(k, k)}: 80 % power at |z| > {Z_CRIT:g} for "
-                               f"{p['basis']} (at least the paper's {p['base']}){more}", "not printed"))
+                               f"{p['basis']} (never fewer than those {p['base']}){more}", "not printed"))
     return rows
 
 
