@@ -181,3 +181,67 @@ def test_claims_of_the_last_build_show_printed_digits(paper):
             assert cell.split(" ± ")[0] == text, (pub, cell, text)
             n += 1
     assert n > 0
+
+
+# ------------------------------------------------------------------ CMS-PF (Ning et al. 2011) ---------
+def _cms_frames():
+    """The CMS-PF tables the chapter shows with published cells, built by the chapter's functions on
+    2 runs (the printed cells do not depend on our runs)."""
+    from pfrepro.experiments import cmspf_ning2011 as E
+
+    t1 = E.table1(runs=20)[0]   # the per-run download shows runs 1-20 beside the paper's rows
+    t2 = E.table2(runs=2, timing_repeats=1)[0]
+    t3 = E.table3(runs=2)[0]
+    return t1, t2, t3
+
+
+def _cms_table1():
+    from pfrepro.figures import cmspf_ning2011 as F
+
+    t1 = _cms_frames()[0]
+    out = [(r["paper"], str(r["run"]), f"N={r['N']} {r['filter']}")
+           for _, r in F.table1_per_run_long(t1).iterrows() if r["paper"] is not None]
+    s = F.table1_summary(t1)
+    out += [(s.loc[N, f"{f} paper"], "21", f"N={N} {f}") for N in s.index for f in ("PF", "CMS-PF")]
+    d = F.divisor_check("Table 1")
+    out += [(d.loc[c, "printed variance (row 22)"], "22", c) for c in d.index]
+    return out
+
+
+def _cms_table2():
+    from pfrepro.figures import cmspf_ning2011 as F
+
+    tab = F.table2_vs_published(_cms_frames()[1])
+    return [(tab.loc[f, col], row, f) for f in F.TABLE2_FILTERS
+            for col, row in (("RMSE paper", "RMSE"), ("time/s paper (printed)", "time/s"))]
+
+
+def _cms_table3():
+    from pfrepro.figures import cmspf_ning2011 as F
+
+    t3 = _cms_frames()[2]
+    tab = F.table3_vs_published(t3)
+    cols = [c for c in tab.index if c in F.E.TABLE3_COLUMNS]
+    out = [(tab.loc[c, "paper mean (row 21)"], "21", c) for c in cols]
+    out += [(tab.loc[c, "paper variance (row 22)"], "22", c) for c in cols]
+    per = F.table3_per_run(t3)["paper (printed)"]
+    out += [(per.loc[i, c], str(i), c) for i in per.index for c in per.columns]
+    return out
+
+
+SHOWN_TABLES["cmspf_ning2011"] = [("Table 1", _cms_table1), ("Table 2", _cms_table2), ("Table 3", _cms_table3)]
+
+
+@pytest.mark.parametrize("table_id,build", SHOWN_TABLES["cmspf_ning2011"])
+def test_every_cmspf_published_cell_shown_is_the_printed_one(table_id, build):
+    test_every_published_cell_shown_is_the_printed_one("cmspf_ning2011", table_id, build)
+
+
+def test_cmspf_table2_shows_the_printed_seconds_beside_the_ratios():
+    """Table 2's run times appear as the paper printed them (seconds), not only as ratios."""
+    from pfrepro.figures import cmspf_ning2011 as F
+
+    tab = F.table2_vs_published(_cms_frames()[1])
+    cols = list(tab.columns)
+    assert cols.index("time/s paper (printed)") + 1 == cols.index("time ratio to PF, paper")
+    assert tab.loc["CMS-PF", "time/s paper (printed)"] == "0.1110" and tab.loc["EKF", "time/s paper (printed)"] == "0.0044"

@@ -68,7 +68,7 @@ def test_two_seeds_give_other_numbers_and_the_same_claims(run1):
     assert R1.step_randn["x_true"] != R2.step_randn["x_true"] and R1.f6_base["x_true"] != R2.f6_base["x_true"]
     assert not np.allclose(R1.sens_runs["ref"]["PF"], R2.sens_runs["ref"]["PF"])
     tag = "sigma_v_t2=R 1, sigma_w2=10"
-    assert not np.allclose(R1.f6_reading(tag, R1.n["f6"]), R2.f6_reading(tag, R2.n["f6"]))
+    assert not np.allclose(R1.f6_reading(tag, R1.plans["f6"]["runs"]), R2.f6_reading(tag, R2.plans["f6"]["runs"]))
     repro = [c.reproduced for c in reg1.claims if c.reproduced is not None and c.basis != "count"]
     other = [c.reproduced for c in reg2.claims if c.reproduced is not None and c.basis != "count"]
     assert all(a != b for a, b in zip(repro, other))
@@ -116,23 +116,108 @@ def _set_t1(R, gap):
 
 
 def test_table1_ordering_holds_flips_and_ties(run1):
+    """The printed effect is tested: a gap at the printed size -> reproduced; far above it ->
+    qualitatively reproduced; reversed -> not reproduced; one reading flips -> depends on the reading;
+    a gap near zero that cannot exclude the printed size -> too few runs."""
     R = copy.deepcopy(run1[0])
-    better = np.array([1.0, 1.1])
-    _set_t1(R, lambda tag: better)
-    reg = _record(R)
-    c = _claim(reg, "t1_cms_better_than_pf")
-    assert set(c.readings.values()) == {True} and c.verdict == "reproduced"
-    # one reading flips: CMS-PF worse than the PF under sigma_w^2 = 10 only -> inconclusive
-    _set_t1(R, lambda tag: -better if tag == "sigma_w2=10" else better)
+    eff = dict(zip(E.TABLE1_N, V.t1_effects()))
+
+    def set_gap(gap):
+        for key, t in list(R.readings.items()):
+            if key[0] == "t1":
+                t = t.copy()
+                for N in E.TABLE1_N:
+                    t[(N, "CMS-PF")] = t[(N, "PF")] - gap(key[1], N)
+                R.readings[key] = t
+        R.t1 = R.readings[("t1", "sigma_w2=1", R.n["t1"])]
+        R.t1_q10 = R.readings[("t1", "sigma_w2=10", R.n["t1"])]
+
+    jitter = np.array([0.99, 1.01])
+    set_gap(lambda tag, N: eff[N] * jitter)                                  # the printed size, every N
     c = _claim(_record(R), "t1_cms_better_than_pf")
-    assert c.readings["sigma_w2=10"] is False and c.readings["sigma_w2=1"] is True and c.verdict == "inconclusive"
-    # worse under every reading -> not reproduced
-    _set_t1(R, lambda tag: -better)
+    assert c.effect == V.UNIT and c.verdict == "reproduced" and c.judgement.under("holds")
+    set_gap(lambda tag, N: 5 * eff[N] * jitter)                              # shown, printed size excluded
+    assert _verdicts(_record(R))["t1_cms_better_than_pf"] == "qualitatively reproduced"
+    set_gap(lambda tag, N: -eff[N] * jitter if tag == "sigma_w2=10" else eff[N] * jitter)
+    c = _claim(_record(R), "t1_cms_better_than_pf")
+    assert c.verdict == "inconclusive" and c.cause == "depends on the reading"
+    assert c.judgement.under("fails") == ["sigma_w2=10"]
+    set_gap(lambda tag, N: -eff[N] * jitter)                                 # worse everywhere
     assert _verdicts(_record(R))["t1_cms_better_than_pf"] == "not reproduced"
-    # a tie (paired differences +-0.1 around 0) under every reading -> undecided -> inconclusive
-    _set_t1(R, lambda tag: np.array([0.1, -0.1]))
+    # one N reversed is enough: the worst part decides
+    set_gap(lambda tag, N: -eff[N] * jitter if N == 1000 else eff[N] * jitter)
+    assert _verdicts(_record(R))["t1_cms_better_than_pf"] == "not reproduced"
+    # a noisy gap around half the printed effect: neither 0 nor the effect excluded -> too few runs
+    set_gap(lambda tag, N: eff[N] * np.array([-1.0, 2.0]))
     c = _claim(_record(R), "t1_cms_better_than_pf")
-    assert set(c.readings.values()) == {None} and c.verdict == "inconclusive"
+    assert c.verdict == "inconclusive" and c.cause == "too few runs" and c.runs_needed > 2
+
+
+def test_worst_part_and_scaling():
+    """Each part in units of its own size; the part with the worst verdict decides."""
+    parts = V.scaled([(2.0, 0.1), (0.1, 0.1)], [2.0, 0.5])
+    assert parts == [(1.0, 0.05), (0.2, 0.2)]
+    assert V.worst(parts) == (0.2, 0.2)                       # 0.2 ± 0.2 excludes the size 1: not reproduced
+    assert V.worst([(1.0, 0.05), (3.0, 0.05)]) == (3.0, 0.05)  # size missed ranks below size attained
+    assert V.worst([(5.0, 0.1), (0.01, 0.01)], "margin") == (0.01, 0.01)   # a tie ranks below a shown part
+    with pytest.raises(ValueError):
+        V.scaled([(1.0, 0.1)], [0.0])
+    d, se, n = V.reading_diff([(2.0, 0.1), (0.1, 0.1)], [2.0, 0.5], 40)
+    assert (d, se, n) == (0.2, 0.2, 40)
+
+
+def test_plans_follow_the_main_spread_and_the_cap(run1):
+    R = copy.deepcopy(run1[0])
+    p = V._plan([(0.0, 0.5, 0.1)], 20, 100, "x")
+    assert p["need"] == __import__("pfrepro").stats.plan_runs(0.5 * np.sqrt(20), 0.1) and p["runs"] == 100
+    assert V._plan([(0.0, 0.01, 1.0)], 20, 100, "x")["runs"] == 20          # never below the paper's count
+    assert V._plan([(0.0, 0.01, 1.0)], 20, 4, "x")["runs"] == 20            # the cap never cuts below it
+    rows = V.plan_choices(R)
+    assert {r.name for r in rows} == {f"plan_{k}" for k in R.plans} and all(r.status == "design choice" for r in rows)
+    reg = _record(R)
+    assert {f"plan_{k}" for k in R.plans} <= set(reg.choices)
+    # every ordering claim carries an effect or a margin and per-reading differences with their runs
+    for c in reg.claims:
+        if c.reading_diffs:
+            assert (c.effect == V.UNIT) != (c.margin == V.UNIT), c.claim_id
+            assert all(v[2] and v[2] >= 2 for v in c.reading_diffs.values()), c.claim_id
+            assert not c.readings
+
+
+def test_xhat_claim_follows_the_kept_shares(run1):
+    R = copy.deepcopy(run1[0])
+
+    def set_kept(a, b):
+        for k, m in R.mech.items():
+            m = m.copy()
+            m[("x̂-centred map particles", "kept")] = a
+            m[("big-centred map particles", "kept")] = b
+            R.mech[k] = m
+    set_kept(np.array([0.9, 0.92]), np.array([0.3, 0.31]))
+    c = _claim(_record(R), "xhat_map_particles_competitive")
+    assert c.verdict == "reproduced" and c.margin == V.UNIT and c.source.endswith("(l.106)")
+    set_kept(np.array([0.3, 0.31]), np.array([0.9, 0.92]))
+    assert _verdicts(_record(R))["xhat_map_particles_competitive"] == "not reproduced"
+    set_kept(np.array([0.500, 0.501]), np.array([0.500, 0.500]))           # well inside 5 points: a tie
+    c = _claim(_record(R), "xhat_map_particles_competitive")
+    assert c.verdict == "inconclusive" and c.cause == "tie within the stated margin"
+
+
+def test_fig1_step_checks_pass_and_fail():
+    t = E.step_checks(runs=3, steps=2)
+    assert list(t.index) == list(E.FIG1_STEPS) and t["passes"].all()
+    from pfrepro.figures import cmspf_ning2011 as F
+    bad = t.copy()
+    bad.loc["Step 2.5", "passes"] = False
+    assert F.fig1_flowchart(bad) is not None
+
+
+def test_runs_fig3_is_a_design_choice_and_fixed_rows_cite_lines():
+    rows = {c.name: c for c in E.CHOICES}
+    assert rows["runs_fig3"].status == "design choice"
+    for c in E.CHOICES:
+        if c.status == "fixed by the paper":
+            assert "l." in c.source, c.name
 
 
 def test_a_diverged_run_stops_the_decision(run1):
@@ -145,20 +230,6 @@ def test_a_diverged_run_stops_the_decision(run1):
         _record(R)
 
 
-def test_decide_extends_only_undecided_readings():
-    calls = []
-    data = {("a", 2): [(1.0, 0.1)], ("b", 2): [(0.0, 1.0)], ("b", 10): [(-5.0, 1.0)]}
-
-    def get(tag, runs):
-        calls.append((tag, runs))
-        return data[(tag, runs)]
-    res, used = V.decide(lambda p: p, ["a", "b"], get, 2, 10)
-    assert res == {"a": True, "b": False} and used == {"a": 2, "b": 10}
-    assert calls == [("a", 2), ("b", 2), ("b", 10)]
-    res, used = V.decide(lambda p: p, ["b"], get, 2, 2)            # no larger count: stays undecided
-    assert res == {"b": None} and used == {"b": 2}
-
-
 def test_fig6_picks_on_the_first_half_and_judges_on_the_second():
     # alpha 0.5 is best on runs 1-2 inside the range, 2.0 outside; on runs 3-4 the outside value wins
     er = pd.DataFrame({0.5: [1.0, 1.0, 3.0, 3.1], 0.8: [2.0, 2.0, 0.0, 0.0], 2.0: [1.5, 1.5, 1.0, 1.05],
@@ -166,6 +237,7 @@ def test_fig6_picks_on_the_first_half_and_judges_on_the_second():
     (d, se), = V.f6_pairs(er)
     assert d == pytest.approx(np.mean([1.0 - 3.0, 1.05 - 3.1]))
     assert V.holds([(d, se)]) is False      # outside better: the paper's range is not confirmed
+    assert V.f6_margin() == pytest.approx(0.05 * 5.2070)
 
 
 def test_table3_orderings_on_hand_values():
@@ -254,8 +326,8 @@ def test_takeaway_and_prose_follow_the_verdicts(run1):
     _set_t1(R, lambda tag: np.array([1.0, 1.1]))                    # better everywhere
     reg = _record(R)
     assert V.takeaway(reg, R).startswith("CMS-PF beat the bootstrap PF")
-    _set_t1(R, lambda tag: np.array([0.1, -0.1]))                   # undecided
-    assert V.takeaway(_record(R), R).startswith("Whether CMS-PF beats")
+    _set_t1(R, lambda tag: np.array([-2.0, 2.5]))                   # undecided: neither 0 nor the printed size excluded
+    assert V.takeaway(_record(R), R).startswith("Whether CMS-PF beats the bootstrap PF is not decided")
     # the bias sentence follows the consistency numbers: a distance that falls clearly with N
     cons = R.cons.copy()
     cms = cons["filter"] == "CMS-PF"
@@ -295,4 +367,5 @@ def test_saved_claims_are_json_of_the_registry(run1, tmp_path):
     path = reg.save(tmp_path)
     rows = json.loads(path.read_text())
     assert [r["claim_id"] for r in rows][:2] == ["t1_pf_mean_N10", "t1_cms_mean_N10"]
-    assert rows[-1]["claim_id"] == "f6_alpha_range" and len(rows) == 43
+    assert rows[-1]["claim_id"] == "f6_alpha_range" and len(rows) == 44
+    assert all(r["cause"] for r in rows if r["verdict"] == "inconclusive")

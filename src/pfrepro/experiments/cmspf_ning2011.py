@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from ..chaos import ChaosCarrier
-from ..choices import FIXED, READING, FreeChoice
+from ..choices import DESIGN, FIXED, READING, FreeChoice
 from ..filters import (BootstrapParticleFilter, CMSParticleFilter, EvolutionSamplingParticleFilter,
                        ExtendedKalmanFilter, GridFilter, OracleCMSParticleFilter, UnscentedKalmanFilter)
 from ..metrics import mc_summary, rmse
@@ -54,8 +54,9 @@ def _seed(seed, name: str) -> int:
     :func:`run_all` passes every seed explicitly, so ``pfrepro run --seed`` reaches every experiment)."""
     return SEEDS[name] if seed is None else int(seed)
 
-#: runs used where the paper's run count leaves an ordering undecided (stated up front in the
-#: chapter): run i is the same run at every count, so the first 20 of these are the paper-scale runs
+#: the most runs a power plan may give a reading (the chapter's budget; a plan that asks for more is
+#: shown with the runs it needs, and ``pfrepro run cmspf --runs R`` gets them). Run i is the same run at
+#: every count, so the first 20 runs of a reading are its paper-scale runs.
 POWER_RUNS = 100
 
 #: every value the paper leaves open, fixed before running (see the chapter)
@@ -83,16 +84,16 @@ ASSUMPTIONS = {
 CHOICES = [
     FreeChoice("sigma_w2", "1", READING,
                "printed σ_w² = 1; the published PF numbers fit the classic UNGM benchmark's σ_w² = 10 "
-               "better (Table 1), so every table is also run with σ_w² = 10", "sec 3.1"),
+               "better (Table 1), so every table is also run with σ_w² = 10", "sec 3.1, l.120"),
     FreeChoice("sigma_v_t1", "1", FIXED,
                "Table 1 prints σ_v = 1 (as a standard deviation or a variance, the same value); Fig. 2 "
-               "prints σ_v² = 1", "sec 3.2, Table 1, Fig. 2"),
+               "prints σ_v² = 1", "l.129 (Table 1: σ_v = 1), l.124 (Fig. 2: σ_v² = 1)"),
     FreeChoice("sigma_v_t2", "1", READING,
                "Table 2 gives no σ_v; 1 (Table 1's and Fig. 2's value) and σ_v² = 10 are run", "Table 2"),
     FreeChoice("sigma_v_t3", "σ_v = 10 (R = 100)", READING,
                "printed σ_v = 10, but the paper writes the measurement noise both ways (Table 1 "
                "'σ_v = 1', Fig. 2 'σ_v² = 1'), so R = 10 is run as a second reading, crossed with both σ_w²",
-               "Fig. 3, Table 3"),
+               "l.166 (Fig. 3), l.181 (Table 3)"),
     FreeChoice("eta", "0.5", READING,
                "middle of the range [0.2, 0.8] the paper recommends; its ends 0.2 and 0.8 are run as "
                "readings, and 0.1 to 8 in the sensitivity sweep (Fig. 6)", "Step 2.2, sec 2.3, Fig. 6"),
@@ -119,9 +120,15 @@ CHOICES = [
     FreeChoice("centres", "x̂_k and the n_big best", FIXED,
                "sec 2.3 note 1 replaces the true state of Step 2.2 by big-weight particles and x̂_k (a "
                "filter cannot use the truth; the oracle that does is run separately and labelled)",
-               "Step 2.2, sec 2.3 note 1"),
+               "l.73-75 (Step 2.2), l.106 (sec 2.3 note 1)"),
+    FreeChoice("map_slots", "slot j on centre j mod (n_big + 1)", DESIGN,
+               "our choice (the paper does not say how the N map particles are shared among the centres, nor "
+               "which big − small spread the x̂_k centre uses): equal shares, the x̂_k centre with the spread of the "
+               "best/worst pair (pfrepro.filters.cmspf.map_particles). Not run at another value: the filter has "
+               "no switch for it; the claim on x̂_k-centred particles (l.106) says so in its note",
+               "l.70-73, l.106 (not specified)"),
     FreeChoice("map_particles", "N", FIXED, "Step 2.2: x2 has N elements; 2N candidates, N kept (Step 2.4)",
-               "Step 2.2, 2.4"),
+               "l.73 (Step 2.2: i = 1..N), l.79 (Step 2.4: the upper half kept)"),
     FreeChoice("N_t23", "200", READING,
                "N of Tables 2 and 3 not given; 200 is the N of Figs 2 and 6; N = 100 is run as a reading",
                "Tables 2-3"),
@@ -131,15 +138,16 @@ CHOICES = [
     FreeChoice("ukf", "α = 1, β = 2, κ = 2", READING,
                "not given; n + κ = 3 (Julier & Uhlmann); κ = 0 is run as a reading; started like the EKF",
                "Tables 2-3"),
-    FreeChoice("ekf_init", "x̂₀ = 0.1, P₀ = 2", FIXED, "printed for the EKF (used for the UKF too)", "sec 3.3"),
+    FreeChoice("ekf_init", "x̂₀ = 0.1, P₀ = 2", FIXED, "printed for the EKF of Table 3 (the UKF's start is not "
+               "printed: started like the EKF, our choice, see the ukf row)", "l.181 (sec 3.3)"),
     FreeChoice("espf", "MH std = σ_w, SBX index 2", READING,
                "our reconstruction of the cited ESPF (see Algorithm); MH std 0.5 σ_w with SBX index 10 is "
                "run as a reading", "Table 2 (ESPF only cited)"),
-    FreeChoice("runs_fig3", "50", FIXED,
-               "runs per point of Fig. 3 not given; Table 2's count is used. Not a value a verdict rests on, so "
-               "not swept: a run count sets only the precision, the Fig. 3 claims are decided on their paired "
-               "standard errors (other readings on 20 runs, 50 where 20 do not decide), and no published Fig. 3 "
-               "number is compared", "Fig. 3 (count not printed)"),
+    FreeChoice("runs_fig3", "50", DESIGN,
+               "our choice (the paper does not print how many runs each point of Fig. 3 averages; Table 2's "
+               "count is used for the figure). No verdict rests on the value: the figure's numbers are not "
+               "compared with printed ones, and the trend claim's readings run the count of their power plan "
+               "(the rows 'plan: ...' below)", "l.166 (Fig. 3: no run count printed)"),
 ]
 
 #: The other values of the CMS-PF's free choices — (choice, value) -> keyword overrides of :func:`cms`
@@ -303,14 +311,15 @@ def carrier_operations(N: int | None = None, sigma_v: float = 1.0, seed=None, **
 # -- Table 1 -------------------------------------------------------------------------------
 def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, seed=None, *,
            cms_over: dict | None = None, pf_resampling: str | None = None, extras: bool = True,
-           filters=("PF", "CMS-PF"), executor=None):
+           filters=("PF", "CMS-PF"), with_grid: bool = True, executor=None):
     """Per-run RMSE of PF and CMS-PF (20 runs, each N), plus PF(2N) and the grid reference.
 
     One set of trajectories is shared by every N (common random numbers); run i is the
     same run for any ``runs`` >= i. ``cms_over`` / ``pf_resampling`` run another value of
     the free choices (:data:`CMS_READINGS`); ``extras=False`` skips PF(2N) and the grid;
-    ``filters`` limits the run to PF or CMS-PF. Returns ``(per_run, grid_rmse, lost_mass)``:
-    ``per_run`` has columns (N, filter); without extras the grid outputs are None.
+    ``filters`` limits the run to PF or CMS-PF; ``with_grid=False`` keeps PF(2N) and skips the grid.
+    Returns ``(per_run, grid_rmse, lost_mass)``: ``per_run`` has columns (N, filter); without extras
+    or the grid the grid outputs are None.
     """
     seed = _seed(seed, "table1")
     m = model(sigma_v, sigma_w2)
@@ -331,7 +340,7 @@ def table1(runs: int = 20, Ns=TABLE1_N, sigma_v: float = 1.0, sigma_w2=None, see
             cols[(N, "PF (2N)")] = res.rmse(f"PF N={2 * N}")
     per_run = pd.DataFrame(cols, index=pd.RangeIndex(1, runs + 1, name="run"))
     per_run.columns = pd.MultiIndex.from_tuples(per_run.columns, names=["N", "filter"])
-    if not extras:
+    if not (extras and with_grid):
         return per_run, None, None
     g = grid(m).filter(sim.y)
     return per_run, rmse(sim.x[:, 1:], g.x), float(g.diagnostics["lost_mass"].max())
@@ -709,8 +718,9 @@ def mechanism(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_
     Bootstrap PF (systematic resampling every step): its **resampled set** (what it
     propagates). CMS-PF: its **candidate set** (N predicted + N map particles, Step 2.3),
     its **map particles** alone, and its **carried set** (the N kept particles after Step 3,
-    what it propagates). Per run, the mean over the T steps of :func:`set_stats`; returns a
-    DataFrame with columns (set, statistic), rows = runs.
+    what it propagates). Per run, the mean over the T steps of :func:`set_stats`; also the share of
+    the map particles centred on x̂_k, and of those centred on big particles, that Step 2.4 keeps
+    (statistic ``kept``; sec 2.3 note 1). Returns a DataFrame with columns (set, statistic), rows = runs.
     """
     seed = _seed(seed, "mechanism")
     from ..filters.particle import normalize_log_weights
@@ -745,6 +755,14 @@ def mechanism(runs: int = 50, N: int | None = None, sigma_v: float = 1.0, sigma_
             add("PF resampled set", xp)
             # CMS-PF: Steps 2.1-2.5, then Step 3 as in CMSParticleFilter
             st = f.step(xc, lwc, y, k, r[k - 1], rng_c)
+            # sec 2.3 note 1: which map particles Step 2.4 keeps, by centre (map particle j is centred
+            # on x_hat_k when j mod (n_big + 1) == 0, else on a big particle; pfrepro.filters.cmspf)
+            kept = np.zeros((runs, N), dtype=bool)
+            ri, ci = np.nonzero(st.selected >= N)
+            kept[ri, st.selected[ri, ci] - N] = True
+            centre = np.arange(N) % (f.n_big + 1)
+            acc.setdefault(("x̂-centred map particles", "kept"), []).append(kept[:, centre == 0].mean(axis=1))
+            acc.setdefault(("big-centred map particles", "kept"), []).append(kept[:, centre > 0].mean(axis=1))
             add("CMS-PF candidates (2N)", np.concatenate([st.x_pred, st.x_map], axis=1))
             add("CMS-PF map particles", st.x_map)
             xc, lwc = st.x, st.logw
@@ -880,6 +898,10 @@ MECH_READINGS = {"main": {}, "eta=0.2": {"cms_over": {"eta": 0.2}}, "eta=0.8": {
 #: the ESS readings of Figs. 4-5 run on Table 2's first runs — tag -> CMS-PF keyword overrides
 ESS_TAGS = {"eta=0.2": {"eta": 0.2}, "eta=0.8": {"eta": 0.8},
             "carrier_init=run": {"init": "run"}, "carrier_init=shared": {"init": "shared"}}
+#: every ESS reading of Figs. 4-5 (the main one and sigma_w^2 = 10 run both filters)
+ESS_ALL = ["main", "sigma_w2=10"] + list(ESS_TAGS)
+#: every mechanism reading (the randn carrier also at the ends of the eta range)
+MECH_TAGS = list(MECH_READINGS) + ["randn eta=0.2", "randn eta=0.8"]
 
 #: the labels :func:`run_all` passes to ``steps`` (in order)
 STEPS = ("equation checks", "Table 1", "Table 2", "Fig. 2", "Fig. 3", "Table 3", "Figs. 4-5", "Fig. 6",
@@ -946,6 +968,7 @@ class Ning2011Results:
     carrier_ops: dict | None = None
     carrier_its: dict | None = None
     readings: dict = field(default_factory=dict)
+    plans: dict = field(default_factory=dict)
     _executor: object = field(default=None, repr=False)
     _live: bool = field(default=False, repr=False)
 
@@ -965,25 +988,26 @@ class Ning2011Results:
         return self.readings[key]
 
     def t1_reading(self, tag: str, runs: int) -> pd.DataFrame:
-        """Table 1's per-run RMSE (columns (N, filter)) under reading ``tag`` on ``runs`` runs."""
+        """Table 1's per-run RMSE (columns (N, filter): PF, CMS-PF and PF (2N)) under reading ``tag`` on
+        ``runs`` runs (run i is the same run at every count)."""
         ex, s = self._executor, self.seeds["table1"]
 
         def compute():
             if tag.startswith("sigma_w2="):
                 q = float(tag.split("=")[1])
-                return table1(runs=runs, sigma_w2=None if q == 1 else q, extras=False, seed=s, executor=ex)[0]
+                return table1(runs=runs, sigma_w2=None if q == 1 else q, with_grid=False, seed=s, executor=ex)[0]
             main = self.t1_reading("sigma_w2=1", runs)
             if tag == "pf_resampling=multinomial":
                 pf_m = table1(runs=runs, pf_resampling="multinomial", extras=False, filters=("PF",), seed=s,
                               executor=ex)[0]
-                return pd.concat([pf_m, main.loc[:, (slice(None), "CMS-PF")]], axis=1)
+                return main.drop(columns=list(pf_m.columns)).join(pf_m)
             cm = table1(runs=runs, cms_over=CMS_TAGS[tag], extras=False, filters=("CMS-PF",), seed=s, executor=ex)[0]
-            return pd.concat([main.loc[:, (slice(None), "PF")], cm], axis=1)
+            return main.drop(columns=list(cm.columns)).join(cm)
         return self._get("t1", tag, runs, compute)
 
     def t2_reading(self, tag: str, runs: int) -> pd.DataFrame:
-        """Table 2's per-run RMSE (columns = filters) under reading ``tag``; the CMS-PF readings are
-        the sensitivity runs (Table 2's setting, their own truths, whatever ``runs``)."""
+        """Table 2's per-run RMSE (columns = filters) under reading ``tag`` on Table 2's runs (the CMS-PF
+        readings rerun the CMS-PF only, paired with the main reading's other filters)."""
         ex, s = self._executor, self.seeds["table2"]
 
         def compute():
@@ -993,11 +1017,11 @@ class Ning2011Results:
                     return pd.DataFrame({n: self.t2_res.rmse(n) for n in ("EKF", "UKF", "PF", "ESPF", "CMS-PF")},
                                         index=pd.RangeIndex(1, runs + 1, name="run"))
                 return table2_rmse(runs=runs, sigma_v=sv, sigma_w2=q, seed=s, executor=ex)
-            if tag in CMS_TAGS:
-                return pd.DataFrame({**{n: self.sens_runs["ref"][n] for n in ("EKF", "UKF", "PF", "ESPF")},
-                                     "CMS-PF": self.sens_runs["cms"][SENS_KEY[tag]]})
-            only = T2_OTHER_FILTERS[tag]
             base = self.t2_reading(T2_MAIN, runs)
+            if tag in CMS_TAGS:   # on Table 2's own runs, paired with its other filters
+                new = table2_rmse(runs=runs, filters=("CMS-PF",), cms_over=CMS_TAGS[tag], seed=s, executor=ex)
+                return base.assign(**{"CMS-PF": new["CMS-PF"]})
+            only = T2_OTHER_FILTERS[tag]
             new = table2_rmse(runs=runs, filters=only, seed=s, executor=ex, **T2_OTHER[tag])
             return base.assign(**{c: new[c] for c in only})
         return self._get("t2", tag, runs, compute)
@@ -1038,12 +1062,29 @@ class Ning2011Results:
             return eta_sweep(runs=runs, sigma_v=sv, sigma_w2=q, seed=self.seeds["sensitivity"], executor=self._executor)
         return self._get("f6", tag, runs, compute)
 
-    def ess_reading(self, tag: str, runs: int) -> np.ndarray:
-        """CMS-PF's per-run mean ESS on Table 2's first ``runs`` runs under reading ``tag`` (:data:`ESS_TAGS`)."""
+    def ess_reading(self, tag: str, runs: int) -> pd.DataFrame:
+        """Per-run mean ESS of the PF and the CMS-PF on Table 2's first ``runs`` runs under reading ``tag``
+        (:data:`ESS_TAGS`; ``"main"`` and ``"sigma_w2=10"`` run both filters, the CMS-PF readings pair the
+        main reading's PF with the CMS-PF under the reading)."""
         def compute():
-            return ess_per_run(runs, filters=("CMS-PF",), cms_over=ESS_TAGS[tag], seed=self.seeds["table2"],
-                               executor=self._executor)["CMS-PF"].to_numpy()
+            kw = dict(seed=self.seeds["table2"], executor=self._executor)
+            if tag == "main":
+                return ess_per_run(runs, **kw)
+            if tag == "sigma_w2=10":
+                return ess_per_run(runs, sigma_w2=10.0, **kw)
+            cm = ess_per_run(runs, filters=("CMS-PF",), cms_over=ESS_TAGS[tag], **kw)
+            return self.ess_reading("main", runs).assign(**{"CMS-PF": cm["CMS-PF"]})
         return self._get("ess", tag, runs, compute)
+
+    def mech_reading(self, tag: str, runs: int) -> pd.DataFrame:
+        """:func:`mechanism` on ``runs`` runs under reading ``tag`` (:data:`MECH_READINGS`; ``"randn eta=<v>"``:
+        the randn carrier at eta = v)."""
+        def compute():
+            if tag.startswith("randn eta="):
+                e = float(tag.split("=")[1])
+                return mechanism(runs=runs, seed=self.seeds["mechanism"], cms_over={"carrier": "randn", "eta": e})
+            return mechanism(runs=runs, seed=self.seeds["mechanism"], **MECH_READINGS[tag])
+        return self._get("mech", tag, runs, compute)
 
     def t3_grid_reading(self, label: str) -> pd.Series:
         """The exact grid filter's per-run RMSE on Table 3's runs under noise reading ``label``
@@ -1123,7 +1164,9 @@ def run_all(runs=None, seeds=None, executor=None, steps=None) -> Ning2011Results
     step("consistency")
     R.cons, R.cons_grid = consistency(runs=n["cons"], seed=seeds["consistency"], executor=ex)
 
-    # the readings (stated up front in the chapter); the main readings are the runs above
+    # the readings (stated up front in the chapter); the main readings are the runs above. Every family
+    # of readings runs the count of its power plan (V.plan_*: 80 % power for the printed effect or the
+    # stated margin at the main reading's spread, computed before the readings run; at most n["power"])
     R._executor, R._live = ex, True
     try:
         R.readings[("t1", "sigma_w2=1", n["t1"])] = R.t1
@@ -1131,29 +1174,32 @@ def run_all(runs=None, seeds=None, executor=None, steps=None) -> Ning2011Results
         R.readings[("t3", T3_MAIN, n["t3"])] = R.t3
         R.readings[("f3", T3_MAIN, n["fig3"])] = R.f3_runs
         step("Table 1 readings")
+        R.plans["t1"] = V.plan_t1(R)
         for t in T1_TAGS:
-            R.t1_reading(t, n["reading"])
-        V.t1_orderings(R)                      # more runs where 20 leave a reading undecided
+            R.t1_reading(t, R.plans["t1"]["runs"])
         step("Table 2 readings")
+        R.plans["t2"] = V.plan_t2(R)
         for t in T2_TAGS:
-            R.t2_reading(t, n["t2"])
-        V.t2_orderings(R)
+            R.t2_reading(t, R.plans["t2"]["runs"])
         step("Table 3 readings")
-        for t in T3_LAB:
-            R.t3_reading(t, n["power"])
-        for t in ["N_t23=100", "ukf=κ 0"] + T3_CMS_TAGS:
-            R.t3_reading(t, n["reading"])
+        R.plans["t3"] = V.plan_t3(R)
+        for t in T3_ORDER_TAGS + ["ukf=κ 0"]:
+            R.t3_reading(t, R.plans["t3"]["runs"])
         for label in T3_READINGS:
             if T3_READINGS[label] not in ((10.0, None), (10.0, 10.0)):
                 R.t3_grid_reading(label)
-        V.t3_orderings(R)
         step("Fig. 3 readings")
-        V.f3_readings(R)
+        R.plans["f3"] = V.plan_f3(R)
+        for t in F3_TAGS:
+            R.f3_reading(t, R.plans["f3"]["runs"])
         step("mechanism")
-        R.mech = {k: mechanism(runs=n["mech"], seed=seeds["mechanism"], **kw) for k, kw in MECH_READINGS.items()}
-        # the randn carrier at the other eta (for "chaos more uniform than randn" under every eta)
-        R.mech_randn = {e: mechanism(runs=n["mech"], seed=seeds["mechanism"], cms_over={"carrier": "randn", "eta": e})
-                        for e in (0.2, 0.8)}
+        R.mech_reading("main", n["mech"])
+        R.plans["mech"] = V.plan_mech(R)
+        for t in MECH_TAGS:
+            R.mech_reading(t, R.plans["mech"]["runs"])
+        R.mech = {k: R.mech_reading(k, R.plans["mech"]["runs"]) for k in MECH_READINGS}
+        # the randn carrier at every eta (for "chaos more uniform than randn" under every eta)
+        R.mech_randn = {e: R.mech_reading(f"randn eta={e}", R.plans["mech"]["runs"]) for e in (0.2, 0.8)}
         R.mech_randn[0.5] = R.mech["carrier=randn"]
         step("costs")
         R.cost2 = cost_evidence_table2(seed=seeds["table2"], repeats=timing.get("timing_repeats", 7))
@@ -1162,9 +1208,99 @@ def run_all(runs=None, seeds=None, executor=None, steps=None) -> Ning2011Results
         R.carrier_ops["chain, T0 = 100"] = carrier_operations(burn_in=100, seed=seeds["table2"])
         R.carrier_its = {i: carrier_iterations(ASSUMPTIONS["N_table2"], init=i, runs=50) for i in ("chain", "run", "shared")}
         step("Figs. 4-5 readings")
-        V.ess_readings(R)
+        R.ess_reading("main", n["t2"])
+        R.plans["ess"] = V.plan_ess(R)
+        for t in ESS_ALL:
+            R.ess_reading(t, R.plans["ess"]["runs"])
         step("Fig. 6 readings")
-        V.f6_readings(R)
+        R.plans["f6"] = V.plan_f6(R)
+        for t in T2_READINGS:
+            R.f6_reading(t, R.plans["f6"]["runs"])
     finally:
         R._executor, R._live = None, False
     return R
+
+
+# -- Fig. 1 (the flowchart): each step of sec 2.2 checked on our CMS-PF ----------------------------
+#: the steps of Fig. 1 / sec 2.2 (l.64-98) as the paper states them: label -> (paper's statement, line)
+FIG1_STEPS = {
+    "Step 1": ("initialise: x_0^i ~ p(x_0) = N(0, 1), w_0^i = 1/N", "l.64, l.117"),
+    "Step 2.1": ("predict N particles x1 = f(x_{k-1}) + w, w ~ N(0, σ_w²)", "l.68"),
+    "Step 2.2": ("map N particles x2 = c + r η (big − small), centres c: x̂_k and big particles",
+                 "l.70-73, l.106"),
+    "Step 2.3-2.4": ("pool x1 ∪ x2 (2N) and keep the N with the largest likelihood", "l.75-79"),
+    "Step 2.5": ("weight w_k ∝ w_{k-1} p(z_k | x_k) (eq 3, prior proposal)", "l.81-83"),
+    "Step 3": ("resample iff N_eff = round(1/Σw²) < N_th", "l.85-89"),
+    "Step 4": ("output x̂_k = Σ w_k^i x_k^i (eq 4)", "l.94-96"),
+}
+
+
+def step_checks(runs: int = 20, N: int | None = None, steps: int = 5, seed=None) -> pd.DataFrame:
+    """Each step of Fig. 1 / sec 2.2 checked on :class:`~pfrepro.filters.CMSParticleFilter` (Table 2's
+    setting, the first ``steps`` steps of ``runs`` runs): the step recomputed from the paper's formula
+    beside what the filter did. Columns: paper's statement, line, check, deviation, tolerance, passes."""
+    from ..filters.particle import normalize_log_weights
+
+    seed = _seed(seed, "table2")
+    N = ASSUMPTIONS["N_table2"] if N is None else N
+    m = model()
+    sim = m.simulate(T, runs, truth_streams(seed, runs))
+    f = cms(m, N)
+    rng = filter_streams(seed, "CMS-PF", runs)
+    r = f.carrier.generate(T, (runs, N, 1), rng)
+    x = f.sample_prior(rng, (runs, N))
+    logw = np.full((runs, N), -np.log(N))
+    dev = {k: 0.0 for k in FIG1_STEPS}
+    z0 = x[..., 0].ravel()
+    dev["Step 1"] = max(abs(z0.mean()) / np.sqrt(1 / z0.size), abs(z0.var() - 1) / np.sqrt(2 / z0.size)) / 4
+    resid = []
+    B = f.n_big
+    with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
+        for k in range(1, steps + 1):
+            y = sim.y[:, k - 1]
+            st = f.step(x, logw, y, k, r[k - 1], rng)
+            resid.append((st.x_pred - m.f(x, k)).ravel())
+            lw_pred = logw + st.ll_pred
+            order = np.argsort(-lw_pred, axis=1, kind="stable")
+            big, small = order[:, :B], order[:, ::-1][:, :B]
+            xp = st.x_pred[..., 0]
+            w = np.exp(lw_pred - lw_pred.max(axis=1, keepdims=True))
+            xhat = np.sum(w * xp, axis=1) / w.sum(axis=1)
+            centres = np.concatenate([xhat[:, None], np.take_along_axis(xp, big, 1)], axis=1)
+            spread = np.take_along_axis(xp, big, 1) - np.take_along_axis(xp, small, 1)
+            spreads = np.concatenate([spread[:, :1], spread], axis=1)
+            cidx = np.arange(N) % (B + 1)
+            x2 = centres[:, cidx] + f.eta * r[k - 1][..., 0] * spreads[:, cidx]
+            dev["Step 2.2"] = max(dev["Step 2.2"], float(np.max(np.abs(x2 - st.x_map[..., 0]))))
+            llc = np.concatenate([st.ll_pred, st.ll_map], axis=1)
+            keep = np.zeros_like(llc, dtype=bool)
+            np.put_along_axis(keep, st.selected, True, axis=1)
+            gap = np.max(np.where(keep, -np.inf, llc), axis=1) - np.min(np.where(keep, llc, np.inf), axis=1)
+            dev["Step 2.3-2.4"] = max(dev["Step 2.3-2.4"], float(max(0.0, gap.max())),
+                                      float(abs(keep.sum(axis=1) - N).max()))
+            prev = np.concatenate([logw, np.take_along_axis(logw, np.concatenate([big[:, :1], big], 1)[:, cidx], 1)], 1)
+            lw = np.take_along_axis(prev + llc, st.selected, axis=1)
+            wk, _, _ = normalize_log_weights(lw)
+            dev["Step 2.5"] = max(dev["Step 2.5"], float(np.max(np.abs(wk - np.exp(st.logw)))))
+            est = np.sum(np.exp(st.logw) * st.x[..., 0], axis=1)
+            dev["Step 4"] = max(dev["Step 4"], float(np.max(np.abs(est - st.estimate[:, 0]))))
+            x, logw = st.x, st.logw
+    e = np.concatenate(resid)
+    dev["Step 2.1"] = abs(e.std() - np.sqrt(m.Q[0, 0])) / (np.sqrt(m.Q[0, 0]) / np.sqrt(2 * e.size)) / 4
+    res = f.filter(sim.y, filter_streams(seed, "CMS-PF", runs))
+    ess, rs = res.diagnostics["ess"], res.diagnostics["resampled"]
+    dev["Step 3"] = float(np.mean(rs != (ess < f.n_th * N)))
+    how = {"Step 1": ("prior sample: mean and variance against N(0, 1)", "1 (4 se)"),
+           "Step 2.1": ("residual x1 − f(x_{k-1}): sd against σ_w", "1 (4 se)"),
+           "Step 2.2": ("map particles recomputed from the formula", "1e-9"),
+           "Step 2.3-2.4": ("N kept; largest discarded − smallest kept log-likelihood", "0"),
+           "Step 2.5": ("weights recomputed from w_{k-1} p(z|x)", "1e-12"),
+           "Step 3": ("share of steps where 'resampled' ≠ (N_eff < N_th)", "0"),
+           "Step 4": ("estimate recomputed as Σ w x", "1e-9")}
+    tol = {"1 (4 se)": 1.0, "1e-9": 1e-9, "0": 0.0, "1e-12": 1e-12}
+    rows = []
+    for k, (stmt, line) in FIG1_STEPS.items():
+        check, t = how[k]
+        rows.append({"step": k, "paper": stmt, "line": line, "check": check, "deviation": float(dev[k]),
+                     "tolerance": t, "passes": bool(dev[k] <= tol[t])})
+    return pd.DataFrame(rows).set_index("step")

@@ -192,7 +192,8 @@ def table1_summary(per_run: pd.DataFrame, per_run_q10: pd.DataFrame | None = Non
 
 
 def table2_vs_published(t2: pd.DataFrame, t2_q10: pd.DataFrame | None = None) -> pd.DataFrame:
-    """Table 2 beside the published one: RMSE (se), time ratio to the PF, likelihood evaluations."""
+    """Table 2 beside the published one: RMSE (se), the paper's printed seconds (Matlab 7.1, 2.4 GHz) and
+    the time ratio to the PF they give beside ours, likelihood evaluations."""
     pub2 = published.table(E.PAPER, "Table 2")
     p2 = printed("Table 2")
     cols = {"RMSE paper": pd.Series({n: p2.loc["RMSE", n] for n in TABLE2_FILTERS}),
@@ -200,6 +201,7 @@ def table2_vs_published(t2: pd.DataFrame, t2_q10: pd.DataFrame | None = None) ->
     if t2_q10 is not None:
         cols["RMSE ours (sigma_w^2=10)"] = t2_q10["mean"]
     cols.update({
+        "time/s paper (printed)": pd.Series({n: p2.loc["time/s", n] for n in TABLE2_FILTERS}),
         "time ratio to PF, paper": pd.Series({n: pub2.loc["time/s", n] / pub2.loc["time/s", "PF"] for n in TABLE2_FILTERS}),
         "time ratio to PF, ours": t2["time ratio to PF"],
         "likelihood evaluations / step": t2["likelihood evaluations / step"]})
@@ -340,7 +342,7 @@ def table3_per_run(t3: pd.DataFrame) -> pd.DataFrame:
 def mechanism_table(mech: pd.DataFrame) -> pd.DataFrame:
     """The mechanism's sets (``E.mechanism()``): distinct fraction, repeated particles and KS distance
     from uniform, each averaged over the runs."""
-    tab = mech.mean().unstack()[["distinct", "duplicates", "ks"]]
+    tab = mech.mean().unstack()[["distinct", "duplicates", "ks"]].dropna(how="all")
     tab.columns = ["distinct fraction", "repeated particles", "KS distance from uniform"]
     return tab
 
@@ -409,3 +411,38 @@ def figures(R) -> dict:
             "Fig. 4": fig_one_step(R.step_randn, "Fig. 4: randn carrier, one step (k = 20, N = 200)"),
             "Fig. 5": fig_one_step(R.step_chaos, "Fig. 5: logistic-map carrier, one step (k = 20, N = 200)"),
             "Fig. 6": fig6(R.f6_base, R.f6_maps, R.sens, R.sens_ref)}
+
+
+def fig1_flowchart(checks: pd.DataFrame):
+    """Fig. 1 of the paper (the CMS-PF flowchart, printed as an image only), redrawn from sec 2.2's
+    steps (l.64-98): one box per step with the paper's statement, coloured by the check of our filter
+    against that step (:func:`pfrepro.experiments.cmspf_ning2011.step_checks`: green passes, red fails);
+    the loop k → k + 1 (Step 5) and the resampling branch (Step 3) as arrows."""
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import FancyBboxPatch
+
+    order = list(checks.index)
+    fig, ax = plt.subplots(figsize=(7.2, 0.78 * len(order) + 0.6))
+    ax.set_xlim(0, 10)
+    ax.set_ylim(-0.6, len(order) * 1.0 + 0.1)
+    ax.axis("off")
+    ys = {s: len(order) - 1 - i + 0.4 for i, s in enumerate(order)}
+    for s in order:
+        ok = bool(checks.loc[s, "passes"])
+        y = ys[s]
+        ax.add_patch(FancyBboxPatch((0.6, y - 0.3), 7.6, 0.6, boxstyle="round,pad=0.02",
+                                    fc="#e3f2e3" if ok else "#f8d7d7", ec="#2e7d32" if ok else "#c62828", lw=1))
+        ax.text(0.75, y + 0.08, f"{s}  ({checks.loc[s, 'line']})", fontsize=7.5, weight="bold", va="center")
+        ax.text(0.75, y - 0.14, str(checks.loc[s, "paper"]), fontsize=7, va="center")
+        ax.text(8.05, y, "✓" if ok else "✗", fontsize=11, color="#2e7d32" if ok else "#c62828", va="center", ha="right")
+    for a, b in zip(order[:-1], order[1:]):
+        ax.annotate("", xy=(4.4, ys[b] + 0.31), xytext=(4.4, ys[a] - 0.31),
+                    arrowprops=dict(arrowstyle="->", lw=0.9))
+    if "Step 2.1" in ys and order[-1] in ys:      # Step 5: k = k + 1, back to Step 2
+        ax.annotate("", xy=(8.2, ys["Step 2.1"]), xytext=(8.2, ys[order[-1]]),
+                    arrowprops=dict(arrowstyle="->", lw=0.9, connectionstyle="arc3,rad=0.45"))
+        ax.text(9.55, (ys["Step 2.1"] + ys[order[-1]]) / 2, "Step 5:\nk ← k + 1", fontsize=7, ha="center", va="center")
+    if "Step 3" in ys:
+        ax.text(0.45, ys["Step 3"], "N_eff < N_th?\nyes: resample", fontsize=6, ha="right", va="center")
+    ax.set_title("Fig. 1 (CMS-PF flow), redrawn from sec 2.2; each step checked on our filter", fontsize=8)
+    return fig

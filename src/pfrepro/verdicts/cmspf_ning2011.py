@@ -10,10 +10,14 @@ filter at all), Figs. 4-5 (larger ESS), the mechanism of secs 2 and 2.3 (fewer r
 uniform candidates), sec 3.3's eq-(6) white-noise properties and Fig. 6's range of alpha, and the
 cost claims of Table 2, Fig. 3 and sec 2.1 (on counts of model evaluations, never on wall time).
 
-Orderings are paired differences over the same runs (:func:`pfrepro.stats.paired_difference`,
-2-SE rule); a reading that 20 runs leave undecided is decided on more runs (the power rule stated
-up front in the chapter; :func:`decide`), which :func:`~pfrepro.experiments.cmspf_ning2011.run_all`
-has already run. Nothing here runs an experiment.
+Orderings are paired differences over the same runs (:func:`pfrepro.stats.paired_difference`),
+judged under every reading by :func:`pfrepro.claims.judge_ordering`: against the effect the paper
+printed where it printed both sides (Tables 1-3), else against a smallest effect of interest stated
+here up front (:data:`MARGIN_FRAC` and its siblings). A claim with several parts (every N, every
+filter, every carrier) is judged on its worst part, each part in units of its own printed effect or
+margin (:func:`worst`). Every family of readings runs the runs of its power plan (``plan_*``, computed
+by :func:`~pfrepro.experiments.cmspf_ning2011.run_all` from the main reading's spread before the readings
+run; capped by the budget). Nothing here runs an experiment.
 """
 from __future__ import annotations
 
@@ -21,16 +25,21 @@ import numpy as np
 import pandas as pd
 
 from .. import published
-from ..claims import Z_CRIT, number_matches, ordering_holds, readings_hold, weakest_ordering
+from ..choices import DESIGN, FreeChoice
+from ..claims import CAUSE_RUNS, CAUSE_TIE, Z_CRIT, judge_ordering, number_matches, ordering_holds, weakest_ordering
 from ..experiments import cmspf_ning2011 as E
 from ..prose import Md, verdict_sentence
-from ..stats import paired_difference
+from ..stats import paired_difference, plan_runs
 
-__all__ = ["MAIN_CLAIMS", "CMS_CHOICES", "T3_CMS_CHOICES", "record_claims", "takeaway", "prose", "holds",
-           "decide", "t1_better", "t2_order", "f3_pairs", "f6_pairs", "t3_below_ekf", "t3_eq6_best",
-           "t3_no_resampling", "t1_orderings", "t2_orderings", "t3_orderings", "f3_readings",
-           "ess_readings", "f6_readings", "f6_choice", "t3_by_reading", "t3_attainable", "table3_readings",
-           "eq6_white", "which_reading"]
+__all__ = ["MAIN_CLAIMS", "CMS_CHOICES", "T3_CMS_CHOICES", "MARGIN_FRAC", "MARGIN_FRACTION", "MARGIN_ESS_FRAC",
+           "record_claims", "takeaway", "prose", "holds", "scaled", "worst", "reading_diff", "t1_effects",
+           "t1_margins", "t2_effects", "t3_effects_ekf", "t3_effects_eq6", "t3_margins_no_r", "f2_margin",
+           "f3_margins", "f6_margin", "ess_margin", "plan_t1", "plan_t2", "plan_t3", "plan_f3", "plan_mech",
+           "plan_ess", "plan_f6", "plan_choices", "t1_better", "t2_order", "f3_pairs", "f6_pairs", "t3_below_ekf",
+           "t3_eq6_best", "t3_no_resampling", "t1_reading_diffs", "t2_reading_diffs", "f2_reading_diffs",
+           "t3_reading_diffs", "f3_reading_diffs", "ess_reading_diffs", "mech_reading_diffs", "f6_reading_diffs",
+           "xhat_pairs", "f6_choice", "t3_by_reading", "t3_attainable", "table3_readings", "eq6_white",
+           "which_reading"]
 
 PAPER = E.PAPER
 #: the paper's main claims (abstract, secs 3.2-3.3) — CMS-PF beats the PF (Table 1) and the EKF,
@@ -48,39 +57,213 @@ _MECH_SETS = ("PF resampled set", "PF candidates (N predicted)", "CMS-PF candida
               "CMS-PF map particles")
 
 
-# -- the rules ---------------------------------------------------------------------------------
+# -- the rule's sizes: printed effects and stated margins ----------------------------------------
+#: Smallest effect of interest where the paper prints no effect, stated before running: 5 % of the
+#: published baseline's mean RMSE in the same table and setting (a difference below that is one no
+#: practitioner would pick a filter for, and it is the size the power plans resolve).
+MARGIN_FRAC = 0.05
+#: the same for statistics that are fractions (distinct fraction, KS distance, share of map particles
+#: kept): 5 percentage points
+MARGIN_FRACTION = 0.05
+#: the same for the effective sample size: 5 % of N
+MARGIN_ESS_FRAC = 0.05
+#: A claim that asserts several orderings at once (at every N, against every filter, per carrier) has a
+#: printed effect (or a margin) per part. Each part's paired difference is divided by its own printed
+#: effect (or margin), so that in these units every part's size is 1; the part with the worst verdict
+#: under the rule decides the reading (:func:`worst`).
+UNIT = 1.0
+
+_RANK = {("not reproduced", ""): 0, ("inconclusive", CAUSE_RUNS): 1, ("inconclusive", CAUSE_TIE): 2,
+         ("qualitatively reproduced", ""): 3, ("reproduced", ""): 4}
+
+
 def holds(pairs):
     """Whether every ordering of ``pairs`` (``(diff, se)``, each asserting diff > 0) holds: True /
     False / None, decided by the weakest (:func:`pfrepro.claims.weakest_ordering`, 2-SE rule)."""
     return ordering_holds(*weakest_ordering(pairs))
 
 
-def decide(pairs_of, tags, get, small, big):
-    """Per reading: :func:`holds` on ``small`` runs, or on ``big`` runs where ``small`` leave it undecided.
+def scaled(pairs, sizes):
+    """``(diff / size, se / size)`` of every part: the paired differences in units of each part's printed
+    effect or margin (``sizes`` > 0, computed from the published data)."""
+    sizes = [float(s) for s in sizes]
+    if len(sizes) != len(pairs) or not all(np.isfinite(s) and s > 0 for s in sizes):
+        raise ValueError(f"every part needs a size > 0, got {sizes}")
+    return [(float(d) / s, float(se) / s) for (d, se), s in zip(pairs, sizes)]
 
-    Parameters
-    ----------
-    pairs_of : callable
-        Per-run data of a reading -> list of ``(diff, se)``.
-    tags : iterable of str
-        The readings.
-    get : callable
-        ``get(tag, runs)`` -> the per-run data of a reading.
-    small, big : int
-        The run counts (the chapter's power rule: run ``i`` is the same run at every count).
 
-    Returns
-    -------
-    tuple of dict
-        ``(holds, used)``: reading -> True / False / None, and reading -> runs that decided it.
-    """
-    res, used = {}, {}
-    for tag in tags:
-        h, n = holds(pairs_of(get(tag, small))), small
-        if h is None and big and big > small:
-            h, n = holds(pairs_of(get(tag, big))), big
-        res[tag], used[tag] = h, n
-    return res, used
+def worst(pairs, kind="effect"):
+    """The part (``(diff, se)`` in units of its size, :func:`scaled`) whose verdict under
+    :func:`pfrepro.claims.judge_ordering` (with ``effect=1`` or ``margin=1``) is the worst; ties by the
+    smallest z. The claim holds under a reading only if every part does, so the worst part decides."""
+    kw = {kind: UNIT}
+
+    def key(p):
+        j = judge_ordering(p[0], p[1], **kw)
+        return _RANK[(j.verdict, j.cause)], (p[0] / p[1] if p[1] > 0 else np.sign(p[0]) * np.inf)
+    return min(pairs, key=key)
+
+
+def reading_diff(pairs, sizes, runs, kind="effect"):
+    """One ``reading_diffs`` entry: the worst part of ``pairs`` in units of ``sizes``, with the runs."""
+    d, se = worst(scaled(pairs, sizes), kind)
+    return d, se, int(runs)
+
+
+def t1_effects():
+    """Table 1's printed effects, PF − CMS-PF of row 21 at each N (all > 0)."""
+    pub = published.table(PAPER, "Table 1")
+    return [float(pub.loc["21", f"N={N} PF"] - pub.loc["21", f"N={N} CMS-PF"]) for N in E.TABLE1_N]
+
+
+def t1_margins():
+    """Equal computation (no PF(2N) printed): :data:`MARGIN_FRAC` of the printed PF mean at each N."""
+    pub = published.table(PAPER, "Table 1")
+    return [MARGIN_FRAC * float(pub.loc["21", f"N={N} PF"]) for N in E.TABLE1_N]
+
+
+def t2_effects():
+    """Table 2's printed effects: EKF, UKF, PF minus CMS-PF, and 10 % of ESPF − |CMS-PF − ESPF|."""
+    p = published.table(PAPER, "Table 2").loc["RMSE"]
+    return [float(p[o] - p["CMS-PF"]) for o in ("EKF", "UKF", "PF")] + [
+        float(0.1 * p["ESPF"] - abs(p["CMS-PF"] - p["ESPF"]))]
+
+
+def f2_margin():
+    """Fig. 2 prints no number: :data:`MARGIN_FRAC` of Table 2's printed EKF RMSE (the same setting)."""
+    return MARGIN_FRAC * float(published.value(PAPER, "Table 2", "RMSE", "EKF"))
+
+
+def t3_effects_ekf():
+    """Table 3: printed EKF − each CMS variant (row 21)."""
+    p = published.table(PAPER, "Table 3").loc["21"]
+    return [float(p["EKF"] - p[c]) for c in E.TABLE3_COLUMNS[2:]]
+
+
+_EQ6_PAIRS = (("CMS1-PF", "CMS3-PF"), ("CMS2-PF", "CMS3-PF"), ("CMSR1-PF", "CMSR3-PF"), ("CMSR2-PF", "CMSR3-PF"))
+
+
+def t3_effects_eq6():
+    """Table 3: printed randn / eq (1) minus eq (6), without and with resampling (row 21)."""
+    p = published.table(PAPER, "Table 3").loc["21"]
+    return [float(p[a] - p[b]) for a, b in _EQ6_PAIRS]
+
+
+def t3_margins_no_r():
+    """No resampling (non-inferiority, no printed effect > 0: the paper's own CMS3 is 12 % above its
+    CMSR3): :data:`MARGIN_FRAC` of the printed CMSR mean of each carrier."""
+    p = published.table(PAPER, "Table 3").loc["21"]
+    return [MARGIN_FRAC * float(p[f"CMSR{i}-PF"]) for i in (1, 2, 3)]
+
+
+def f3_margins():
+    """Fig. 3 prints no number: a fall of :data:`MARGIN_FRAC` of Table 3's printed CMSR2-PF mean (the
+    CMS-PF of Fig. 3: logistic carrier, resampling) across the sweep, as slopes per unit log N (over all
+    N and over N >= 100)."""
+    m = MARGIN_FRAC * float(published.value(PAPER, "Table 3", "21", "CMSR2-PF"))
+    return [m / np.log(E.FIG3_N[-1] / E.FIG3_N[0]), m / np.log(E.FIG3_N[-1] / 100)]
+
+
+def f6_margin():
+    """Fig. 6 prints no number: :data:`MARGIN_FRAC` of Table 2's printed CMS-PF RMSE (the same setting)."""
+    return MARGIN_FRAC * float(published.value(PAPER, "Table 2", "RMSE", "CMS-PF"))
+
+
+def ess_margin():
+    """Figs. 4-5: :data:`MARGIN_ESS_FRAC` of N (Table 2's N)."""
+    return MARGIN_ESS_FRAC * E.ASSUMPTIONS["N_table2"]
+
+
+# -- the power plans (called by run_all before the readings run) --------------------------------
+def _plan(parts, base, cap, what):
+    """``{"runs", "need", "base", "basis"}``: the runs every reading of a family gets — the most any
+    part needs for 80 % power (:func:`pfrepro.stats.plan_runs`) at the main reading's spread on
+    ``base`` runs (``parts``: ``(diff, se, size)``), at least ``base`` and at most ``cap``."""
+    need = max(plan_runs(float(se) * np.sqrt(base), float(size), z=Z_CRIT) for _, se, size in parts)
+    cap = max(cap, base)
+    return {"runs": int(min(max(base, need), cap)), "need": int(need), "base": int(base), "cap": int(cap),
+            "basis": f"{what}, at the main reading's spread on its first {base} runs"}
+
+
+def _parts(pairs, sizes):
+    return [(d, se, s) for (d, se), s in zip(pairs, sizes)]
+
+
+def plan_t1(R):
+    """Table 1's readings: the printed effects (CMS-PF vs PF) and the equal-computation margins, at the
+    spread of the main reading's 20 runs."""
+    return _plan(_parts(t1_better(R.t1), t1_effects()) + _parts(_t1_equal(R.t1, R.t1), t1_margins()),
+                 R.n["t1"], R.n["power"], "Table 1's printed PF − CMS-PF at each N and 5 % of the printed PF "
+                 "(equal computation)")
+
+
+def plan_t2(R):
+    """Table 2's readings (and Fig. 2's): the printed effects and Fig. 2's margin, main reading's 50 runs."""
+    main = R.t2_reading(E.T2_MAIN, R.n["t2"])
+    return _plan(_parts(t2_order(main), t2_effects()) + _parts(_f2_order(main), [f2_margin()]),
+                 R.n["t2"], R.n["power"], "Table 2's printed effects (EKF, UKF, PF − CMS-PF; closeness to "
+                 "ESPF) and Fig. 2's margin")
+
+
+def plan_t3(R):
+    """Table 3's readings: the printed effects (below the EKF, eq (6) best) and the no-resampling margins."""
+    t = R.t3
+    return _plan(_parts(t3_below_ekf(t), t3_effects_ekf()) + _parts(t3_eq6_best(t), t3_effects_eq6())
+                 + _parts(t3_no_resampling(t), t3_margins_no_r()), R.n["t3"], R.n["power"],
+                 "Table 3's printed effects (EKF − CMS, randn / eq (1) − eq (6)) and the no-resampling "
+                 "margins")
+
+
+def plan_f3(R):
+    """Fig. 3's readings: the trend margins at the spread of Fig. 3's own 50 runs."""
+    return _plan(_parts(f3_pairs(R.f3_runs), f3_margins()), R.n["fig3"], R.n["power"],
+                 "Fig. 3's margin (a fall of 5 % of the printed CMSR2-PF mean across the sweep)")
+
+
+def plan_mech(R):
+    """The mechanism's readings: 5 percentage points."""
+    m = R.mech_reading("main", R.n["mech"])
+    rn = R.mech_reading("carrier=randn", R.n["mech"])
+    ks = ("CMS-PF map particles", "ks")
+    pairs = [p for _, f, _ in _mech_pairs().values() for p in f(m)] + [paired_difference(rn[ks], m[ks])]
+    return _plan(_parts(pairs, [MARGIN_FRACTION] * len(pairs)), R.n["mech"], R.n["power"],
+                 "5 percentage points (distinct fraction, KS distance, share kept)")
+
+
+def plan_ess(R):
+    """Figs. 4-5's readings: 5 % of N in ESS at the spread of Table 2's 50 runs."""
+    e = R.ess_reading("main", R.n["t2"])
+    return _plan(_parts([paired_difference(e["CMS-PF"], e["PF"])], [ess_margin()]), R.n["t2"], R.n["power"],
+                 "5 % of N in ESS")
+
+
+def plan_f6(R):
+    """Fig. 6's readings: the margin at the spread of the main reading's judged half (runs 26-50 of the
+    sensitivity sweep); a reading picks on the first half and judges on the second, so it runs twice
+    the judged runs the plan needs."""
+    c = f6_choice(R)
+    n_judged = len(c["eta_runs"]) - c["half"]
+    need = plan_runs(c["se"] * np.sqrt(n_judged), f6_margin(), z=Z_CRIT)
+    base = R.n["f6"]
+    cap = max(R.n["power"], base)
+    return {"runs": int(min(max(base, 2 * need), cap)), "need": int(2 * need), "base": int(base), "cap": int(cap),
+            "basis": "Fig. 6's margin (5 % of Table 2's printed CMS-PF RMSE), at the spread of the main reading's "
+                     f"judged half (runs {c['half'] + 1}-{len(c['eta_runs'])} of the sensitivity sweep); twice the judged "
+                     f"runs (half pick, half judge); {base} runs at least"}
+
+
+def plan_choices(R):
+    """The power plans as rows of the assumptions table (design choices, one per family of readings)."""
+    names = {"t1": "Table 1", "t2": "Table 2 and Fig. 2", "t3": "Table 3", "f3": "Fig. 3", "mech": "the mechanism",
+             "ess": "Figs. 4-5 (ESS)", "f6": "Fig. 6"}
+    rows = []
+    for k, p in R.plans.items():
+        more = (f"; the plan asks for {p['need']}, more than the budget's {p['cap']}: a reading still undecided "
+                f"there says how many runs would decide it (pfrepro run cmspf --runs R)" if p["need"] > p["cap"] else "")
+        rows.append(FreeChoice(f"plan_{k}", f"{p['runs']} runs per reading",
+                               DESIGN, f"power plan of {names.get(k, k)}: 80 % power at |z| > {Z_CRIT:g} for "
+                               f"{p['basis']} (never fewer than those {p['base']}){more}", "not printed"))
+    return rows
 
 
 def _mean_se(v):
@@ -98,11 +281,6 @@ def _weakest_note(pairs):
     return f"weakest Δ = {d:.3f} ± {se:.3f}"
 
 
-def _used_note(used, power):
-    more = [t for t, n in used.items() if n > min(used.values())]
-    return f"; decided on {power} runs under: " + ", ".join(more) if more else ""
-
-
 def _add(reg, *a, **k):
     """``reg.add`` with the paper's printed digits (``published_text``) of a published cell, looked up
     in the claim's source table (None for a derived number, e.g. a ratio of two cells)."""
@@ -111,6 +289,7 @@ def _add(reg, *a, **k):
         tab = tab if tab.startswith("Table") else None
         k["published_text"] = published.printed_for(PAPER, k["published"], tab)
     return reg.add(*a, **k)
+
 
 
 # -- the orderings (each a list of (diff, se) asserting diff > 0) -------------------------------
@@ -171,67 +350,85 @@ def f6_pairs(er):
     return [paired_difference(er.iloc[h:][bo], er.iloc[h:][bi])]
 
 
-# -- the readings of each ordering (also called by run_all, to run the power runs they need) ---
-def t1_orderings(R):
-    """Table 1's ordering under every reading (20 runs, :data:`~pfrepro.experiments.cmspf_ning2011.POWER_RUNS`
-    where 20 leave it undecided): ``(holds, used)``."""
-    return decide(t1_better, E.T1_TAGS, R.t1_reading, R.n["reading"], R.n["power"])
+# -- the readings of each ordering: reading -> (diff, se, runs) in units of the parts' sizes ---------
+def t1_reading_diffs(R):
+    """Table 1 / sec 3.2 under every reading (plan runs): ``(better, equal)``, the CMS-PF-vs-PF ordering
+    against the printed effects and the equal-computation ordering against its margins."""
+    n = R.plans["t1"]["runs"]
+    better = {t: reading_diff(t1_better(R.t1_reading(t, n)), t1_effects(), n) for t in E.T1_TAGS}
+    equal = {t: reading_diff(_t1_equal(R.t1_reading(t, n), R.t1_reading(t, n)), t1_margins(), n, "margin")
+             for t in E.T1_TAGS if t != "pf_resampling=multinomial"}
+    return better, equal
 
 
-def t2_orderings(R):
-    """Table 2's ordering under every reading (50 runs, more where undecided; the CMS-PF readings on
-    the sensitivity runs): ``(holds, used)``."""
-    res, used = decide(t2_order, E.T2_TAGS, R.t2_reading, R.n["t2"], R.n["power"])
-    for t in E.CMS_TAGS:   # the sensitivity runs are not extended
-        used[t] = R.n["sens"]
-    return res, used
+def t2_reading_diffs(R):
+    """Table 2's ordering under every reading (plan runs, Table 2's runs)."""
+    n = R.plans["t2"]["runs"]
+    return {t: reading_diff(t2_order(R.t2_reading(t, n)), t2_effects(), n) for t in E.T2_TAGS}
 
 
-def _t3_decide(R, pairs_of):
-    out, used = {}, {}
-    power = R.n["power"]
-    for t in E.T3_ORDER_TAGS:
-        n = power if t in E.T3_LAB else R.n["reading"]
-        h = holds(pairs_of(R.t3_reading(t, n)))
-        if h is None and n < power:
-            n = power
-            h = holds(pairs_of(R.t3_reading(t, n)))
-        out[t], used[t] = h, n
-    return out, used
+def f2_reading_diffs(R):
+    """Fig. 2's ordering (EKF − CMS-PF) under the sigma_w^2 and CMS-PF readings on Table 2's runs."""
+    n = R.plans["t2"]["runs"]
+    tags = [E.T2_MAIN, "sigma_v_t2=R 1, sigma_w2=10"] + list(E.CMS_TAGS)
+    return {t.replace("sigma_v_t2=R 1, ", ""): reading_diff(_f2_order(R.t2_reading(t, n)), [f2_margin()], n, "margin")
+            for t in tags}
 
 
-def t3_orderings(R):
-    """Table 3's three orderings under every reading (noise readings on the power runs, the others
-    on 20, more where undecided): ``{name: (holds, used)}``."""
-    return {name: _t3_decide(R, f) for name, f in (("below_ekf", t3_below_ekf), ("eq6", t3_eq6_best),
-                                                     ("no_r", t3_no_resampling))}
+#: Table 3's three orderings: name -> (parts, sizes, kind)
+_T3_ORDERINGS = {"below_ekf": (lambda t: t3_below_ekf(t), t3_effects_ekf, "effect"),
+                 "eq6": (lambda t: t3_eq6_best(t), t3_effects_eq6, "effect"),
+                 "no_r": (lambda t: t3_no_resampling(t), t3_margins_no_r, "margin")}
 
 
-def f3_readings(R):
-    """Fig. 3's trend under every reading (the main one on Fig. 3's runs, the others on 20, Fig. 3's
-    count where 20 do not decide): ``(holds, used)``."""
-    out, used = {}, {}
-    for t in E.F3_TAGS:
-        if t == E.T3_MAIN:
-            out[t], used[t] = holds(f3_pairs(R.f3_runs)), len(R.f3_runs)
-        else:
-            h, u = decide(f3_pairs, [t], R.f3_reading, R.n["reading"], R.n["fig3"])
-            out[t], used[t] = h[t], u[t]
-    return out, used
+def t3_reading_diffs(R):
+    """Table 3's three orderings under every reading (plan runs): ``{name: {reading: (diff, se, runs)}}``."""
+    n = R.plans["t3"]["runs"]
+    return {name: {t: reading_diff(f(R.t3_reading(t, n)), sizes(), n, kind) for t in E.T3_ORDER_TAGS}
+            for name, (f, sizes, kind) in _T3_ORDERINGS.items()}
 
 
-def _ess_pf(res):
-    return res.results["PF"].diagnostics["ess"].mean(axis=1)
+def f3_reading_diffs(R):
+    """Fig. 3's trend under every reading (plan runs)."""
+    n = R.plans["f3"]["runs"]
+    return {t: reading_diff(f3_pairs(R.f3_reading(t, n)), f3_margins(), n, "margin") for t in E.F3_TAGS}
 
 
-def ess_readings(R):
-    """Figs. 4-5's ESS ordering (CMS-PF − PF) under the eta and carrier-initialisation readings on
-    Table 2's first 20 runs (all of Table 2's where 20 do not decide): ``(holds, used)``."""
-    pf = _ess_pf(R.t2_res)
+#: the ESS readings' names in the claim (the main one carries the values of its choices)
+_ESS_KEYS = {"main": "eta=0.5, carrier_init=chain, sigma_w2=1"}
 
-    def pairs(tag, runs):
-        return [paired_difference(R.ess_reading(tag, runs), pf[:runs])]
-    return decide(lambda p: p, list(E.ESS_TAGS), pairs, R.n["reading"], R.n["t2"])
+
+def ess_reading_diffs(R):
+    """Figs. 4-5's ESS ordering (CMS-PF − PF) under every reading (plan runs, Table 2's first runs)."""
+    n = R.plans["ess"]["runs"]
+    out = {}
+    for t in E.ESS_ALL:
+        e = R.ess_reading(t, n)
+        out[_ESS_KEYS.get(t, t)] = reading_diff([paired_difference(e["CMS-PF"], e["PF"])], [ess_margin()], n, "margin")
+    return out
+
+
+def mech_reading_diffs(R, pairs_of):
+    """A mechanism ordering under every mechanism reading (plan runs); the main one named ``eta=0.5``."""
+    n = R.plans["mech"]["runs"]
+    out = {}
+    for k, m in R.mech.items():
+        pairs = pairs_of(m)
+        out["eta=0.5" if k == "main" else k] = reading_diff(pairs, [MARGIN_FRACTION] * len(pairs), n, "margin")
+    return out
+
+
+def f6_reading_diffs(R):
+    """Fig. 6's range under Table 2's noise readings (plan runs: picked on the first half, judged on
+    the second; the runs given are the judged ones)."""
+    n = R.plans["f6"]["runs"]
+    return {t: reading_diff(f6_pairs(R.f6_reading(t, n)), [f6_margin()], n - n // 2, "margin") for t in E.T2_READINGS}
+
+
+def xhat_pairs(m):
+    """Sec 2.3 note 1 (l.106): share of the x̂_k-centred map particles kept by Step 2.4 minus the share of
+    the big-particle-centred ones, per run (mean over the steps)."""
+    return [paired_difference(m["x̂-centred map particles", "kept"], m["big-centred map particles", "kept"])]
 
 
 def f6_choice(R) -> dict:
@@ -248,21 +445,6 @@ def f6_choice(R) -> dict:
     return {"eta_runs": eta_runs, "half": half, "in": b_in, "out": b_out, "d": d, "se": se}
 
 
-def f6_readings(R):
-    """Fig. 6's range under Table 2's noise readings: the main one on the sensitivity runs, the
-    others on 20 runs, 50 where 20 leave a reading undecided while the readings before it agree
-    (where they already disagree, more runs cannot change the verdict): ``(holds, used)``."""
-    c = f6_choice(R)
-    main = E.T2_MAIN
-    res, used = {main: holds([(c["d"], c["se"])])}, {}
-    for t in [t for t in E.T2_READINGS if t != main]:
-        n, h = R.n["f6"], holds(f6_pairs(R.f6_reading(t, R.n["f6"])))
-        if h is None and readings_hold(res) is not None:
-            n, h = R.n["sens"], holds(f6_pairs(R.f6_reading(t, R.n["sens"])))
-        res[t], used[t] = h, n
-    return res, used
-
-
 def t3_by_reading(R) -> dict:
     """Table 3's per-run RMSE with the exact grid under each noise reading (label of
     :data:`~pfrepro.experiments.cmspf_ning2011.T3_READINGS` -> frame on Table 3's runs)."""
@@ -272,8 +454,8 @@ def t3_by_reading(R) -> dict:
             out[lab] = R.t3
         elif (sv, q) == (10.0, 10.0):
             out[lab] = R.t3_q10
-        else:   # the first runs of the reading's power runs (the same runs), with the exact grid on them
-            out[lab] = R.t3_reading(E.T3_TAGS[lab], R.n["power"]).iloc[:R.n["t3"]].assign(
+        else:   # the first runs of the reading's plan runs (the same runs), with the exact grid on them
+            out[lab] = R.t3_reading(E.T3_TAGS[lab], R.plans["t3"]["runs"]).iloc[:R.n["t3"]].assign(
                 **{"Grid (exact)": R.t3_grid_reading(lab)})
     return out
 
@@ -361,18 +543,23 @@ def record_claims(reg, R):
         ``reg``.
     """
     n = R.n
-    power = n["power"]
+    for row in plan_choices(R):          # the power plans: rows of the assumptions table (design choices)
+        reg.choices[row.name] = row
+    p1, p2, p3 = (R.plans[k]["runs"] for k in ("t1", "t2", "t3"))
     pub1, pub2, pub3 = (published.table(PAPER, t) for t in ("Table 1", "Table 2", "Table 3"))
+
+    def first(frame, k):                 # the paper-scale runs of a reading run on its plan's runs
+        return frame.iloc[:k]
     # ---- Table 1: numbers under sigma_w^2 and every CMS / PF reading (20 runs, the paper's count)
     for N in E.TABLE1_N:
         for f, key in (("PF", "pf"), ("CMS-PF", "cms")):
             v = R.t1[(N, f)]
             alt = {"sigma_w2=10": R.t1_q10[(N, f)]}
             if f == "PF":
-                alt["pf_resampling=multinomial"] = R.t1_reading("pf_resampling=multinomial", n["reading"])[(N, f)]
+                alt["pf_resampling=multinomial"] = first(R.t1_reading("pf_resampling=multinomial", p1), n["t1"])[(N, f)]
                 dep = ["sigma_v_t1", "sigma_w2", "pf_resampling"]
             else:
-                alt.update({t: R.t1_reading(t, n["reading"])[(N, f)] for t in E.CMS_TAGS})
+                alt.update({t: first(R.t1_reading(t, p1), n["t1"])[(N, f)] for t in E.CMS_TAGS})
                 dep = ["sigma_v_t1", "sigma_w2"] + CMS_CHOICES
             _add(reg, f"t1_{key}_mean_N{N}", f"Table 1: mean RMSE of {f} over 20 runs, N = {N}, sigma_v = 1",
                  published=float(pub1.loc["21", f"N={N} {f}"]), reproduced=float(v.mean()),
@@ -380,58 +567,65 @@ def record_claims(reg, R):
                  published_se=published.per_run_se(PAPER, "Table 1", f"N={N} {f}", range(1, 21)),
                  reading_values=_reading_values(alt), depends_on=dep,
                  note="main reading sigma_w^2 = 1; published SE from rows 1-20")
-    t1b, t1b_used = t1_orderings(R)
+    better, equal = t1_reading_diffs(R)
+    eff1 = t1_effects()
+    d, se, _ = better["sigma_w2=1"]
     _add(reg, "t1_cms_better_than_pf", "Table 1 / sec 3.2: CMS-PF has a smaller RMSE than PF at every N",
-         readings=t1b, depends_on=["sigma_v_t1", "sigma_w2", "pf_resampling"] + CMS_CHOICES, source="Table 1, sec 3.2",
-         note="paired RMSE PF − CMS-PF at each N; " + _weakest_note(t1_better(R.t1)) + f" (main, {n['t1']} runs)"
-              + _used_note(t1b_used, power))
+         reading_diffs=better, effect=UNIT, diff=d, diff_se=se, runs=p1,
+         depends_on=["sigma_v_t1", "sigma_w2", "pf_resampling"] + CMS_CHOICES, source="Table 1, sec 3.2 (l.129)",
+         note="paired RMSE PF − CMS-PF at each N, in units of the printed PF − CMS-PF at that N ("
+              + ", ".join(f"{e:.3f}" for e in eff1) + " for N = " + ", ".join(map(str, E.TABLE1_N))
+              + "); the worst N decides each reading; raw main: " + _weakest_note(t1_better(R.t1_reading("sigma_w2=1", p1))))
+    d, se, _ = equal["sigma_w2=1"]
     _add(reg, "abstract_equal_computation",
          "Abstract: CMS-PF improves precision -- tested at equal likelihood evaluations (PF with 2N)",
-         readings={"sigma_w2=1": holds(_t1_equal(R.t1, R.t1)), "sigma_w2=10": holds(_t1_equal(R.t1_q10, R.t1_q10)),
-                   **{t: holds(_t1_equal(R.t1, R.t1_reading(t, n["reading"]))) for t in E.CMS_TAGS}},
+         reading_diffs=equal, margin=UNIT, diff=d, diff_se=se, runs=p1,
          depends_on=["sigma_w2"] + CMS_CHOICES, source="Abstract (our test, beyond the paper)",
-         note=f"Table 1 runs ({n['t1']}), every N: paired RMSE PF(2N) − CMS-PF; "
-              + _weakest_note(_t1_equal(R.t1, R.t1)) + " (main)")
+         note=f"Table 1's runs, every N: paired RMSE PF(2N) − CMS-PF in units of the margin ({MARGIN_FRAC:.0%} of the "
+              "printed PF mean at that N; no PF(2N) is printed); the worst N decides each reading")
     # ---- Table 2: numbers under the noise readings (50 runs) and the other settings
     main2 = R.t2_reading(E.T2_MAIN, n["t2"])
     for f in _TABLE2_FILTERS:
         v = main2[f]
-        alt = {t: R.t2_reading(t, n["t2"])[f] for t in E.T2_READINGS if t != E.T2_MAIN}
+        alt = {t: first(R.t2_reading(t, p2), n["t2"])[f] for t in E.T2_READINGS if t != E.T2_MAIN}
         dep = ["sigma_v_t2", "sigma_w2"]
         if f == "UKF":
-            alt["ukf=κ 0"] = R.t2_reading("ukf=κ 0", n["t2"])[f]
+            alt["ukf=κ 0"] = first(R.t2_reading("ukf=κ 0", p2), n["t2"])[f]
             dep.append("ukf")
         if f in ("PF", "ESPF", "CMS-PF"):
-            alt["N_t23=100"] = R.t2_reading("N_t23=100", n["t2"])[f]
+            alt["N_t23=100"] = first(R.t2_reading("N_t23=100", p2), n["t2"])[f]
             dep.append("N_t23")
         if f == "PF":
-            alt["pf_resampling=multinomial"] = R.t2_reading("pf_resampling=multinomial", n["t2"])[f]
+            alt["pf_resampling=multinomial"] = first(R.t2_reading("pf_resampling=multinomial", p2), n["t2"])[f]
             dep.append("pf_resampling")
         if f == "ESPF":
-            alt["espf=MH 0.5, SBX 10"] = R.t2_reading("espf=MH 0.5, SBX 10", n["t2"])[f]
+            alt["espf=MH 0.5, SBX 10"] = first(R.t2_reading("espf=MH 0.5, SBX 10", p2), n["t2"])[f]
             dep.append("espf")
         if f == "CMS-PF":
-            alt.update({t: R.t2_reading(t, n["t2"])[f] for t in E.CMS_TAGS})
+            alt.update({t: first(R.t2_reading(t, p2), n["t2"])[f] for t in E.CMS_TAGS})
             dep += CMS_CHOICES
         _add(reg, f"t2_rmse_{f}", f"Table 2: mean RMSE of {f} over 50 runs", published=float(pub2.loc["RMSE", f]),
              reproduced=float(v.mean()), se=_mean_se(v)[1], source="Table 2", reading_values=_reading_values(alt),
-             depends_on=dep, note="main reading N = 200, sigma_v = 1, sigma_w^2 = 1; CMS-PF settings on the "
-                                  "sensitivity runs; no printed spread")
-    t2o, t2o_used = t2_orderings(R)
+             depends_on=dep, note="main reading N = 200, sigma_v = 1, sigma_w^2 = 1; every reading on Table 2's first "
+                                  "50 runs; no printed spread")
+    t2d = t2_reading_diffs(R)
+    d, se, _ = t2d[E.T2_MAIN]
+    eff2 = t2_effects()
     _add(reg, "t2_cms_order", "Table 2: CMS-PF is more accurate than EKF, UKF and PF, and close (within 10 %) to ESPF",
-         readings=t2o, depends_on=["sigma_v_t2", "sigma_w2", "N_t23", "pf_resampling", "ukf", "espf"] + CMS_CHOICES,
+         reading_diffs=t2d, effect=UNIT, diff=d, diff_se=se, runs=p2,
+         depends_on=["sigma_v_t2", "sigma_w2", "N_t23", "pf_resampling", "ukf", "espf"] + CMS_CHOICES,
          source="Table 2, sec 3.2",
-         note="paired RMSE differences; closeness: 10 % of ESPF − |CMS − ESPF|; ESPF is our reconstruction; "
-              + _weakest_note(t2_order(main2)) + " (main)" + _used_note(t2o_used, power))
-    f2_tags = [E.T2_MAIN, "sigma_v_t2=R 1, sigma_w2=10"] + list(E.CMS_TAGS)
-    f2o = {t.replace("sigma_v_t2=R 1, ", ""): holds(_f2_order(R.t2_reading(t, n["t2"]))) for t in f2_tags}
-    d, se = _f2_order(main2)[0]
+         note="paired RMSE differences (EKF, UKF, PF − CMS-PF; closeness: 10 % of ESPF − |CMS − ESPF|) in units of "
+              "the printed ones (" + ", ".join(f"{e:.3f}" for e in eff2) + "); the worst part decides each reading; "
+              "ESPF is our reconstruction; raw main: " + _weakest_note(t2_order(R.t2_reading(E.T2_MAIN, p2))))
+    f2d = f2_reading_diffs(R)
+    d, se, _ = f2d["sigma_w2=1"]
     _add(reg, "f2_cms_better_than_ekf",
          "Fig. 2: CMS-PF tracks the UNGM state much better than the EKF (sigma_v^2 = 1, N = 200)",
-         readings=f2o, diff=d, diff_se=se, depends_on=["sigma_v_t1", "sigma_w2"] + CMS_CHOICES,
-         source="Fig. 2, sec 3.2",
-         note=f"one run in the paper; judged paired over Table 2's {n['t2']} runs: RMSE EKF − CMS-PF (CMS settings "
-              "on the sensitivity runs)")
+         reading_diffs=f2d, margin=UNIT, diff=d, diff_se=se, runs=p2,
+         depends_on=["sigma_v_t1", "sigma_w2"] + CMS_CHOICES, source="Fig. 2, sec 3.2 (l.124)",
+         note=f"one run in the paper (no number); judged paired over Table 2's runs: RMSE EKF − CMS-PF in units of the "
+              f"margin ({MARGIN_FRAC:.0%} of Table 2's printed EKF RMSE = {f2_margin():.3f})")
     # cost claims: decided on deterministic counts of model evaluations (pfrepro.cost); times are context
     c2 = R.cost2["model evals / step"]
     _add(reg, "t2_time_cms_over_pf", "Table 2: CMS-PF run time slightly above PF: its counted cost per step is above "
@@ -439,7 +633,9 @@ def record_claims(reg, R):
          published=float(pub2.loc["time/s", "CMS-PF"] / pub2.loc["time/s", "PF"]),
          reproduced=float(c2["CMS-PF"] / c2["PF"]), basis="count",
          qualitative=bool(c2["PF"] < c2["CMS-PF"] < 2 * c2["PF"]),
-         source="Table 2", note=f"model evaluations per step counted on an instrumented model (transitions + "
+         source="Table 2", note=f"printed times {published.printed(PAPER, 'Table 2', 'time/s', 'CMS-PF')} s / "
+                                f"{published.printed(PAPER, 'Table 2', 'time/s', 'PF')} s; "
+                                f"model evaluations per step counted on an instrumented model (transitions + "
                                 f"likelihoods): PF {c2['PF']:.0f}, CMS-PF {c2['CMS-PF']:.0f}; 'slightly above' read "
                                 "as between 1 and 2 times the PF's count (stated before counting); measured times: "
                                 "cost table, context")
@@ -447,7 +643,9 @@ def record_claims(reg, R):
          "not wall time; ratio ESPF/PF)",
          published=float(pub2.loc["time/s", "ESPF"] / pub2.loc["time/s", "PF"]),
          reproduced=float(c2["ESPF"] / c2["PF"]), basis="count", qualitative=bool(c2["CMS-PF"] < c2["ESPF"]),
-         source="Table 2", note=f"model evaluations per step: CMS-PF {c2['CMS-PF']:.0f}, ESPF {c2['ESPF']:.0f} "
+         source="Table 2", note=f"printed times {published.printed(PAPER, 'Table 2', 'time/s', 'ESPF')} s / "
+                                f"{published.printed(PAPER, 'Table 2', 'time/s', 'PF')} s; "
+                                f"model evaluations per step: CMS-PF {c2['CMS-PF']:.0f}, ESPF {c2['ESPF']:.0f} "
                                 "(ESPF is our reconstruction); measured times: cost table, context")
     ops = R.carrier_ops
     _add(reg, "offline_carrier_saves", "Sec 2.1 (3): generating the chaotic sequence offline lowers the computation in "
@@ -462,13 +660,16 @@ def record_claims(reg, R):
               + ", ".join(f"{k}: {o['offline before the loop']}" for k, o in ops.items())
               + "); reproduced = online / offline operations per step (chain layout)")
     # ---- Fig. 3
-    f3h, f3u = f3_readings(R)
+    f3d = f3_reading_diffs(R)
+    d, se, _ = f3d[E.T3_MAIN]
     sl_all, sl_up = f3_pairs(R.f3_runs)
     _add(reg, "f3_rmse_falls_with_N", "Fig. 3: the CMS-PF RMSE decreases as N increases (sigma_v = 10)",
-         readings=f3h, depends_on=["sigma_v_t3", "sigma_w2", "eta"], source="Fig. 3",
-         note="per-run slope of RMSE on log N, over all 12 N and over N >= 100, both negative (z < -2); main: "
-              f"{-sl_all[0]:.3f} ± {sl_all[1]:.3f}, {-sl_up[0]:.3f} ± {sl_up[1]:.3f}; runs per reading: "
-              + ", ".join(f"{t}: {k}" for t, k in f3u.items()))
+         reading_diffs=f3d, margin=UNIT, diff=d, diff_se=se, runs=R.plans["f3"]["runs"],
+         depends_on=["sigma_v_t3", "sigma_w2", "eta"], source="Fig. 3 (l.166)",
+         note="minus the per-run slope of RMSE on log N, over all 12 N and over N >= 100, each in units of its margin "
+              f"(a fall of {MARGIN_FRAC:.0%} of the printed CMSR2-PF mean across the range: "
+              + ", ".join(f"{m:.3f}" for m in f3_margins()) + " per unit log N); the worse part decides; Fig. 3's "
+              f"own {len(R.f3_runs)} runs: {-sl_all[0]:.3f} ± {sl_all[1]:.3f}, {-sl_up[0]:.3f} ± {sl_up[1]:.3f}")
     evals = R.cost3["CMS-PF evals / step"]
     per_N = evals.to_numpy() / R.cost3.index.to_numpy()
     grow = bool(np.all(np.diff(evals.to_numpy()) > 0) and np.ptp(per_N) <= 0.01 * per_N.mean())
@@ -478,7 +679,7 @@ def record_claims(reg, R):
          note="model evaluations per step counted on an instrumented model at each of the 12 N: strictly increasing "
               f"and the count per particle constant within 1 % ({per_N.min():.3f} to {per_N.max():.3f}); "
               "reproduced = count(800)/count(10); measured time: figure, context")
-    # ---- Table 3: numbers at 20 runs under the noise readings and the CMS settings; orderings on 100 runs
+    # ---- Table 3: numbers at 20 runs under the noise readings and the CMS settings; orderings on the plan's runs
     cols3 = list(E.TABLE3_COLUMNS)
     mean3, se3 = R.t3.mean(), R.t3.std(ddof=1) / np.sqrt(len(R.t3))
     t3_read = t3_by_reading(R)
@@ -486,33 +687,38 @@ def record_claims(reg, R):
         alt = {E.T3_TAGS[lab]: t3_read[lab][c] for lab in E.T3_READINGS if E.T3_TAGS[lab] != E.T3_MAIN}
         dep = ["sigma_v_t3", "sigma_w2"]
         if c == "UKF":
-            alt["ukf=κ 0"] = R.t3_reading("ukf=κ 0", n["reading"])[c]
+            alt["ukf=κ 0"] = first(R.t3_reading("ukf=κ 0", p3), n["t3"])[c]
             dep.append("ukf")
         if c.startswith("CMS"):
-            alt.update({t: R.t3_reading(t, n["reading"])[c] for t in ["N_t23=100"] + E.T3_CMS_TAGS})
+            alt.update({t: first(R.t3_reading(t, p3), n["t3"])[c] for t in ["N_t23=100"] + E.T3_CMS_TAGS})
             dep += ["N_t23"] + T3_CMS_CHOICES
         _add(reg, f"t3_mean_{c}", f"Table 3: mean RMSE of {c} over 20 runs, sigma_v = 10",
              published=float(pub3.loc["21", c]), reproduced=float(mean3[c]), se=float(se3[c]),
              source="Table 3, row 21", published_se=published.per_run_se(PAPER, "Table 3", c, range(1, 21)),
              reading_values=_reading_values(alt), depends_on=dep,
              note="main reading N = 200, R = 100, sigma_w^2 = 1; published SE from rows 1-20")
-    main3 = R.t3_reading(E.T3_MAIN, power)
-    o3 = t3_orderings(R)
-    h, u = o3["below_ekf"]
-    _add(reg, "t3_cms_below_ekf", "Table 3: every CMS-PF variant has a smaller RMSE than the EKF",
-         readings=h, depends_on=_T3_DEP, source="Table 3",
-         note="paired RMSE EKF − CMS variant, all 6; " + _weakest_note(t3_below_ekf(main3))
-              + f" (main, {power} runs)" + _used_note(u, power))
-    h, u = o3["eq6"]
-    _add(reg, "t3_eq6_best", "Table 3: mapping with the eq-(6) sequence gives a smaller RMSE than eq (1) and randn",
-         readings=h, depends_on=_T3_DEP, source="Table 3, sec 3.3",
-         note="paired RMSE differences, both without and with resampling; " + _weakest_note(t3_eq6_best(main3))
-              + f" (main, {power} runs)" + _used_note(u, power))
-    h, u = o3["no_r"]
-    _add(reg, "t3_no_resampling_ok", "Table 3: CMS-PF needs no resampling; accuracy does not drop without it",
-         readings=h, depends_on=_T3_DEP, source="Table 3, sec 3.3",
-         note="non-inferiority per carrier: 10 % of CMSR − (CMS − CMSR) > 0, paired; "
-              + _weakest_note(t3_no_resampling(main3)) + f" (main, {power} runs)" + _used_note(u, power))
+    o3 = t3_reading_diffs(R)
+    main3 = R.t3_reading(E.T3_MAIN, p3)
+    texts = {"below_ekf": ("t3_cms_below_ekf", "Table 3: every CMS-PF variant has a smaller RMSE than the EKF",
+                           "paired RMSE EKF − CMS variant, all 6, in units of the printed ones ("
+                           + ", ".join(f"{e:.2f}" for e in t3_effects_ekf()) + "); raw main: "
+                           + _weakest_note(t3_below_ekf(main3))),
+             "eq6": ("t3_eq6_best", "Table 3: mapping with the eq-(6) sequence gives a smaller RMSE than eq (1) and randn",
+                     "paired RMSE randn / eq (1) − eq (6), without and with resampling, in units of the printed ones ("
+                     + ", ".join(f"{e:.3f}" for e in t3_effects_eq6()) + "); raw main: "
+                     + _weakest_note(t3_eq6_best(main3))),
+             "no_r": ("t3_no_resampling_ok", "Table 3: CMS-PF needs no resampling; accuracy does not drop without it",
+                      "non-inferiority per carrier: 10 % of CMSR − (CMS − CMSR) > 0, paired, in units of the margin "
+                      f"({MARGIN_FRAC:.0%} of the printed CMSR mean); the paper's own numbers give "
+                      + ", ".join(f"{0.1 * pub3.loc['21', f'CMSR{i}-PF'] - (pub3.loc['21', f'CMS{i}-PF'] - pub3.loc['21', f'CMSR{i}-PF']):+.3f}"
+                                  for i in (1, 2, 3)) + " (eq (6) fails its own 10 %), so no printed effect; raw main: "
+                      + _weakest_note(t3_no_resampling(main3)))}
+    for name, (cid, text, note) in texts.items():
+        kind = _T3_ORDERINGS[name][2]
+        d, se, _ = o3[name][E.T3_MAIN]
+        _add(reg, cid, text, reading_diffs=o3[name], diff=d, diff_se=se, runs=p3, depends_on=_T3_DEP,
+             source="Table 3, sec 3.3 (l.181)", note=note + "; the worst part decides each reading",
+             **{kind: UNIT})
     attain, _ = t3_attainable(R)
     p = _t3_published_min()
     _add(reg, "t3_attainable_by_a_filter",
@@ -520,47 +726,57 @@ def record_claims(reg, R):
          readings={E.T3_TAGS[k]: v for k, v in attain.items()}, depends_on=["sigma_v_t3", "sigma_w2"],
          source="Table 3 vs exact grid filter",
          note=f"smallest published CMS mean {p['text']} ± {p['se']:.3f} vs the exact posterior mean under each "
-              f"reading; below iff z < −{Z_CRIT:g} (combined SE)")
+              f"reading; below iff z < −{Z_CRIT:g} (combined SE); a yes/no statement per reading")
     # ---- Figs. 4-5 and the mechanism
-    ess_pf, ess_cms = _ess_pf(R.t2_res), R.t2_res.results["CMS-PF"].diagnostics["ess"].mean(axis=1)
-    d, se = paired_difference(ess_cms, ess_pf)
-    f45, f45_used = ess_readings(R)
-    f45 = {"eta=0.5, carrier_init=chain, sigma_w2=1": holds([(d, se)]),
-           "sigma_w2=10": holds([paired_difference(R.t2_q10_res.results["CMS-PF"].diagnostics["ess"].mean(axis=1),
-                                                   _ess_pf(R.t2_q10_res))]), **f45}
+    f45 = ess_reading_diffs(R)
+    d, se, _ = f45[_ESS_KEYS["main"]]
     _add(reg, "f45_fewer_small_weights", "Figs. 4-5: after mapping and selection few particles have small weights (larger ESS)",
-         readings=f45, diff=d, diff_se=se, depends_on=["eta", "carrier_init", "sigma_w2"], source="Figs. 4-5",
-         note="paired per-run mean ESS over the steps of Table 2, CMS-PF − PF (main reading shown); sigma_w^2 = 10 on "
-              f"Table 2's {n['t2']} runs; runs per eta / carrier-initialisation reading: "
-              + ", ".join(f"{t}: {k}" for t, k in f45_used.items()))
-    others = [k for k in R.mech if k != "main"]
+         reading_diffs=f45, margin=UNIT, diff=d, diff_se=se, runs=R.plans["ess"]["runs"],
+         depends_on=["eta", "carrier_init", "sigma_w2"], source="Figs. 4-5",
+         note=f"paired per-run mean ESS over the steps, CMS-PF − PF, on Table 2's first runs, in units of the margin "
+              f"({MARGIN_ESS_FRAC:.0%} of N = {ess_margin():g} particles)")
+    nm = R.plans["mech"]["runs"]
     for cid, (text, pairs_of, note) in _mech_pairs().items():
-        r = {"eta=0.5": holds(pairs_of(R.mech["main"])), **{k: holds(pairs_of(R.mech[k])) for k in others}}
-        d, se = weakest_ordering(pairs_of(R.mech["main"]))
-        _add(reg, cid, text, readings=r, diff=d, diff_se=se, depends_on=["sigma_w2", "eta", "carrier", "carrier_init"],
-             source="Sec 2 and 2.3 (the mechanism)", note=note + f"; {n['mech']} runs × 50 steps per reading")
-    d, se = weakest_ordering(_chaos_pairs(R, 0.5))
+        r = mech_reading_diffs(R, pairs_of)
+        d, se, _ = r["eta=0.5"]
+        _add(reg, cid, text, reading_diffs=r, margin=UNIT, diff=d, diff_se=se, runs=nm,
+             depends_on=["sigma_w2", "eta", "carrier", "carrier_init"], source="Sec 2 and 2.3 (the mechanism)",
+             note=note + f", in units of the margin ({MARGIN_FRACTION:g}); {nm} runs × 50 steps per reading")
+    chaos = {f"eta={e}": reading_diff(_chaos_pairs(R, e), [MARGIN_FRACTION] * len(_chaos_pairs(R, e)), nm, "margin")
+             for e in (0.2, 0.5, 0.8)}
+    d, se, _ = chaos["eta=0.5"]
     _add(reg, "mech_chaos_more_uniform_than_randn",
          "Sec 2, 3.3: chaotic carriers spread the map particles more uniformly than randn",
-         readings={f"eta={e}": holds(_chaos_pairs(R, e)) for e in (0.2, 0.5, 0.8)}, diff=d, diff_se=se,
+         reading_diffs=chaos, margin=UNIT, diff=d, diff_se=se, runs=nm,
          depends_on=["eta"], source="Sec 2, sec 3.3",
          note="paired KS distance of the map particles, randn − chaotic (logistic and eq 6 at eta = 0.5, logistic at "
-              f"0.2, 0.8); {n['mech']} runs")
+              f"0.2, 0.8), in units of the margin ({MARGIN_FRACTION:g}); {nm} runs")
+    xh = mech_reading_diffs(R, xhat_pairs)
+    d, se, _ = xh["eta=0.5"]
+    _add(reg, "xhat_map_particles_competitive",
+         "Sec 2.3 note 1: map particles generated around the estimate x̂_k are highly competitive (kept by Step 2.4 "
+         "more often than those around big-weight particles)",
+         reading_diffs=xh, margin=UNIT, diff=d, diff_se=se, runs=nm,
+         depends_on=["sigma_w2", "eta", "carrier", "carrier_init"], source="Sec 2.3 note 1 (l.106)",
+         note="per run, mean over the 50 steps of the share of x̂_k-centred map particles kept by Step 2.4 minus the "
+              f"share of big-particle-centred ones, paired, in units of the margin ({MARGIN_FRACTION:g}); "
+              f"{nm} runs per reading; the x̂_k centre takes the widest (best/worst) spread, our design choice "
+              "(map_slots), not run at another value")
     ck = R.checks
     _add(reg, "eq6_white", "Sec 3.3: the eq-(6) sequence has zero mean, delta autocorrelation and zero cross-correlation",
          qualitative=eq6_white(ck), source="Sec 3.3, eq (6)",
          note=f"{ck['n6']} iterates: |mean|, |autocorrelation| at lags 1-3 and |cross-correlation| of two chains "
               f"(independent starts, starts 1e-9 apart) at lags -3..3 all below 4/sqrt(n) = {ck['bound6']:.4f}")
-    # ---- Fig. 6: best alpha inside and outside [0.2, 0.8] chosen on runs 1-25, judged on runs 26-50
-    c = f6_choice(R)
-    f6r, f6u = f6_readings(R)
-    er = c["eta_runs"]
+    # ---- Fig. 6: best alpha inside and outside [0.2, 0.8] chosen on the first half, judged on the second
+    f6d = f6_reading_diffs(R)
+    d, se, k = f6d[E.T2_MAIN]
+    pf6 = R.plans["f6"]["runs"]
     _add(reg, "f6_alpha_range", "Fig. 6 / sec 3.3: alpha in [0.2, 0.8] works best",
-         readings=f6r, diff=c["d"], diff_se=c["se"], depends_on=["sigma_v_t2", "sigma_w2"], source="Fig. 6, sec 3.3",
-         note=f"paired RMSE, best alpha outside [0.2, 0.8] ({c['out']:g}) − best inside ({c['in']:g}), chosen on runs "
-              f"1-{c['half']}, judged on runs {c['half'] + 1}-{len(er)} (main reading shown); sweep "
-              f"{', '.join(f'{v:g}' for v in er.columns)}; other noise readings: "
-              + ", ".join(f"{t}: {f6r[t]} on {k} runs (first half picks)" for t, k in f6u.items()))
+         reading_diffs=f6d, margin=UNIT, diff=d, diff_se=se, runs=k,
+         depends_on=["sigma_v_t2", "sigma_w2"], source="Fig. 6, sec 3.3",
+         note=f"paired RMSE, best alpha outside [0.2, 0.8] − best inside, both picked on runs 1-{pf6 // 2} and judged "
+              f"on runs {pf6 // 2 + 1}-{pf6} of each reading, in units of the margin ({MARGIN_FRAC:.0%} of Table 2's "
+              f"printed CMS-PF RMSE = {f6_margin():.3f}); sweep {', '.join(f'{v:g}' for v in E.SENSITIVITY_GRID['eta'])}")
     return reg
 
 
@@ -636,21 +852,29 @@ def takeaway(reg, R) -> str:
     str
         One or two sentences.
     """
-    v = reg.verdicts()
-    better, equal = v.get("t1_cms_better_than_pf"), v.get("abstract_equal_computation")
+    by = {c.claim_id: c for c in reg.claims}
+    better, equal = by.get("t1_cms_better_than_pf"), by.get("abstract_equal_computation")
+    bv = better.verdict if better else None
+    ev = equal.verdict if equal else None
     bias = _cons_bias(R.cons)
-    if better == "not reproduced":
+    if bv == "not reproduced":
         first = ("On the paper's benchmark CMS-PF was not more accurate than a bootstrap PF with the same particles "
                  "under any reading we ran")
-        first += ", nor at equal computation" if equal == "not reproduced" else ""
+        first += ", nor at equal computation" if ev == "not reproduced" else ""
         first += ": a plain bootstrap PF is the better choice."
-    elif better == "reproduced":
-        first = "CMS-PF beat the bootstrap PF at every particle number under every reading we ran"
+    elif bv in ("reproduced", "qualitatively reproduced"):
+        size = "" if bv == "reproduced" else " (though not by the margins the paper printed)"
+        first = f"CMS-PF beat the bootstrap PF at every particle number under every reading we ran{size}"
         first += (", but not at equal computation (a PF with 2N particles does as well)."
-                  if equal != "reproduced" else ", also at equal computation.")
+                  if ev not in ("reproduced", "qualitatively reproduced") else ", also at equal computation.")
+    elif better is not None and better.cause == "depends on the reading":
+        holds_ = better.judgement.under("holds")
+        first = ("Whether CMS-PF beats the bootstrap PF depends on settings the paper does not give (it holds only "
+                 "under " + ", ".join(holds_) + "), so it is no safe replacement for a plain PF.")
     else:
-        first = ("Whether CMS-PF beats the bootstrap PF depends on settings the paper does not give "
-                 "(the claim is inconclusive), so it is no safe replacement for a plain PF.")
+        need = f" ({better.runs_needed} runs per reading would decide it)" if better is not None and better.runs_needed else ""
+        first = ("Whether CMS-PF beats the bootstrap PF is not decided by our runs" + need
+                 + ", so it is no safe replacement for a plain PF.")
     r, N = f"{bias['ratio']:.0f}", bias["N"]
     if bias["kind"] == "shrinks":
         second = (f"Its likelihood-selected map particles carry improper weights: its estimate stays {r} times "
@@ -734,7 +958,7 @@ def _prose_tables(R) -> dict:
 
 
 def _prose_fig3(R) -> dict:
-    f3h, f3u = f3_readings(R)
+    f3u = {t: R.plans["f3"]["runs"] for t in E.F3_TAGS}
     sl_all, sl_up = f3_pairs(R.f3_runs)
     out = {"cms_f3_slope_all": -sl_all[0], "cms_f3_slope_all_se": sl_all[1],
            "cms_f3_slope_up": -sl_up[0], "cms_f3_slope_up_se": sl_up[1]}
@@ -818,6 +1042,9 @@ def _prose_mechanism(R) -> dict:
         out[f"cms_mech_{key}_distinct"] = float(tab.loc[k, "distinct"])
         out[f"cms_mech_{key}_ks"] = float(tab.loc[k, "ks"])
     out["cms_mech_pf_dups"] = float(tab.loc["PF resampled set", "duplicates"])
+    mm = R.mech["main"]
+    out["cms_xhat_kept"] = float(mm["x̂-centred map particles", "kept"].mean())
+    out["cms_big_kept"] = float(mm["big-centred map particles", "kept"].mean())
     out["cms_mech_carried_dups"] = float(tab.loc["CMS-PF carried set", "duplicates"])
     for key, mk in (("randn", "carrier=randn"), ("log", "main"), ("eq6", "carrier=eq (6)")):
         out[f"cms_mech_ks_{key}"] = float(R.mech[mk]["CMS-PF map particles", "ks"].mean())
@@ -854,7 +1081,7 @@ def _prose_verdicts(reg, R) -> dict:
     out = {"cms_f2_sentence": Md(f"Over Table 2's {R.n['t2']} runs the EKF's RMSE exceeds the CMS-PF's by {d:.2f} ± "
                                  f"{se:.2f} (paired; claim `f2_cms_better_than_ekf`).")}
     c = f6_choice(R)
-    f6r, f6u = f6_readings(R)
+    n6 = R.plans["f6"]["runs"]
     er = c["eta_runs"]
     best_all = float(er.mean().idxmin())
     turns = best_all < max(er.columns)
@@ -866,16 +1093,18 @@ def _prose_verdicts(reg, R) -> dict:
                 f"The mean RMSE is still lowest at the largest alpha tried ({best_all:g}); beyond it the map "
                 "particles land far outside the predicted cloud and are almost never kept, so CMS-PF approaches a PF "
                 "that ranks its particles by likelihood. ")
-    said = {True: "the range is better", False: "a value outside is better", None: "undecided"}
+    f6c = next((x for x in reg.claims if x.claim_id == "f6_alpha_range"), None)
+    per = {r: (v + (f", {cc}" if cc else "")) for r, v, cc in (f6c.judgement.per_reading if f6c else ())}
     parts = []
-    for t, k in f6u.items():
-        dd, ss = f6_pairs(R.f6_reading(t, k))[0]
-        parts.append(f"{t.replace('sigma_v_t2=R ', 'σ_v² = ').replace('sigma_w2=', 'σ_w² = ')}: " + said[f6r[t]]
-                     + f" ({k} runs, outside − inside {dd:+.3f} ± {ss:.3f})")
+    for t in E.T2_READINGS:
+        dd, ss = f6_pairs(R.f6_reading(t, n6))[0]
+        parts.append(f"{t.replace('sigma_v_t2=R ', 'σ_v² = ').replace('sigma_w2=', 'σ_w² = ')}: {per.get(t, '')} "
+                     f"(outside − inside {dd:+.3f} ± {ss:.3f})")
     out["cms_f6_sentence"] = Md(
         turn_txt + f"Chosen on runs 1–{c['half']} and judged on runs {c['half'] + 1}–{len(er)} (paired), the best value "
         f"outside [0.2, 0.8] (alpha = {c['out']:g}) minus the best inside (alpha = {c['in']:g}) is {c['d']:.3f} ± "
-        f"{c['se']:.3f} in RMSE: {word}. Under Table 2's other noise readings (claim `f6_alpha_range`): "
+        f"{c['se']:.3f} in RMSE: {word}. The claim `f6_alpha_range` reruns the sweep under each of Table 2's noise "
+        f"readings on {n6} runs (its power plan; picked on runs 1–{n6 // 2}, judged on {n6 // 2 + 1}–{n6}): "
         + "; ".join(parts) + ".")
     cells, _ = which_reading(reg)
     noise = set(E.T2_READINGS) | set(E.T3_LAB) | {"sigma_w2=1", "sigma_w2=10"}
@@ -891,10 +1120,12 @@ def _prose_verdicts(reg, R) -> dict:
         out[f"cms_n_{v.replace(' ', '_')}"] = verdicts.count(v)
     out["cms_n_claims"] = len(verdicts)
     out["cms_verdict_sentence"] = Md(verdict_sentence(verdicts))
-    vs = reg.verdicts()
     for v in ["reproduced", "qualitatively reproduced", "not reproduced", "inconclusive"]:
-        ids = [k for k, vv in vs.items() if vv == v and not k.startswith(("t1_pf_", "t1_cms_mean", "t2_rmse_", "t3_mean_"))]
-        out[f"cms_ids_{v.replace(' ', '_')}"] = Md(", ".join(f"`{i}`" for i in ids) if ids else "none")
+        cs = [c for c in reg.claims if c.verdict == v
+              and not c.claim_id.startswith(("t1_pf_", "t1_cms_mean", "t2_rmse_", "t3_mean_"))]
+        txt = ", ".join(f"`{c.claim_id}`" + (f" ({c.verdict_text()[len('inconclusive ('):-1]})" if v == "inconclusive" else "")
+                        for c in cs)
+        out[f"cms_ids_{v.replace(' ', '_')}"] = Md(txt or "none")
     return out
 
 
