@@ -25,7 +25,8 @@ EKF" at the paper's N, judged by the Li chapter's own function
 
 Rankings (:func:`ranking`): within a benchmark every pair of methods is compared (paired
 difference, two-sided z test), Holm over all pairs of that benchmark; a method's rank is 1 + the
-number of methods significantly better than it (so "tied" is symmetric and no chaining arises).
+number of methods significantly better than it (so "not shown different" is symmetric and no chaining
+arises; it is not a tie within the margin, which the rankings do not test).
 What to use (:func:`what_to_use`): per benchmark, the cheapest method of rank 1. The takeaway
 (:func:`takeaway`) and the chapter's numbers and phrases (:func:`prose`) are generated from these.
 """
@@ -37,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from ..choices import over
-from ..claims import CAUSE_COUNT, CAUSE_TIE, Z_CRIT, ClaimsRegistry, Judgement, judge_ordering
+from ..claims import CAUSE_COUNT, CAUSE_RUNS, CAUSE_TIE, Z_CRIT, ClaimsRegistry, Judgement, judge_ordering
 from ..experiments import synthesis as S
 from ..experiments.synthesis import (ALPHA, BOT_CENTRED_EXCLUDED, BOT_FLOW_REF_TOL, BOT_READINGS, MARGIN, PF_N,
                                      BenchResult, _cost, _frontier_names)
@@ -47,7 +48,8 @@ from ..prose import Md, plural
 from ..stats import holm, p_two_sided, plan_runs, ratio_of_means
 from .ekf_pf_li2012 import pf_beats_ekf
 
-__all__ = ["efficient_frontier", "pf_at_cost", "equal_budget", "judge_equal_budget", "WORDS", "plan_table", "ranking", "verdict_table", "CLAIM_TEXT", "LI_CLAIM",
+__all__ = ["efficient_frontier", "pf_at_cost", "equal_budget", "judge_equal_budget", "WORDS", "plan_table", "ranking",
+           "verdict_table", "CLAIM_TEXT", "LI_CLAIM",
            "claim_rows", "record_claims", "MAIN_CLAIMS", "takeaway", "prose", "PAPER_METHODS", "overall",
            "summary_table", "dpf_vs_liu_west", "bot_reference_tables", "PROBLEM_CLASS", "what_to_use",
            "time_range_phrase", "below_line_sentence", "frontier_improves_phrase", "gaussian_phrase",
@@ -146,7 +148,8 @@ def ranking(r: BenchResult, names=None, alpha: float = ALPHA) -> pd.DataFrame:
     test); Holm's rule at ``alpha`` over all pairs of the benchmark decides which differences are
     significant. A method's rank is 1 + the number of methods significantly better than it, so two
     methods share a rank only if the same methods beat both; "tie" lists the methods with a lower
-    mean MSE that it is not significantly worse than. Diverged methods are listed last, unranked."""
+    mean MSE that it is not significantly worse than (no difference shown; not a tie within the
+    margin, which rankings do not test). Diverged methods are listed last, unranked."""
     dt = distance_table(r)
     names = list(dt.index) if names is None else list(names)
     ok = [n for n in names if dt.loc[n, "diverged"] == 0]
@@ -183,7 +186,7 @@ def ranking(r: BenchResult, names=None, alpha: float = ALPHA) -> pd.DataFrame:
 
 #: the word of an equal-budget comparison in the verdict tables, by the verdict of its claim
 WORDS = {"reproduced": "better", "not reproduced": "worse", CAUSE_TIE: "tie (within the margin)",
-         CAUSE_COUNT: "undecided (off frontier)", "too few runs": "undecided (too few runs)"}
+         CAUSE_COUNT: "undecided (off frontier)", CAUSE_RUNS: "undecided (too few runs)"}
 
 
 def _word(e) -> str:
@@ -418,8 +421,8 @@ PROBLEM_CLASS = {"ung_zhang": "scalar, strongly nonlinear (UNGM, Q = R = 1)",
 def what_to_use(results: dict, alpha: float = ALPHA) -> pd.DataFrame:
     """Per benchmark, the method that reaches the best accuracy shown at the least cost: among the methods
     of rank 1 of :func:`ranking` (none shown better, Holm over all pairs), the one with the fewest model
-    evaluations per step. With it: its MSE / reference, its count, the other rank-1 methods (all tied
-    with it), the best paper's method and the best of today's methods with their ranks."""
+    evaluations per step. With it: its MSE / reference, its count, the other rank-1 methods (none shown
+    different from it), the best paper's method and the best of today's methods with their ranks."""
     rows = []
     for key, r in results.items():
         rk = ranking(r, alpha=alpha)
@@ -445,7 +448,7 @@ PAPER_METHODS = (("gpff_zhang2016", "GPFF (Zhang et al. 2016)"), ("cmspf_ning201
                  ("dpf_hou2008", "DPF (Hou & Yin 2008)"), ("immpfor_zhou2017", "IMMPFOR (Zhou et al. 2017)"))
 
 
-_UNDECIDED = (WORDS[CAUSE_TIE], WORDS[CAUSE_COUNT], WORDS["too few runs"], "not measured")
+_UNDECIDED = (WORDS[CAUSE_TIE], WORDS[CAUSE_COUNT], WORDS[CAUSE_RUNS], "not measured")
 
 
 def overall(vt: pd.DataFrame, paper: str) -> str:
@@ -476,7 +479,7 @@ def summary_table(results) -> pd.DataFrame:
     vt = verdict_table(results)
     vt = vt[vt["benchmark"] != BOT_READINGS["centred"]]
     seen = set(vt.loc[vt["paper"].isin([p for p, _ in PAPER_METHODS]), "by count"])
-    order = ["better", WORDS[CAUSE_TIE], WORDS["too few runs"], WORDS[CAUSE_COUNT], "worse", "diverged"]
+    order = ["better", WORDS[CAUSE_TIE], WORDS[CAUSE_RUNS], WORDS[CAUSE_COUNT], "worse", "diverged"]
     words = [w for w in order if w in seen] + sorted(seen - set(order))
     out = pd.DataFrame([{"method (paper)": name, "at equal count": overall(vt, p),
                          **{w: int((vt.loc[vt["paper"] == p, "by count"] == w).sum()) for w in words},
