@@ -79,7 +79,8 @@ from . import gpff_zhang2016 as GPFF
 from . import immpfor_zhou2017 as IMM
 
 __all__ = ["PAPER", "RUNS", "SEEDS", "TIMING_REPEATS", "PF_N", "SCHEMES", "SCHEME_N", "METHOD_N", "BOT_REF_N",
-           "TIMING_STEPS", "COUNT_STEPS", "ALPHA", "MARGIN", "BOT_CENTRED_EXCLUDED", "NOT_RUN", "CHOICES", "RUNS_OF", "BOT_READINGS", "BENCHMARKS",
+           "TIMING_STEPS", "COUNT_STEPS", "ALPHA", "MARGIN", "BOT_CENTRED_EXCLUDED", "NOT_RUN", "CHOICES", "RUNS_OF",
+           "BOT_READINGS", "BENCHMARKS",
            "ALL_BENCHMARKS", "LW_N", "DPF_N", "PCRB_RUNS", "TODAY_N", "LEDH_N", "SMC2_SIZE", "JMPF_N", "TODAY_FAMILIES",
            "BOT_FLOW_REF_N", "BOT_FLOW_REF_RUNS", "BOT_FLOW_REF_TOL", "Method", "Benchmark", "BenchResult",
            "SynthesisResults", "build", "build_imm", "bench_filter", "run_benchmark", "run_benchmarks", "run_imm",
@@ -171,8 +172,8 @@ MARGIN = {"ung_zhang": 0.2, "ung_li": 0.2, "ung_ning": 0.2, "theta_hou": 0.2, "b
 #: why the centred bearings-only start is not a reading of the GPFF paper (shown, not counted)
 BOT_CENTRED_EXCLUDED = ("Zhang 2016 sets the offset start on purpose: l.293 (sec 5) \"BOT 模型考察多维和非理想初值"
                         "条件下各滤波器性能\" (the BOT example tests the filters from a non-ideal start), repeated "
-                        "in sec 5.3, l.398 and l.406 (\"不理想初值\"); a start centred on the truth is not the "
-                        "paper's experiment")
+                        "in sec 5.3, l.398, l.404 and l.406 (\"不理想初值\", \"初始条件不够理想\"); a start "
+                        "centred on the truth is not the paper's experiment")
 
 #: the chapter's assumptions table (CONTRIBUTING, *Free choices*). The synthesis is not a paper: *fixed by
 #: the paper* marks a value the paper of the benchmark prints (the source cites its line), *design choice*
@@ -183,9 +184,9 @@ CHOICES = [
                "m0 = (-6, 17, 0, 0) (l.392): the truth starts 4.1 prior SDs from the prior mean, and the "
                "bootstrap PF's weights collapse at the first measurement. The paper says the offset is "
                "deliberate: the BOT example tests the filters 'under a non-ideal initial value' (非理想初值, "
-               "l.293; 不理想初值, l.398, l.406). The centred start (m0 = x0, same P0, same truths) is run as "
+               "l.293; 不理想初值, l.398, l.404, l.406). The centred start (m0 = x0, same P0, same truths) is run as "
                "context and excluded from the verdicts (not a reading of this paper)",
-               "Zhang 2016 sec 5 l.293; sec 5.3 l.392, l.398, l.406"),
+               "Zhang 2016 sec 5 l.293; sec 5.3 l.392, l.398, l.404, l.406"),
     FreeChoice("pf_n", "N = 10, 30, 100, 300, 1000 (scalar); 100, 300, 1000, 2000 (BOT)", SWEEP,
                "the baseline's particle number is swept: every method is compared with the PF at the method's "
                "own cost, interpolated in log cost along the swept frontier (the frontier figures); a method "
@@ -255,7 +256,7 @@ class Benchmark:
     error: str = "x"          # "x": state MSE; "theta": theta MSE
     baseline: str = "PF"      # family of the frontier the equal-budget comparison uses
     chunk_runs: int | None = None   # runs per pool task (None: run_monte_carlo's default split)
-    seed: int | None = None   # truths and filter streams (the centred BOT reading has the offset reading's)
+    seed: int | None = None   # truths and filter streams (the centred BOT start has the printed start's)
 
 
 def _pf(model, N, scheme="systematic"):
@@ -397,8 +398,8 @@ def run_imm(runs: int = RUNS, *, executor=None, timing_repeats: int = TIMING_REP
 def build(key: str, seeds: dict | None = None, pcrb_runs: int = PCRB_RUNS) -> Benchmark:
     """The benchmark ``key`` (one of :data:`BENCHMARKS`), with every method built by its chapter's builder.
 
-    ``seeds``: the seeds by benchmark key (default :data:`SEEDS`; the centred BOT reading uses the
-    offset reading's, and the BOT bound ``bot_pcrb`` with ``pcrb_runs`` truths).
+    ``seeds``: the seeds by benchmark key (default :data:`SEEDS`; the centred BOT start (context) uses the
+    printed start's, and the BOT bound ``bot_pcrb`` with ``pcrb_runs`` truths).
     """
     seeds = SEEDS if seeds is None else seeds
     seed = int(seeds["bot" if key == "bot_centred" else key]) if key in BENCHMARKS else None
@@ -438,7 +439,7 @@ def build(key: str, seeds: dict | None = None, pcrb_runs: int = PCRB_RUNS) -> Be
                          "exact θ posterior mean (grid)", error="theta", baseline="Liu-West", seed=seed)
     if key in ("bot", "bot_centred"):
         m = GPFF.BearingsOnly.zhang2016()
-        if key == "bot_centred":   # the centred reading of bot_prior: the filters' prior mean at the truth's start
+        if key == "bot_centred":   # the centred start (context): the filters' prior mean at the truth's start
             m = BearingsOnly(m0=m.x0)
         t2 = GPFF.bot_table_filters(m)   # the GPFF chapter's Table 2 filters
         ms = [Method("EKF", "EKF", t2["EKF"]), Method("UKF", "UKF", t2["UKF"])]
@@ -584,7 +585,7 @@ def run_benchmarks(keys=ALL_BENCHMARKS, runs: int = RUNS, *, executor=None, timi
     The benchmarks' Monte Carlo tasks are submitted to ``executor`` together (one submitting thread
     per benchmark, so the pool never idles between benchmarks); counts and timings follow, serial,
     once the pool is idle. Numbers are the same as with ``executor=None`` (per-run streams).
-    ``runs_of`` caps the runs of a reading (default :data:`RUNS_OF`); ``seeds`` by benchmark key
+    ``runs_of`` caps the runs of a benchmark (default :data:`RUNS_OF`: the centred BOT start, context); ``seeds`` by benchmark key
     (default :data:`SEEDS`); ``pcrb_runs`` truths for the bearings-only bound.
     """
     runs = check_positive_int(runs, "runs")
@@ -654,8 +655,8 @@ def run_all(runs=None, seeds=None, executor=None, steps=None, *, time_it: bool =
     Parameters
     ----------
     runs : int, optional
-        None: the chapter's counts (``RUNS`` per benchmark, ``RUNS_OF`` for the centred
-        reading, ``BOT_FLOW_REF_RUNS`` for the PFPF-EDH reference, ``PCRB_RUNS`` truths for
+        None: the chapter's counts (``RUNS`` per benchmark, ``RUNS_OF`` for the centred BOT
+        start, context), ``BOT_FLOW_REF_RUNS`` for the PFPF-EDH reference, ``PCRB_RUNS`` truths for
         the bounds). An int replaces every one of these counts (``run_all(runs=2)`` for a quick check).
     seeds : None, int or dict, optional
         :func:`pfrepro.papers.resolve_seeds` of :data:`SEEDS` (None: the book's seeds).

@@ -128,7 +128,7 @@ def ranking_compact(r) -> pd.DataFrame:
 
 def paper_table(results) -> pd.DataFrame:
     """The verdicts per paper's method as a table (one row per method and benchmark; the BOT
-    readings side by side): distance to the reference, equal-count and equal-time words, z."""
+    starts side by side, the centred one context): distance to the reference, equal-count and equal-time words, z."""
     vt = V.verdict_table(results)
     sub = vt[vt["paper"] != ""]
     rows = []

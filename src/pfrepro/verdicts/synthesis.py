@@ -6,9 +6,9 @@ Equal budget (:func:`equal_budget`): a method of cost B is compared with the bas
 systematic resampling every step; Liu-West on ``theta_hou``; the IMMPF on ``imm_zhou``) whose cost is
 B, on the same truths: per run, the baseline's MSE is interpolated linearly in log cost between the
 two configurations of its efficient frontier that bracket B (:func:`efficient_frontier`,
-:func:`pf_at_cost`), and the paired per-run difference MSE(baseline at B) - MSE(method), in units of the reference's MSE, is
-judged by the book's rule (:func:`judge_equal_budget`, :func:`pfrepro.claims.judge_ordering`): better at
-2 SE, worse when reversed, a tie only when the interval lies inside the benchmark's smallest effect of
+:func:`pf_at_cost`), and the paired per-run difference MSE(baseline at B) - MSE(method), in units of the
+reference's MSE, is judged by the book's rule (:func:`judge_equal_budget`,
+:func:`pfrepro.claims.judge_ordering`): better at 2 SE, worse when reversed, a tie only when the interval lies inside the benchmark's smallest effect of
 interest (:data:`pfrepro.experiments.synthesis.MARGIN`), else too few runs with the runs a plan needs.
 Outside the baseline's range of costs the nearest configuration is used and only the conclusion that
 survives the cost mismatch is kept (no extrapolation: the PF's frontier on BOT kept improving beyond the
@@ -136,7 +136,8 @@ def judge_equal_budget(e: dict) -> Judgement:
     if e["where"] == "not measured":
         return Judgement("inconclusive", CAUSE_COUNT)
     j = judge_ordering(e["d"], e["se"], margin=e["margin"], runs=e["runs"])
-    if (e["where"] == "below" and j.verdict == "not reproduced") or (e["where"] == "above" and j.verdict == "reproduced"):
+    if (e["where"] == "below" and j.verdict == "not reproduced") or (
+            e["where"] == "above" and j.verdict == "reproduced"):
         return Judgement("inconclusive", CAUSE_COUNT)
     return j
 
@@ -270,13 +271,18 @@ def _cid(benchmark: str, method: str) -> str:
 LI_CLAIM = "ung_li-pf-beats-ekf"
 
 
-def _note(row) -> str:
-    if not np.isfinite(row["MSE / opt."]):
-        return "diverged in every run"
+def _note(row, results=None) -> str:
+    if row["where count"] == "diverged":
+        r = None if results is None else results[row["benchmark"]]
+        n = "" if r is None else f" in {r.diverged(row['method'])} of {len(r.err)} runs"
+        return f"diverged{n}: worse than the baseline"
     # no wall time here: claims must be identical between two builds (the equal-time comparison is
-    # in the chapter's verdict table, as context)
-    return (f"MSE/reference {row['MSE / opt.']:.3g} ± {row['SE']:.2g}; baseline − method at equal count, in units "
-            f"of the reference MSE ({row['by count']})")
+    # in the chapter's verdict table, as context); the paired difference is in the test column
+    out = (f"MSE/reference {row['MSE / opt.']:.3g} ± {row['SE']:.2g}; baseline − method at equal count in units of "
+           f"the reference MSE ({row['by count']}; cost {row['where count']} the baseline's range")
+    if row["by count"] == WORDS[CAUSE_COUNT]:
+        out += f"; {row['d count']:.3g} ± {row['se count']:.2g}, z = {row['z count']:.2f}"
+    return out + ")"
 
 
 def claim_rows(vt: pd.DataFrame) -> pd.DataFrame:
@@ -333,7 +339,7 @@ def record_claims(reg: ClaimsRegistry, results) -> ClaimsRegistry:
         text = f"{CLAIM_TEXT[row['paper']]} at equal model-evaluation count ({method}, {bench})"
         e = equal_budget(results[bench], method, "count")
         kw = _claim_kwargs(e)
-        note = _note(row)
+        note = _note(row, results)
         if bench == BOT_READINGS["offset"] and centred in results and "diff" in kw:
             ec = equal_budget(results[centred], method, "count")
             if np.isfinite(ec["d"]):
@@ -413,7 +419,7 @@ PROBLEM_CLASS = {"ung_zhang": "scalar, strongly nonlinear (UNGM, Q = R = 1)",
                  "ung_li": "scalar, strongly nonlinear (UNGM, Q = 10)",
                  "ung_ning": "scalar, strongly nonlinear (UNGM, σ_w² = 1)",
                  "bot": "bearings-only, prior offset from the truth",
-                 "bot_centred": "bearings-only, prior centred (reading)",
+                 "bot_centred": "bearings-only, prior centred (context: not the paper's start)",
                  "theta_hou": "unknown static parameter",
                  "imm_zhou": "manoeuvring target"}
 
@@ -470,7 +476,7 @@ def overall(vt: pd.DataFrame, paper: str) -> str:
         return "better on some benchmarks and not on others"
     if words & lost:
         return "never shown better: worse on some benchmarks, undecided on the others"
-    return "undecided wherever it ran (" + ", ".join(sorted(w.replace("undecided ", "") for w in words)) + ")"
+    return "undecided wherever it ran: " + ", ".join(sorted(w.replace("undecided ", "").strip("()") for w in words))
 
 
 def summary_table(results) -> pd.DataFrame:
@@ -567,7 +573,8 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
                 f"none of the {n} comparisons decides either way ({why})" if worse == 0 else
                 f"{worse} of the {n} comparisons find the paper's method worse, the other {n - worse} do not "
                 f"decide ({why})")
-        first = f"No method proposed in the papers is better than {base} at the same number of model evaluations: {rest}"
+        first = (f"No method proposed in the papers is better than {base} at the same number of model "
+                 f"evaluations: {rest}")
     elif len(better) == n:
         first = f"Every method proposed in the papers is better than {base} at the same number of model evaluations"
     else:
