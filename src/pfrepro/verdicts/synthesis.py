@@ -38,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from ..choices import over
-from ..claims import CAUSE_COUNT, CAUSE_RUNS, CAUSE_TIE, Z_CRIT, ClaimsRegistry, Judgement, judge_ordering
+from ..claims import CAUSE_COUNT, CAUSE_RUNS, CAUSE_TIE, Z_CRIT, ClaimsRegistry, Judgement, judge, judge_ordering
 from ..experiments import synthesis as S
 from ..experiments.synthesis import (ALPHA, BOT_CENTRED_EXCLUDED, BOT_FLOW_REF_TOL, BOT_READINGS, MARGIN, PF_N,
                                      BenchResult, _cost, _frontier_names)
@@ -499,7 +499,8 @@ def plan_table(results) -> pd.DataFrame:
     its paired difference (the main reading's own), the size the plan resolves (the benchmark's margin; the
     printed effect for Li 2012) and the runs 80 % power at ``|z| > 2`` needs (:func:`pfrepro.stats.plan_runs`).
     The runs are fixed before any run (:data:`pfrepro.experiments.synthesis.RUNS`); a claim left undecided
-    reports the runs its plan needs (``runs_needed``), no run is added after an outcome."""
+    reports the runs its plan needs (``runs_needed``), no run is added after an outcome. ``at these runs``:
+    the comparison's word (the Li claim's verdict) on the runs it has."""
     vt = claim_rows(verdict_table(results))
     rows = []
     for _, row in vt.iterrows():
@@ -508,7 +509,8 @@ def plan_table(results) -> pd.DataFrame:
         sd = float(row["se count"]) * math.sqrt(int(row["runs"]))
         rows.append({"claim": _cid(row["benchmark"], row["method"]), "runs": int(row["runs"]),
                      "sd per run": sd, "size resolved": f"margin {row['margin']:g}",
-                     "runs the plan needs": plan_runs(sd, float(row["margin"]), z=Z_CRIT)})
+                     "runs the plan needs": plan_runs(sd, float(row["margin"]), z=Z_CRIT),
+                     "at these runs": row["by count"]})
     if "ung_li" in results:
         r = results["ung_li"]
         pf = f"PF({max(PF_N['ung_li'])})"
@@ -516,7 +518,9 @@ def plan_table(results) -> pd.DataFrame:
         sd = kw["diff_se"] * math.sqrt(kw["runs"])
         rows.append({"claim": LI_CLAIM, "runs": kw["runs"], "sd per run": sd,
                      "size resolved": f"printed effect {kw['effect']:.4g}",
-                     "runs the plan needs": plan_runs(sd, kw["effect"], z=Z_CRIT)})
+                     "runs the plan needs": plan_runs(sd, kw["effect"], z=Z_CRIT),
+                     "at these runs": judge(diff=kw["diff"], diff_se=kw["diff_se"], effect=kw["effect"],
+                                            runs=kw["runs"]).verdict})
     return pd.DataFrame(rows)
 
 
