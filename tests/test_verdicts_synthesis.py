@@ -1,6 +1,7 @@
 """Verdicts of the synthesis (pfrepro.verdicts.synthesis) on small fixtures with known outcomes: the
-equal-budget rule (interpolation, off-frontier, Holm family), rankings with ties, the claims (readings,
-ties, diverged runs, Li 2012's ordering), what to use, the takeaway and the chapter's prose."""
+equal-budget rule (interpolation, off-frontier, the book's rule with the margin: tie / too few runs),
+rankings (Holm), the claims (the centred BOT start excluded, ties, diverged runs, Li 2012's ordering through
+the Li chapter's function), the power plans, what to use, the takeaway and the chapter's prose."""
 import copy
 import math
 import re
@@ -60,7 +61,23 @@ def test_equal_budget_sign_units_and_tie():
     assert g["d"] == pytest.approx((3 - 1.5) * BASE.mean() / BASE.mean())   # in units of the optimum's MSE
     assert V.equal_budget(r, "bad")["holds"] is False
     assert V.equal_budget(r, "same")["holds"] is None
-    assert V._word(V.equal_budget(r, "same")) == "equal (tie)"
+    # the interval lies inside ±MARGIN: a tie within the stated margin, not "too few runs"
+    same = V.equal_budget(r, "same")
+    assert same["judgement"].cause == "tie within the stated margin" and V._word(same) == "tie (within the margin)"
+    assert same["margin"] == S.MARGIN["ung_zhang"] == 0.2 and same["runs"] == RUNS
+
+
+def test_an_undecided_comparison_outside_the_margin_asks_for_the_runs_a_plan_needs():
+    from pfrepro.stats import plan_runs
+    rng = np.random.default_rng(7)
+    noise = rng.standard_normal(RUNS)
+    noise = noise - noise.mean()                                   # d = 0 exactly, sd of the noise 1 (in ref units)
+    err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "noisy": 3 * BASE + noise * BASE.mean(), "ref": BASE}
+    r = fake(err, {"PF(10)": 20, "PF(100)": 200, "noisy": math.sqrt(4000)})
+    e = V.equal_budget(r, "noisy")
+    j = e["judgement"]
+    assert j.verdict == "inconclusive" and j.cause == "too few runs" and V._word(e) == "undecided (too few runs)"
+    assert j.runs_needed == plan_runs(e["se"] * math.sqrt(RUNS), 0.2) > RUNS
 
 
 def test_off_frontier_keeps_only_what_survives_the_cost_mismatch():
@@ -152,22 +169,29 @@ def test_record_claims_readings():
     assert "at equal count" in c.note and "time" not in c.note   # claims are identical between builds
 
 
-def test_bot_claim_is_decided_under_both_prior_readings():
-    """A BOT claim holds only if it holds with the printed (offset) prior and with the centred one."""
-    from pfrepro.choices import as_choice_map
+def test_bot_claim_is_decided_on_the_papers_start_and_the_centred_start_is_excluded():
+    """The GPFF paper sets its offset start on purpose (l.293, l.398, l.406): the centred start is shown
+    (a reading_diffs entry, excluded with the paper's lines) and never counted."""
+    from pfrepro.choices import FIXED, as_choice_map
     err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "G": 1.2 * BASE, "ref": BASE}
     cost = {"PF(10)": 20, "PF(100)": 200, "G": 60}
     off = fake(err, cost, families={"G": "GPFF"}, papers={"G": "gpff_zhang2016"})
     cen = fake({**err, "G": 5 * BASE}, cost, families={"G": "GPFF"}, papers={"G": "gpff_zhang2016"})
     reg = V.record_claims(ClaimsRegistry("synthesis", choices=S.CHOICES), {"bot": off, "bot_centred": cen})
-    assert [c.claim_id for c in reg.claims] == ["bot-g"]            # the centred row is a reading, not a claim
+    assert [c.claim_id for c in reg.claims] == ["bot-g"]            # the centred row is context, not a claim
     c = reg.claims[0]
-    assert c.readings == {"bot_prior=offset": True, "bot_prior=centred": False} and c.depends_on == ["bot_prior"]
-    assert c.verdict == "inconclusive" and f"centred prior (m0 = x0, {RUNS} runs)" in c.note
-    assert as_choice_map(S.CHOICES)["bot_prior"].status == "reading"
+    assert set(c.reading_diffs) == {"bot_prior=offset", "bot_prior=centred"} and c.depends_on == ["bot_prior"]
+    assert c.reading_diffs["bot_prior=centred"][0] < 0 and c.reading_diffs["bot_prior=centred"][2] == RUNS
+    assert set(c.excluded) == {"bot_prior=centred"} and "l.293" in c.excluded["bot_prior=centred"]
+    assert "非理想初值" in c.excluded["bot_prior=centred"]
+    assert c.verdict == "reproduced"                                 # worse under the centred start: not counted
+    assert [r for r, _, _ in c.judgement.per_reading] == ["bot_prior=offset"]
+    assert "not counted (the paper excludes them)" in c.test_text()
+    row = as_choice_map(S.CHOICES)["bot_prior"]
+    assert row.status == FIXED and "l.293" in row.source and "l.392" in row.source
 
 
-def test_todays_methods_are_their_own_family_and_leave_the_papers_verdicts_alone():
+def test_todays_methods_leave_the_papers_verdicts_alone():
     err = {"PF(10)": 4 * BASE, "PF(100)": 2 * BASE, "M": 1.2 * BASE, "T1": 1.1 * BASE, "ref": BASE}
     r = fake(err, {"PF(10)": 20, "PF(100)": 200, "M": 60, "T1": 60}, papers={"M": "gpff_zhang2016"})
     before = V.verdict_table({"fake": fake({k: v for k, v in err.items() if k != "T1"},
@@ -232,14 +256,29 @@ def claims_of(results, choices=S.CHOICES):
 
 
 @pytest.mark.parametrize("offset, centred, expected", [
-    (1.2, 1.1, "reproduced"),          # better under both readings
-    (1.2, 5.0, "inconclusive"),        # better under one, worse under the other
-    (5.0, 5.0, "not reproduced"),      # worse under both
+    (1.2, 1.1, "reproduced"),          # better on the paper's start (and on the centred one)
+    (1.2, 5.0, "reproduced"),          # the centred start no longer vetoes it (issue 31)
+    (5.0, 1.2, "not reproduced"),      # nor rescues it
+    (5.0, 5.0, "not reproduced"),
 ])
-def test_a_bot_reading_flips_the_verdict(offset, centred, expected):
+def test_the_centred_start_never_changes_a_bot_verdict(offset, centred, expected):
     c = claims_of({"bot": paper_fixture(offset * BASE), "bot_centred": paper_fixture(centred * BASE)})["bot-g"]
     assert c.verdict == expected
-    assert c.readings == {"bot_prior=offset": offset < 3, "bot_prior=centred": centred < 3}
+    alone = claims_of({"bot": paper_fixture(offset * BASE)})["bot-g"]
+    assert alone.verdict == expected
+
+
+def test_the_assumptions_table_says_what_is_ours():
+    """issue 31: the cost basis, the tie rule, the run counts and the margin are our design choices; a row
+    fixed by the paper cites the paper's lines."""
+    from pfrepro.choices import DESIGN, FIXED, as_choice_map
+    rows = as_choice_map(S.CHOICES)
+    for name in ("equal_cost", "tie_rule", "runs", "margin"):
+        assert rows[name].status == DESIGN, name
+    assert "fixed by the paper" not in rows["runs"].value
+    for row in rows.values():
+        if row.status == FIXED:
+            assert re.search(r"l\.\d+", row.source), row.name
 
 
 def test_without_the_centred_reading_a_bot_claim_is_decided_on_the_offset_runs():
@@ -271,31 +310,56 @@ def _shifted(z, rng_seed=11):
     return 2 * BASE - 0.01 * delta
 
 
-def test_a_tie_is_inconclusive():
-    # at the cost of PF(100) exactly, better by one standard error only: a tie
+def test_a_tie_is_inconclusive_only_inside_the_margin():
+    # at the cost of PF(100) exactly, better by one standard error only, the interval far inside ±0.2: a tie
     c = claims_of({"ung_zhang": paper_fixture(_shifted(1.0), cost=200)})["ung_zhang-g"]
-    assert c.verdict == "inconclusive" and "z = 1.00 (equal (tie); Holm" in c.note
+    assert c.verdict == "inconclusive" and c.cause == "tie within the stated margin"
+    assert c.margin == 0.2 and c.runs == RUNS and c.diff_se > 0
+    assert c.verdict_text() == "inconclusive (tie within the stated margin)"
+    # the same z with a spread 100 times wider: the interval leaves the margin -> too few runs, with a plan
+    noise = np.random.default_rng(11).standard_normal(RUNS)
+    wide = 2 * BASE - (noise - noise.mean() + 1.0 * noise.std(ddof=1) / math.sqrt(RUNS))
+    c = claims_of({"ung_zhang": paper_fixture(wide, cost=200)})["ung_zhang-g"]
+    assert c.verdict == "inconclusive" and c.cause == "too few runs" and c.runs_needed > RUNS
+    assert f"{c.runs_needed} would decide" in c.verdict_text()
 
 
-def test_holm_over_the_family_turns_a_lone_win_into_a_tie():
-    """z = 2.5 alone is significant (p = 0.012); in a family of six comparisons Holm's first threshold
-    is 0.05 / 6 = 0.0083, so the same difference is a tie and the claim inconclusive."""
+def test_each_comparison_is_judged_alone():
+    """No family: z = 2.5 is better whatever other comparisons the table holds (the claims' rule)."""
     alone = claims_of({"ung_zhang": paper_fixture(_shifted(2.5), cost=200)})["ung_zhang-g"]
-    assert alone.verdict == "reproduced" and "z = 2.50" in alone.note
-    ties = {f"T{i}": _shifted(0.0, rng_seed=i) for i in range(5)}     # equal to the PF at their cost: p = 1
+    assert alone.verdict == "reproduced"
+    ties = {f"T{i}": _shifted(0.0, rng_seed=i) for i in range(5)}     # equal to the PF at their cost
     family = claims_of({"ung_zhang": paper_fixture(_shifted(2.5), cost=200, **ties)})
-    assert len(family) == 6
-    assert family["ung_zhang-g"].verdict == "inconclusive" and "(equal (tie); Holm" in family["ung_zhang-g"].note
+    assert len(family) == 6 and family["ung_zhang-g"].verdict == "reproduced"
+    # the verdict table's word is the claim's verdict in words (one rule)
+    vt = V.verdict_table({"ung_zhang": paper_fixture(_shifted(2.5), cost=200, **ties)}).set_index("method")
+    assert vt.loc["G", "by count"] == "better"
+    assert {vt.loc[f"T{i}", "by count"] for i in range(5)} == {"tie (within the margin)"}
 
 
-@pytest.mark.parametrize("ekf, expected", [(2.0, "reproduced"), (0.5, "not reproduced"), (1.0, "inconclusive")])
-def test_li_claim_pf_against_the_ekf(ekf, expected):
+LI_GAIN = 30.1709 - 3.9459      # Li 2012 Table 1, model 1: printed EKF − PF RMSE
+
+
+@pytest.mark.parametrize("gain, expected", [
+    (LI_GAIN, "reproduced"),                  # the printed size attained
+    (2.0, "qualitatively reproduced"),        # the PF better, the printed size excluded
+    (-0.5, "not reproduced"),                 # reversed
+    (0.0, "not reproduced"),                  # no difference, and the printed size excluded
+])
+def test_li_claim_is_judged_by_the_li_chapters_function(gain, expected):
+    """One comparison, one function: the synthesis passes its per-run RMSEs (the root of its per-run MSEs)
+    to pfrepro.verdicts.ekf_pf_li2012.pf_beats_ekf and records exactly what it returns."""
+    from pfrepro.verdicts.ekf_pf_li2012 import pf_beats_ekf
     noise = 0.01 * np.random.default_rng(3).standard_normal(RUNS)
-    err = {"EKF": ekf * BASE + noise, "PF(1000)": BASE.copy(), "ref": BASE}
+    pf_rmse = np.sqrt(BASE)
+    err = {"EKF": (pf_rmse + gain + noise) ** 2, "PF(1000)": BASE.copy(), "ref": BASE}
     r = fake(err, {"EKF": 4, "PF(1000)": 2000})
     c = claims_of({"ung_li": r})[V.LI_CLAIM]
     assert c.verdict == expected
-    assert c.diff == pytest.approx(float(np.mean((err["EKF"] - BASE) / BASE.mean())))
+    same = pf_beats_ekf(np.sqrt(err["EKF"]), pf_rmse, which=1)
+    assert (c.diff, c.diff_se, c.runs, c.effect) == pytest.approx(
+        (same["diff"], same["diff_se"], same["runs"], same["effect"]))
+    assert c.effect == pytest.approx(LI_GAIN)
 
 
 # -- the takeaway -------------------------------------------------------------------------------------
@@ -355,10 +419,18 @@ def test_summary_counts_every_comparison_of_a_method():
     sm = V.summary_table(res).set_index("method (paper)")
     row = sm.loc["GPFF (Zhang et al. 2016)"]
     assert row["comparisons"] == 2 and row["worse"] == 1 and row["better"] == 1
-    assert row["at equal count"] == "better on some benchmarks or readings and not on others"
+    assert row["at equal count"] == "better on some benchmarks and not on others"
     assert sm.loc["DPF (Hou & Yin 2008)", "at equal count"] == "not run"
     assert V.overall(V.verdict_table({"ung_zhang": paper_fixture(5 * BASE, cost=200)}), "gpff_zhang2016") == \
         "worse than the baseline at equal budget wherever it ran"
+    tie = V.verdict_table({"ung_zhang": paper_fixture(_shifted(1.0), cost=200)})
+    assert V.overall(tie, "gpff_zhang2016") == "a tie with the baseline within the margin wherever it ran"
+    noise = np.random.default_rng(11).standard_normal(RUNS)
+    wide = 2 * BASE - (noise - noise.mean())
+    mixed = V.verdict_table({"ung_zhang": paper_fixture(5 * BASE, cost=200), "ung_ning": paper_fixture(wide, cost=200)})
+    assert V.overall(mixed, "gpff_zhang2016") == "never shown better: worse on some benchmarks, undecided on the others"
+    undecided = V.verdict_table({"ung_ning": paper_fixture(wide, cost=200)})
+    assert V.overall(undecided, "gpff_zhang2016") == "undecided wherever it ran: too few runs"
 
 
 # -- on results of the experiments' own shape (every benchmark and method, synthetic numbers) ------
@@ -436,17 +508,42 @@ def test_the_takeaway_follows_a_change_of_result(synthetic):
     t = V.takeaway(reg, R)
     for phrase in ("scalar growth model", "bearings-only tracking", "static parameter", "manoeuvring target"):
         assert phrase in t
-    # make the GPFF's MSE tiny on every run of the GPFF setting: it is now better than the PF at its count
-    # (inside the PF's range), the claim is reproduced, and the takeaway and the prose say so
-    R2 = copy.copy(R)
-    R2.benchmarks = dict(R.benchmarks)
-    r = copy.copy(R["ung_zhang"])
-    r.err = r.err.copy()
-    r.err["GPFF eq43 unif."] = 1e-3 * r.err[r.ref] * np.linspace(1, 1.1, len(r.err))
-    R2.benchmarks["ung_zhang"] = r
-    reg2 = V.record_claims(ClaimsRegistry(S.PAPER, choices=S.CHOICES), R2)
-    before = {c.claim_id: c.verdict for c in reg.claims}["ung_zhang-gpff-eq43-unif"]
-    assert before != "reproduced"
+
+    def with_gpff(factor):
+        R2 = copy.copy(R)
+        R2.benchmarks = dict(R.benchmarks)
+        r = copy.copy(R["ung_zhang"])
+        r.err = r.err.copy()
+        r.err["GPFF eq43 unif."] = factor * r.err[r.ref] * np.linspace(1, 1.1, len(r.err))
+        R2.benchmarks["ung_zhang"] = r
+        return R2, V.record_claims(ClaimsRegistry(S.PAPER, choices=S.CHOICES), R2)
+
+    # the GPFF's MSE 50 times the reference's on every run of the GPFF setting: worse than the PF at its count;
+    # then tiny: better (inside the PF's range), the claim is reproduced, and the takeaway and the prose say so
+    R1, reg1 = with_gpff(50.0)
+    R2, reg2 = with_gpff(1e-3)
+    assert {c.claim_id: c.verdict for c in reg1.claims}["ung_zhang-gpff-eq43-unif"] == "not reproduced"
     assert {c.claim_id: c.verdict for c in reg2.claims}["ung_zhang-gpff-eq43-unif"] == "reproduced"
-    assert "GPFF eq43 unif. (ung_zhang)" in V.takeaway(reg2, R2) and "GPFF eq43 unif." not in t
+    assert "GPFF eq43 unif. (ung_zhang)" in V.takeaway(reg2, R2)
+    assert "GPFF eq43 unif. (ung_zhang)" not in V.takeaway(reg1, R1)
     assert "GPFF eq43 unif. on ung_zhang" in V.prose(reg2, R2)["syn_s_below"]
+    assert "GPFF eq43 unif. on ung_zhang" not in V.prose(reg1, R1)["syn_s_below"]
+
+
+def test_the_power_plans_are_the_claims_own(synthetic):
+    """Every claim with a paired difference has a plan row: its runs, its own per-run spread and the runs
+    80 % power for the margin (Li 2012: the printed effect) needs; an undecided claim's runs_needed is
+    its plan."""
+    from pfrepro.stats import plan_runs
+    R, reg = synthetic
+    pt = V.plan_table(R).set_index("claim")
+    claims = {c.claim_id: c for c in reg.claims}
+    for cid, row in pt.iterrows():
+        c = claims[cid]
+        assert row["runs"] == c.runs
+        assert row["sd per run"] == pytest.approx(c.diff_se * math.sqrt(c.runs))
+        size = c.effect if c.effect else c.margin
+        assert row["runs the plan needs"] == plan_runs(row["sd per run"], size)
+        if c.cause == "too few runs":
+            assert c.runs_needed == row["runs the plan needs"]
+    assert V.LI_CLAIM in pt.index and "printed effect" in pt.loc[V.LI_CLAIM, "size resolved"]

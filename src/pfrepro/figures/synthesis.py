@@ -123,12 +123,12 @@ def ranking_compact(r) -> pd.DataFrame:
                          "MSE / ref.": [f"{m:.3g} ± {s:.2g}" if np.isfinite(m) else "–"
                                         for m, s in zip(rk["MSE / opt."], rk["SE"])],
                          "evals/step": rk["evals/step"].map(lambda v: f"{v:.0f}"),
-                         "tie / note": rk["tie"]}, index=rk.index)
+                         "not shown different / note": rk["tie"]}, index=rk.index)
 
 
 def paper_table(results) -> pd.DataFrame:
     """The verdicts per paper's method as a table (one row per method and benchmark; the BOT
-    readings side by side): distance to the reference, equal-count and equal-time words, z."""
+    starts side by side, the centred one context): distance to the reference, equal-count and equal-time words, z."""
     vt = V.verdict_table(results)
     sub = vt[vt["paper"] != ""]
     rows = []
@@ -143,7 +143,7 @@ def paper_table(results) -> pd.DataFrame:
 
 
 def today_table(results) -> pd.DataFrame:
-    """Today's methods against the baseline at equal budget (their own Holm family,
+    """Today's methods against the baseline at equal budget (the claims' rule per comparison,
     ``verdict_table(results, today=True)``): distance to the reference, count, words, z."""
     tv = V.verdict_table(results, today=True)
     tv["MSE / ref."] = [f"{m:.3g} ± {s_:.2g}" if np.isfinite(m) else "diverged"

@@ -6,26 +6,27 @@ Equal budget (:func:`equal_budget`): a method of cost B is compared with the bas
 systematic resampling every step; Liu-West on ``theta_hou``; the IMMPF on ``imm_zhou``) whose cost is
 B, on the same truths: per run, the baseline's MSE is interpolated linearly in log cost between the
 two configurations of its efficient frontier that bracket B (:func:`efficient_frontier`,
-:func:`pf_at_cost`), and the paired per-run difference MSE(baseline at B) - MSE(method), in units of
-the reference's MSE, decides better / equal / worse. Significance is family-wise (:data:`pfrepro.experiments.synthesis.ALPHA`,
-Holm's step-down rule, :func:`pfrepro.stats.holm`) over every equal-budget comparison of the verdict
-table on one cost axis (:func:`verdict_table`); a *tie* is a difference that is not significant under
-that rule (not a proof of equality). Outside the baseline's range of costs the nearest configuration
-is used and only the conclusion that survives the cost mismatch is kept (no extrapolation: the PF's
-frontier on BOT kept improving beyond the last point where it had looked flat). Today's methods
-form their own family (``verdict_table(results, today=True)``), so adding them leaves the papers'
-verdicts as they were.
+:func:`pf_at_cost`), and the paired per-run difference MSE(baseline at B) - MSE(method), in units of the
+reference's MSE, is judged by the book's rule (:func:`judge_equal_budget`,
+:func:`pfrepro.claims.judge_ordering`): better at 2 SE, worse when reversed, a tie only when the interval lies inside the benchmark's smallest effect of
+interest (:data:`pfrepro.experiments.synthesis.MARGIN`), else too few runs with the runs a plan needs.
+Outside the baseline's range of costs the nearest configuration is used and only the conclusion that
+survives the cost mismatch is kept (no extrapolation: the PF's frontier on BOT kept improving beyond the
+last point where it had looked flat).
 
 Claims (:func:`record_claims`): per paper's method and benchmark, the implicit claim of its paper,
 "it is better than the plain filter", re-tested at equal budget on the count axis (model
-evaluations per step, exact and load-independent): better -> reproduced, worse -> not reproduced,
-a tie or a conclusion the frontier's range does not support -> inconclusive. The bearings-only
-claims are decided under both readings of the free choice ``bot_prior``. The wall-time reading is
-context in the chapter's tables, never in a claim. Plus Li 2012's "PF beats EKF" at the paper's N.
+evaluations per step, exact and load-independent), with the verdict of :func:`judge_equal_budget`.
+On bearings-only the paper's own start is the one admissible reading: the start centred on the truth
+is shown and not counted (``excluded``, :data:`pfrepro.experiments.synthesis.BOT_CENTRED_EXCLUDED`).
+The wall-time reading is context in the chapter's tables, never in a claim. Plus Li 2012's "PF beats
+EKF" at the paper's N, judged by the Li chapter's own function
+(:func:`pfrepro.verdicts.ekf_pf_li2012.pf_beats_ekf`), so the two chapters carry one word.
 
 Rankings (:func:`ranking`): within a benchmark every pair of methods is compared (paired
 difference, two-sided z test), Holm over all pairs of that benchmark; a method's rank is 1 + the
-number of methods significantly better than it (so "tied" is symmetric and no chaining arises).
+number of methods significantly better than it (so "not shown different" is symmetric and no chaining
+arises; it is not a tie within the margin, which the rankings do not test).
 What to use (:func:`what_to_use`): per benchmark, the cheapest method of rank 1. The takeaway
 (:func:`takeaway`) and the chapter's numbers and phrases (:func:`prose`) are generated from these.
 """
@@ -37,15 +38,18 @@ import numpy as np
 import pandas as pd
 
 from ..choices import over
-from ..claims import Z_CRIT, ClaimsRegistry, ordering_holds
+from ..claims import CAUSE_COUNT, CAUSE_RUNS, CAUSE_TIE, Z_CRIT, ClaimsRegistry, Judgement, judge, judge_ordering
 from ..experiments import synthesis as S
-from ..experiments.synthesis import ALPHA, BOT_FLOW_REF_TOL, BOT_READINGS, PF_N, BenchResult, _cost, _frontier_names
+from ..experiments.synthesis import (ALPHA, BOT_CENTRED_EXCLUDED, BOT_FLOW_REF_TOL, BOT_READINGS, MARGIN, PF_N,
+                                     BenchResult, _cost, _frontier_names)
 from ..experiments.synthesis import distance_table
 from ..metrics import mse
 from ..prose import Md, plural
-from ..stats import holm, p_two_sided, ratio_of_means
+from ..stats import holm, p_two_sided, plan_runs, ratio_of_means
+from .ekf_pf_li2012 import pf_beats_ekf
 
-__all__ = ["efficient_frontier", "pf_at_cost", "equal_budget", "ranking", "verdict_table", "CLAIM_TEXT", "LI_CLAIM",
+__all__ = ["efficient_frontier", "pf_at_cost", "equal_budget", "judge_equal_budget", "WORDS", "plan_table", "ranking",
+           "verdict_table", "CLAIM_TEXT", "LI_CLAIM",
            "claim_rows", "record_claims", "MAIN_CLAIMS", "takeaway", "prose", "PAPER_METHODS", "overall",
            "summary_table", "dpf_vs_liu_west", "bot_reference_tables", "PROBLEM_CLASS", "what_to_use",
            "time_range_phrase", "below_line_sentence", "frontier_improves_phrase", "gaussian_phrase",
@@ -88,38 +92,54 @@ def pf_at_cost(r: BenchResult, target: float, axis: str = "count"):
     return (1 - w) * r.err[names[j]].to_numpy() + w * r.err[names[j + 1]].to_numpy(), "inside"
 
 
-def _decide(d, se, where, significant=None):
-    """better (True) / worse (False) / tie or undecided (None), keeping only what survives a cost mismatch.
-    ``significant``: the family-wise decision (Holm) for this comparison; None: the unadjusted 2-SE rule."""
-    holds = ordering_holds(d, se) if significant is None else ((d > 0) if significant else None)
-    if where == "below" and holds is False:   # the PF compared with cost more than the method
-        return None
-    if where == "above" and holds is True:    # the PF compared with cost less than the method
-        return None
-    return holds
-
-
-def equal_budget(r: BenchResult, name: str, axis: str = "count", significant=None) -> dict:
+def equal_budget(r: BenchResult, name: str, axis: str = "count") -> dict:
     """Method ``name`` against the baseline at the same cost on ``axis`` ("count" or "time").
 
     ``d`` = mean over runs of MSE(baseline at equal cost) - MSE(method), divided by the mean
     MSE of the reference (so d is in units of the optimum's MSE; d > 0: the method is better),
-    ``se`` its paired standard error, ``p`` its two-sided p-value, ``holds`` True/False/None (None:
-    not significant, or a conclusion the cost mismatch at the frontier's ends does not support).
-    ``significant``: the family-wise decision made by the caller (:func:`verdict_table`, Holm); None
-    decides this comparison alone (2 SE).
+    ``se`` its paired standard error, ``p`` its two-sided p-value, ``runs`` the runs behind it,
+    ``where`` where the method's cost lies on the baseline's frontier (:func:`pf_at_cost`; or
+    "diverged", "not measured"), ``margin`` the benchmark's smallest effect of interest
+    (:data:`pfrepro.experiments.synthesis.MARGIN`), ``judgement`` the book's verdict rule applied to it
+    (:func:`judge_equal_budget`) and ``holds`` True (better) / False (worse) / None (undecided).
     """
+    margin = MARGIN.get(r.bench.key, MARGIN["ung_zhang"])
     if not r.finite(name):
-        return {"d": np.nan, "se": np.nan, "p": np.nan, "holds": False, "where": "diverged", "cost": np.nan}
-    cost = _cost(r, name, axis)
-    if not np.isfinite(cost):    # not timed (time_it=False): no comparison on that axis
-        return {"d": np.nan, "se": np.nan, "p": np.nan, "holds": None, "where": "not measured", "cost": cost}
-    pf, where = pf_at_cost(r, cost, axis)
-    diff = (pf - r.err[name].to_numpy()) / r.err[r.ref].mean()
-    d, se = float(diff.mean()), float(diff.std(ddof=1) / math.sqrt(diff.size))
-    return {"d": d, "se": se, "p": p_two_sided(d, se), "holds": _decide(d, se, where, significant),
-            "where": where, "cost": cost}
+        e = {"d": np.nan, "se": np.nan, "p": np.nan, "where": "diverged", "cost": np.nan, "runs": len(r.err)}
+    else:
+        cost = _cost(r, name, axis)
+        if not np.isfinite(cost):    # not timed (time_it=False): no comparison on that axis
+            e = {"d": np.nan, "se": np.nan, "p": np.nan, "where": "not measured", "cost": cost, "runs": len(r.err)}
+        else:
+            pf, where = pf_at_cost(r, cost, axis)
+            diff = (pf - r.err[name].to_numpy()) / r.err[r.ref].mean()
+            d, se = float(diff.mean()), float(diff.std(ddof=1) / math.sqrt(diff.size))
+            e = {"d": d, "se": se, "p": p_two_sided(d, se), "where": where, "cost": cost, "runs": int(diff.size)}
+    e["margin"] = margin
+    j = judge_equal_budget(e)
+    e["judgement"] = j
+    e["holds"] = {"reproduced": True, "not reproduced": False}.get(j.verdict)
+    return e
 
+
+def judge_equal_budget(e: dict) -> Judgement:
+    """The book's verdict rule (:func:`pfrepro.claims.judge_ordering`) on one equal-budget comparison
+    ``e`` (:func:`equal_budget`'s fields ``d``, ``se``, ``runs``, ``where``, ``margin``): better
+    (*reproduced*) when shown at 2 SE, worse (*not reproduced*) when reversed, a tie only when the
+    interval lies inside ``±margin``, else too few runs (with the runs a plan needs). What the cost
+    mismatch at the frontier's ends does not support is *inconclusive* (the count does not decide): a
+    method cheaper than the cheapest baseline that loses to it, or dearer than the dearest that beats
+    it. A method that diverged loses (*not reproduced*); a comparison not measured is undecided.
+    The one rule behind the claims, the verdict tables and their words (:data:`WORDS`)."""
+    if e["where"] == "diverged":
+        return Judgement("not reproduced")
+    if e["where"] == "not measured":
+        return Judgement("inconclusive", CAUSE_COUNT)
+    j = judge_ordering(e["d"], e["se"], margin=e["margin"], runs=e["runs"])
+    if (e["where"] == "below" and j.verdict == "not reproduced") or (
+            e["where"] == "above" and j.verdict == "reproduced"):
+        return Judgement("inconclusive", CAUSE_COUNT)
+    return j
 
 
 def ranking(r: BenchResult, names=None, alpha: float = ALPHA) -> pd.DataFrame:
@@ -129,7 +149,8 @@ def ranking(r: BenchResult, names=None, alpha: float = ALPHA) -> pd.DataFrame:
     test); Holm's rule at ``alpha`` over all pairs of the benchmark decides which differences are
     significant. A method's rank is 1 + the number of methods significantly better than it, so two
     methods share a rank only if the same methods beat both; "tie" lists the methods with a lower
-    mean MSE that it is not significantly worse than. Diverged methods are listed last, unranked."""
+    mean MSE that it is not significantly worse than (no difference shown; not a tie within the
+    margin, which rankings do not test). Diverged methods are listed last, unranked."""
     dt = distance_table(r)
     names = list(dt.index) if names is None else list(names)
     ok = [n for n in names if dt.loc[n, "diverged"] == 0]
@@ -164,28 +185,25 @@ def ranking(r: BenchResult, names=None, alpha: float = ALPHA) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index("method")
 
 
-_WORD = {True: "better", False: "worse", None: "equal (tie)"}
+#: the word of an equal-budget comparison in the verdict tables, by the verdict of its claim
+WORDS = {"reproduced": "better", "not reproduced": "worse", CAUSE_TIE: "tie (within the margin)",
+         CAUSE_COUNT: "undecided (off frontier)", CAUSE_RUNS: "undecided (too few runs)"}
 
 
-def _word(e, significant=None):
-    """The verdict word of an :func:`equal_budget` result (``significant``: its family-wise decision)."""
+def _word(e) -> str:
+    """The verdict word of an :func:`equal_budget` result (its :func:`judge_equal_budget` in words)."""
     if e["where"] in ("diverged", "not measured"):
         return e["where"]
-    sig = (ordering_holds(e["d"], e["se"]) is not None) if significant is None else bool(significant)
-    if e["holds"] is None and e["where"] in ("above", "below") and sig:
-        return "undecided (off frontier)"
-    return _WORD[e["holds"]]
+    j = e["judgement"]
+    return WORDS[j.verdict] if j.verdict != "inconclusive" else WORDS[j.cause]
 
 
-def verdict_table(results, families=None, alpha: float = ALPHA, today: bool = False) -> pd.DataFrame:
+def verdict_table(results, families=None, today: bool = False) -> pd.DataFrame:
     """One row per (benchmark, method of a paper, plus UKF/ESPF baselines where given):
-    distance to the optimum and the equal-budget comparison by count and by time.
-
-    Significance is family-wise: Holm's rule at ``alpha`` over all rows' comparisons on one cost
-    axis (``p count`` / ``p time`` unadjusted, ``sig count`` / ``sig time`` the decisions).
-    ``today=False``: the book's methods without today's (the family the claims rest on, as it was
-    before today's methods were added); ``today=True``: today's methods only, their own family."""
-    rows, evals = [], []
+    distance to the reference and the equal-budget comparison by count and by time, each judged by
+    :func:`judge_equal_budget` (the claims' rule, per comparison; ``by count`` / ``by time`` its word).
+    ``today=False``: the book's methods without today's; ``today=True``: today's methods only."""
+    rows = []
     for key, r in results.items():
         dt = distance_table(r)
         for m in r.bench.methods:
@@ -196,24 +214,18 @@ def verdict_table(results, families=None, alpha: float = ALPHA, today: bool = Fa
             if families is not None and m.family not in families:
                 continue
             ec, et = equal_budget(r, m.name, "count"), equal_budget(r, m.name, "time")
-            evals.append((r, m.name))
             rows.append({"benchmark": key, "method": m.name, "paper": m.paper or "",
                          "MSE / opt.": dt.loc[m.name, "MSE / opt."], "SE": dt.loc[m.name, "SE"],
                          "d count": ec["d"], "se count": ec["se"], "p count": ec["p"], "where count": ec["where"],
-                         "d time": et["d"], "se time": et["se"], "p time": et["p"], "where time": et["where"]})
+                         "runs": ec["runs"], "margin": ec["margin"],
+                         "by count": _word(ec), "holds count": ec["holds"],
+                         "d time": et["d"], "se time": et["se"], "p time": et["p"], "where time": et["where"],
+                         "by time": _word(et), "holds time": et["holds"]})
     vt = pd.DataFrame(rows)
     if vt.empty:
         return vt
     for ax in ("count", "time"):
-        sig = holm(vt[f"p {ax}"].to_numpy(float), alpha)
-        vt[f"sig {ax}"] = sig
-        words, holds = [], []
-        for (r, name), s_ in zip(evals, sig):
-            e = equal_budget(r, name, ax, significant=bool(s_))
-            words.append(_word(e, bool(s_)))
-            holds.append(e["holds"])
-        vt[f"by {ax}"] = words
-        vt[f"holds {ax}"] = pd.Series(holds, dtype=object).to_numpy()
+        vt[f"holds {ax}"] = pd.Series(list(vt[f"holds {ax}"]), dtype=object).to_numpy()
     vt["z count"] = vt["d count"] / vt["se count"]
     return vt
 
@@ -221,8 +233,8 @@ def verdict_table(results, families=None, alpha: float = ALPHA, today: bool = Fa
 def dpf_vs_liu_west(r: BenchResult, n: int = 500) -> dict:
     """The DPF(n+n) against Liu-West on ``theta_hou`` under the two tests the book uses.
 
-    ``synthesis``: θ-MSE per run, Liu-West interpolated at the DPF's model-evaluation count, Holm
-    over the chapter's family (the verdict table); ``dpf_chapter``: the DPF chapter's test on these
+    ``synthesis``: θ-MSE per run, Liu-West interpolated at the DPF's model-evaluation count, the
+    book's rule with the margin (the verdict table); ``dpf_chapter``: the DPF chapter's test on these
     runs -- Liu-West(n) against DPF(n+n) at equal *likelihood* count (2n each), per-run θ RMSE,
     paired difference Liu-West - DPF (negative: Liu-West better) with a 2-SE rule; ``mse_same_pair``:
     the same pair on θ-MSE. Each entry is (d, se, z)."""
@@ -259,36 +271,53 @@ def _cid(benchmark: str, method: str) -> str:
 LI_CLAIM = "ung_li-pf-beats-ekf"
 
 
-def _note(row) -> str:
-    if not np.isfinite(row["MSE / opt."]):
-        return "diverged in every run"
+def _note(row, results=None) -> str:
+    if row["where count"] == "diverged":
+        r = None if results is None else results[row["benchmark"]]
+        n = "" if r is None else f" in {r.diverged(row['method'])} of {len(r.err)} runs"
+        return f"diverged{n}: worse than the baseline"
     # no wall time here: claims must be identical between two builds (the equal-time comparison is
-    # in the chapter's verdict table, as context)
-    return (f"MSE/reference {row['MSE / opt.']:.3g} ± {row['SE']:.2g}; baseline − method at equal count "
-            f"{row['d count']:.3g} ± {row['se count']:.2g}, z = {row['d count'] / row['se count']:.2f} "
-            f"({row['by count']}; Holm, family-wise α = {ALPHA:g}), in units of the reference MSE")
+    # in the chapter's verdict table, as context); the paired difference is in the test column
+    out = (f"MSE/reference {row['MSE / opt.']:.3g} ± {row['SE']:.2g}; baseline − method at equal count in units of "
+           f"the reference MSE ({row['by count']}; cost {row['where count']} the baseline's range")
+    if row["by count"] == WORDS[CAUSE_COUNT]:
+        out += f"; {row['d count']:.3g} ± {row['se count']:.2g}, z = {row['z count']:.2f}"
+    return out + ")"
 
 
 def claim_rows(vt: pd.DataFrame) -> pd.DataFrame:
     """The rows of the verdict table (:func:`verdict_table`) that are claims: the papers' methods,
-    except the centred bearings-only reading (a reading of the offset row's claim, not a claim)."""
+    except on the centred bearings-only start (context: the paper excludes it, not a claim)."""
     if vt.empty:
         return vt
     return vt[(vt["paper"] != "") & (vt["benchmark"] != BOT_READINGS["centred"])]
+
+
+def _claim_kwargs(e: dict) -> dict:
+    """The verdict inputs of one equal-budget claim: the paired difference with its runs and margin, or
+    a statement where no difference decides (diverged: worse; off frontier: the count does not decide)."""
+    if e["where"] == "diverged":
+        return dict(qualitative=False)
+    j = e["judgement"]
+    if j.verdict == "inconclusive" and j.cause == CAUSE_COUNT:
+        return dict(qualitative=None)
+    return dict(diff=e["d"], diff_se=e["se"], runs=e["runs"], margin=e["margin"])
 
 
 def record_claims(reg: ClaimsRegistry, results) -> ClaimsRegistry:
     """Record the synthesis's claims in ``reg`` and return it.
 
     Per paper's method and benchmark, the implicit claim "<method> beats the baseline" re-tested
-    at equal budget. The verdict rests on the equal-count comparison (model evaluations, exact and
-    load-independent), significance family-wise (Holm, :func:`verdict_table`): better ->
-    reproduced, worse -> not reproduced, a tie or a conclusion the frontier's range does not
-    support -> inconclusive. On bearings-only the claim depends on the free choice ``bot_prior``
-    and is decided under both readings (the centred reading's row of the same method, when
-    ``results`` has it): it holds only if it holds under both. The equal-wall-time comparison
-    moves with the machine's load: it is context in the chapter's tables, never in a claim.
-    Plus Li 2012's "PF beats EKF" (Li 2012, sec 3, model 1: at the paper's N, not at equal cost).
+    at equal model-evaluation count (exact and load-independent), judged by
+    :func:`judge_equal_budget` (the book's rule with the benchmark's margin): better -> reproduced,
+    worse or diverged -> not reproduced, a tie inside the margin, too few runs (with the runs a plan
+    needs) or a conclusion the frontier's range does not support -> inconclusive with that cause. On
+    bearings-only the claim is decided on the paper's offset start; the centred start's difference is
+    passed as a reading and ``excluded`` with the paper's lines (shown, not counted). The
+    equal-wall-time comparison moves with the machine's load: it is context in the chapter's tables,
+    never in a claim. Plus Li 2012's "PF beats EKF" (model 1, at the paper's N, not at equal cost),
+    judged by the Li chapter's :func:`~pfrepro.verdicts.ekf_pf_li2012.pf_beats_ekf` with its printed
+    effect.
 
     Parameters
     ----------
@@ -304,33 +333,32 @@ def record_claims(reg: ClaimsRegistry, results) -> ClaimsRegistry:
         ``reg``, with the claims added in the chapter's order.
     """
     vt = verdict_table(results)
-    readings_of = {v: k for k, v in BOT_READINGS.items()}
+    centred = BOT_READINGS["centred"]
     for _, row in claim_rows(vt).iterrows():
-        text = f"{CLAIM_TEXT[row['paper']]} at equal budget ({row['method']}, {row['benchmark']})"
-        hc = row["holds count"]
-        note = _note(row)
-        kw = dict(qualitative=None if hc is None else bool(hc))
-        if row["benchmark"] in readings_of:
-            other = vt[(vt["benchmark"] == BOT_READINGS["centred"]) & (vt["method"] == row["method"])]
-            if not other.empty:
-                oc = other.iloc[0]["holds count"]
-                kw = dict(readings=over("bot_prior", {"offset": None if hc is None else bool(hc),
-                                                      "centred": None if oc is None else bool(oc)}),
-                          depends_on=["bot_prior"])
-                note += (f"; centred prior (m0 = x0, {len(results[BOT_READINGS['centred']].err)} runs): "
-                         + _note(other.iloc[0]).split("; ", 1)[1])
-        reg.add(_cid(row["benchmark"], row["method"]), text, basis="count",
-                source=f"{row['paper']}; benchmark {row['benchmark']}", note=note, **kw)
+        bench, method = row["benchmark"], row["method"]
+        text = f"{CLAIM_TEXT[row['paper']]} at equal model-evaluation count ({method}, {bench})"
+        e = equal_budget(results[bench], method, "count")
+        kw = _claim_kwargs(e)
+        note = _note(row, results)
+        if bench == BOT_READINGS["offset"] and centred in results and "diff" in kw:
+            ec = equal_budget(results[centred], method, "count")
+            if np.isfinite(ec["d"]):
+                kw.update(reading_diffs=over("bot_prior", {"offset": (e["d"], e["se"], e["runs"]),
+                                                           "centred": (ec["d"], ec["se"], ec["runs"])}),
+                          excluded={"bot_prior=centred": BOT_CENTRED_EXCLUDED}, depends_on=["bot_prior"])
+            note += f"; centred start (context, not counted): {_word(ec)}"
+        reg.add(_cid(bench, method), text, basis="count", source=f"{row['paper']}; benchmark {bench}", note=note,
+                **kw)
     if "ung_li" in results:
         r = results["ung_li"]
         pf = f"PF({max(PF_N['ung_li'])})"
-        dd = (r.err["EKF"] - r.err[pf]).to_numpy() / r.err[r.ref].mean()
+        kw = pf_beats_ekf(np.sqrt(r.err["EKF"].to_numpy()), np.sqrt(r.err[pf].to_numpy()), which=1)
         reg.add(LI_CLAIM, f"Li 2012: the bootstrap PF is better than the EKF ({pf} vs EKF, model 1)",
-                diff=float(dd.mean()), diff_se=float(dd.std(ddof=1) / math.sqrt(dd.size)),
-                source="ekf_pf_li2012; benchmark ung_li",
-                note=f"paired MSE EKF − {pf} in units of the exact MSE; at the paper's N, not at equal cost "
-                     f"(EKF {r.counts.loc['EKF', 'model evals / step']:.0f} model evaluations per step); "
-                     f"one comparison, 2-SE rule")
+                source="ekf_pf_li2012 (l.181, Table 1); benchmark ung_li", **kw,
+                note=f"per-run RMSE EKF − {pf} on this chapter's runs, judged by the Li chapter's function "
+                     f"(pfrepro.verdicts.ekf_pf_li2012.pf_beats_ekf, printed effect: Table 1's EKF − PF, model 1); "
+                     f"at the paper's N, not at equal cost (EKF {r.counts.loc['EKF', 'model evals / step']:.0f} "
+                     f"model evaluations per step)")
     return reg
 
 
@@ -391,7 +419,7 @@ PROBLEM_CLASS = {"ung_zhang": "scalar, strongly nonlinear (UNGM, Q = R = 1)",
                  "ung_li": "scalar, strongly nonlinear (UNGM, Q = 10)",
                  "ung_ning": "scalar, strongly nonlinear (UNGM, σ_w² = 1)",
                  "bot": "bearings-only, prior offset from the truth",
-                 "bot_centred": "bearings-only, prior centred (reading)",
+                 "bot_centred": "bearings-only, prior centred (context: not the paper's start)",
                  "theta_hou": "unknown static parameter",
                  "imm_zhou": "manoeuvring target"}
 
@@ -399,8 +427,8 @@ PROBLEM_CLASS = {"ung_zhang": "scalar, strongly nonlinear (UNGM, Q = R = 1)",
 def what_to_use(results: dict, alpha: float = ALPHA) -> pd.DataFrame:
     """Per benchmark, the method that reaches the best accuracy shown at the least cost: among the methods
     of rank 1 of :func:`ranking` (none shown better, Holm over all pairs), the one with the fewest model
-    evaluations per step. With it: its MSE / reference, its count, the other rank-1 methods (all tied
-    with it), the best paper's method and the best of today's methods with their ranks."""
+    evaluations per step. With it: its MSE / reference, its count, the other rank-1 methods (none shown
+    different from it), the best paper's method and the best of today's methods with their ranks."""
     rows = []
     for key, r in results.items():
         rk = ranking(r, alpha=alpha)
@@ -426,34 +454,74 @@ PAPER_METHODS = (("gpff_zhang2016", "GPFF (Zhang et al. 2016)"), ("cmspf_ning201
                  ("dpf_hou2008", "DPF (Hou & Yin 2008)"), ("immpfor_zhou2017", "IMMPFOR (Zhou et al. 2017)"))
 
 
+_UNDECIDED = (WORDS[CAUSE_TIE], WORDS[CAUSE_COUNT], WORDS[CAUSE_RUNS], "not measured")
+
+
 def overall(vt: pd.DataFrame, paper: str) -> str:
-    """One phrase for a paper's method over all its benchmarks and readings, from its equal-count
-    words in the verdict table ``vt`` (the verdicts rest on the count; the time reading is context)."""
-    sub = vt[vt["paper"] == paper] if not vt.empty else vt
+    """One phrase for a paper's method over all its benchmarks (the centred bearings-only start, context,
+    left out), from its equal-count words in the verdict table ``vt`` (the verdicts rest on the count;
+    the time reading is context)."""
+    sub = vt[(vt["paper"] == paper) & (vt["benchmark"] != BOT_READINGS["centred"])] if not vt.empty else vt
     words = set(sub["by count"]) if not sub.empty else set()
     if not words:
         return "not run"
-    if words <= {"worse", "diverged"}:
+    lost = {"worse", "diverged"}
+    if words <= lost:
         return "worse than the baseline at equal budget wherever it ran"
-    if words <= {"better"}:
+    if words == {"better"}:
         return "better than the baseline at equal budget wherever it ran"
-    if words <= {"equal (tie)"}:
-        return "no difference from the baseline shown at equal budget (ties) wherever it ran"
-    return "better on some benchmarks or readings and not on others"
+    if words == {WORDS[CAUSE_TIE]}:
+        return "a tie with the baseline within the margin wherever it ran"
+    if "better" in words:
+        return "better on some benchmarks and not on others"
+    if words & lost:
+        return "never shown better: worse on some benchmarks, undecided on the others"
+    return "undecided wherever it ran: " + ", ".join(sorted(w.replace("undecided ", "").strip("()") for w in words))
 
 
 def summary_table(results) -> pd.DataFrame:
-    """Per paper's method: :func:`overall`'s phrase and how many of its comparisons (all benchmarks and
-    readings) gave each equal-count word, one column per word, from the same verdict table."""
+    """Per paper's method: :func:`overall`'s phrase and how many of its comparisons (all benchmarks; the
+    centred bearings-only start, context, left out) gave each equal-count word, one column per word."""
     vt = verdict_table(results)
+    vt = vt[vt["benchmark"] != BOT_READINGS["centred"]]
     seen = set(vt.loc[vt["paper"].isin([p for p, _ in PAPER_METHODS]), "by count"])
-    words = [w for w in ("better", "equal (tie)", "worse", "diverged") if w in seen] + sorted(
-        seen - {"better", "equal (tie)", "worse", "diverged"})
+    order = ["better", WORDS[CAUSE_TIE], WORDS[CAUSE_RUNS], WORDS[CAUSE_COUNT], "worse", "diverged"]
+    words = [w for w in order if w in seen] + sorted(seen - set(order))
     out = pd.DataFrame([{"method (paper)": name, "at equal count": overall(vt, p),
                          **{w: int((vt.loc[vt["paper"] == p, "by count"] == w).sum()) for w in words},
                          "comparisons": int((vt["paper"] == p).sum())} for p, name in PAPER_METHODS])
     assert all(out[words].sum(axis=1) == out["comparisons"])
     return out
+
+
+def plan_table(results) -> pd.DataFrame:
+    """The power plan of every equal-budget claim (and Li 2012's): the runs behind it, the per-run spread of
+    its paired difference (the main reading's own), the size the plan resolves (the benchmark's margin; the
+    printed effect for Li 2012) and the runs 80 % power at ``|z| > 2`` needs (:func:`pfrepro.stats.plan_runs`).
+    The runs are fixed before any run (:data:`pfrepro.experiments.synthesis.RUNS`); a claim left undecided
+    reports the runs its plan needs (``runs_needed``), no run is added after an outcome. ``at these runs``:
+    the comparison's word (the Li claim's verdict) on the runs it has."""
+    vt = claim_rows(verdict_table(results))
+    rows = []
+    for _, row in vt.iterrows():
+        if not np.isfinite(row["se count"]):
+            continue
+        sd = float(row["se count"]) * math.sqrt(int(row["runs"]))
+        rows.append({"claim": _cid(row["benchmark"], row["method"]), "runs": int(row["runs"]),
+                     "sd per run": sd, "size resolved": f"margin {row['margin']:g}",
+                     "runs the plan needs": plan_runs(sd, float(row["margin"]), z=Z_CRIT),
+                     "at these runs": row["by count"]})
+    if "ung_li" in results:
+        r = results["ung_li"]
+        pf = f"PF({max(PF_N['ung_li'])})"
+        kw = pf_beats_ekf(np.sqrt(r.err["EKF"].to_numpy()), np.sqrt(r.err[pf].to_numpy()), which=1)
+        sd = kw["diff_se"] * math.sqrt(kw["runs"])
+        rows.append({"claim": LI_CLAIM, "runs": kw["runs"], "sd per run": sd,
+                     "size resolved": f"printed effect {kw['effect']:.4g}",
+                     "runs the plan needs": plan_runs(sd, kw["effect"], z=Z_CRIT),
+                     "at these runs": judge(diff=kw["diff"], diff_se=kw["diff_se"], effect=kw["effect"],
+                                            runs=kw["runs"]).verdict})
+    return pd.DataFrame(rows)
 
 
 # ---------------------------------------------------------------------------------- the takeaway
@@ -498,12 +566,19 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
     if not eq:
         first = "No paper's method was compared with the plain baseline at equal cost"
     elif not better:
+        und = [c for c in eq if c.verdict == "inconclusive"]
+        ties = sum(c.cause == CAUSE_TIE for c in und)
+        why = ("ties within the margin" if ties == len(und) else
+               "need more runs or lie off the baseline's range of costs" if ties == 0 else
+               f"{ties} tie within the margin, {len(und) - ties} need more runs or lie off the baseline's range")
         rest = ("the one comparison finds the paper's method worse" if worse == n == 1 else
                 f"all {n} comparisons find the paper's method worse" if worse == n else
                 "the one comparison does not decide" if n == 1 else
-                f"none of the {n} comparisons decides either way" if worse == 0 else
-                f"{worse} of the {n} comparisons find the paper's method worse, the other {n - worse} do not decide")
-        first = f"No method proposed in the papers is better than {base} at the same number of model evaluations: {rest}"
+                f"none of the {n} comparisons decides either way ({why})" if worse == 0 else
+                f"{worse} of the {n} comparisons find the paper's method worse, the other {n - worse} do not "
+                f"decide ({why})")
+        first = (f"No method proposed in the papers is better than {base} at the same number of model "
+                 f"evaluations: {rest}")
     elif len(better) == n:
         first = f"Every method proposed in the papers is better than {base} at the same number of model evaluations"
     else:
@@ -621,7 +696,8 @@ def _results_prose(results, vt: pd.DataFrame) -> dict:
         row = _row(vt, k, "GPFF eq41 unif.")
         out[f"syn_gpff_z{suf}"] = row["z count"]
         out[f"syn_gpff_word{suf}"] = Md(row["by count"])
-    out["syn_n_family"] = int(vt["p count"].notna().sum())
+    out["syn_n_family"] = int(vt["d count"].notna().sum())
+    out["syn_margin"] = MARGIN["ung_zhang"]
     # the DPF chapter's sec 5.1 size: Liu-West(n) against DPF(n+n), 2n likelihoods each
     n = 500
     assert n in S.LW_N and n in S.DPF_N
@@ -709,12 +785,12 @@ def time_agrees_phrase(vt: pd.DataFrame) -> Md:
 
 
 def _today_prose(results) -> dict:
-    """The numbers and words of the section on today's methods (their own Holm family)."""
+    """The numbers and words of the section on today's methods (the same rule per comparison)."""
     ratio = lambda k, n: _ratio_of(results, k, n)     # noqa: E731
     cnt = lambda k, n: _count_of(results, k, n)       # noqa: E731
     vt = verdict_table(results, today=True)
     N, imm_n = S.TODAY_N, S.IMM.SCENARIO["N"]
-    out = {"syn_n_family_today": int(vt["p count"].notna().sum())}
+    out = {"syn_n_family_today": int(vt["d count"].notna().sum())}
     words = vt["by count"].value_counts()
     out["syn_today_words"] = Md(", ".join(f"{w} in {plural(int(c), 'comparison')}" for w, c in words.items()))
     for k in _SCALAR + ("bot", "bot_centred"):
