@@ -422,27 +422,29 @@ def fig1_flowchart(checks: pd.DataFrame):
     from matplotlib.patches import FancyBboxPatch
 
     order = list(checks.index)
-    fig, ax = plt.subplots(figsize=(7.2, 0.78 * len(order) + 0.6))
-    ax.set_xlim(0, 10)
+    # every text at the book's 8 pt minimum (MIN_FONT_PT): taller boxes, the resampling branch in a
+    # left margin of its own
+    fig, ax = plt.subplots(figsize=(9.6, 0.95 * len(order) + 0.6))
+    ax.set_xlim(-2.3, 11.3)
     ax.set_ylim(-0.6, len(order) * 1.0 + 0.1)
     ax.axis("off")
     ys = {s: len(order) - 1 - i + 0.4 for i, s in enumerate(order)}
     for s in order:
         ok = bool(checks.loc[s, "passes"])
         y = ys[s]
-        ax.add_patch(FancyBboxPatch((0.6, y - 0.3), 7.6, 0.6, boxstyle="round,pad=0.02",
+        ax.add_patch(FancyBboxPatch((0.0, y - 0.36), 9.4, 0.72, boxstyle="round,pad=0.02",
                                     fc="#e3f2e3" if ok else "#f8d7d7", ec="#2e7d32" if ok else "#c62828", lw=1))
-        ax.text(0.75, y + 0.08, f"{s}  ({checks.loc[s, 'line']})", fontsize=7.5, weight="bold", va="center")
-        ax.text(0.75, y - 0.14, str(checks.loc[s, "paper"]), fontsize=7, va="center")
-        ax.text(8.05, y, "✓" if ok else "✗", fontsize=11, color="#2e7d32" if ok else "#c62828", va="center", ha="right")
+        ax.text(0.15, y + 0.13, f"{s}  ({checks.loc[s, 'line']})", fontsize=8, weight="bold", va="center")
+        ax.text(0.15, y - 0.16, str(checks.loc[s, "paper"]), fontsize=8, va="center")
+        ax.text(9.3, y, "✓" if ok else "✗", fontsize=11, color="#2e7d32" if ok else "#c62828", va="center", ha="right")
     for a, b in zip(order[:-1], order[1:]):
-        ax.annotate("", xy=(4.4, ys[b] + 0.31), xytext=(4.4, ys[a] - 0.31),
+        ax.annotate("", xy=(4.1, ys[b] + 0.37), xytext=(4.1, ys[a] - 0.37),
                     arrowprops=dict(arrowstyle="->", lw=0.9))
     if "Step 2.1" in ys and order[-1] in ys:      # Step 5: k = k + 1, back to Step 2
-        ax.annotate("", xy=(8.2, ys["Step 2.1"]), xytext=(8.2, ys[order[-1]]),
+        ax.annotate("", xy=(9.4, ys["Step 2.1"]), xytext=(9.4, ys[order[-1]]),
                     arrowprops=dict(arrowstyle="->", lw=0.9, connectionstyle="arc3,rad=0.45"))
-        ax.text(9.55, (ys["Step 2.1"] + ys[order[-1]]) / 2, "Step 5:\nk ← k + 1", fontsize=7, ha="center", va="center")
+        ax.text(10.6, (ys["Step 2.1"] + ys[order[-1]]) / 2, "Step 5:\nk ← k + 1", fontsize=8, ha="center", va="center")
     if "Step 3" in ys:
-        ax.text(0.45, ys["Step 3"], "N_eff < N_th?\nyes: resample", fontsize=6, ha="right", va="center")
+        ax.text(-0.15, ys["Step 3"], "N_eff < N_th?\nyes: resample", fontsize=8, ha="right", va="center")
     ax.set_title("Fig. 1 (CMS-PF flow), redrawn from sec 2.2; each step checked on our filter", fontsize=8)
     return fig
