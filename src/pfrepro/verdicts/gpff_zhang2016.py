@@ -12,8 +12,15 @@
   GPFF(100), UKF better than EKF, the PF's y error, GPFF stable, GPFF converges faster) and the
   cost of GPFF(100) against PF(500).
 
-Every ordering is a paired difference over the same runs (:mod:`pfrepro.stats`), decided under
-each reading of the free choices it rests on (``CHOICES`` of the experiments module). The
+Every ordering is a paired difference over the same runs (:mod:`pfrepro.stats`), judged under each
+admissible reading of the free choices it rests on (``CHOICES`` of the experiments module;
+``reading_diffs``) by the book's rule (:func:`pfrepro.claims.judge_ordering`): against the effect the
+paper printed where it printed both sides (each pair in units of its printed effect, the worst pair
+deciding, :func:`worst_pair`), else against a smallest effect of interest stated up front
+(:data:`MARGIN_REL`, :data:`CONV_MARGIN`). The UT setting the paper's Table 1 excludes
+(:data:`EXCLUDED_UT`) is shown and not counted. :func:`power_plans` gives each sized claim's plan, and
+:func:`items_table` the statements judged for the first time in issue 31 (sec 1, l.37; sec 2, l.83;
+sec 3.1, l.143; sec 5.3, l.398 and l.404). The
 module also gives the chapter's findings (:data:`MAIN_CLAIMS`, :func:`takeaway`) and every
 value the chapter glues (:func:`prose`).
 """
@@ -573,6 +580,7 @@ def _record_bot(reg, results):
             row = t2.loc[(c, f)]
             heavy = _heavy(pc[f][:, bot.j[c]])
             reg.add(f"t2_{c}_{f}", f"Table 2: time-averaged MSE of {c} for {f} on BOT over 100 runs",
+                    excluded={k: excluded_ut_reason(results) for k in rv if k == EXCLUDED_UT} or None,
                     published=float(row["published mean"]),
                     published_text=published.printed(PAPER, "Table 2", f"{row['published (printed label)']} mean", f),
                     reproduced=float(row["MSE mean"]), se=float(row["SE"]),
@@ -606,12 +614,13 @@ def _record_bot(reg, results):
         "one), larger than EKF/UKF/GPFF", bot.pf_y, _ALL5, "sec 5.3, l.402, Fig. 5",
         "paired y-MSE differences PF(500) − EKF/UKF/GPFF(100), " + unit, **one)
     sp = bot.stable_pairs()
+    unclaimed = "; ".join(f"{f} in {c}" for f in bot.others for c in E.COMPONENTS if (f, c) not in sp)
     add("bot_gpff_stable", "Sec 5.3: GPFF keeps a stable performance in all simulations (no divergence; a smaller "
         "spread over runs than every filter whose printed spread in Table 2 is larger)", bot.stable, _ALL5[:4],
         "sec 5.3, l.404, l.406, Table 2",
         f"no diverged GPFF run, and std(other) − std(GPFF(100)) of the per-run MSE for the {len(sp)} (filter, component) "
-        "pairs whose printed std exceeds GPFF's (the paper's own table prints GPFF's spread above EKF, UKF and "
-        f"PF(4000) in x), paired bootstrap SE ({E.BOOT} resamples), " + unit, **one)
+        f"pairs whose printed std exceeds GPFF's (Table 2 prints GPFF's spread above {unclaimed}: not claimed), "
+        f"paired bootstrap SE ({E.BOOT} resamples), " + unit, **one)
     add("bot_pf_worse_than_ekf", "Sec 5.3 (l.404): with the paper's non-ideal start the PF's average performance "
         "is even worse than the EKF's", bot.pf_worse_than_ekf, ("pf_resampling", "statistic"), "sec 5.3, l.404, Table 2",
         "paired eq (56) MSE (mean over the 4 components) PF(500) − EKF; printed effect from Table 2's means", **one)
@@ -1119,6 +1128,8 @@ def _prose_bot(results) -> dict:
         "pub_pf500_row2": published.value(PAPER, "Table 2", "xdot mean", "PF(500)"),
         "pub_pf500_row3": published.value(PAPER, "Table 2", "y mean", "PF(500)"),
         "bot_stable_weakest": Md(f"{weak[0]} in {_LAB[weak[1]]}"),
+        "bot_stable_unclaimed": Md(", ".join(f"{f} in {_LAB[c]}" for f in bot.others for c in E.COMPONENTS
+                                             if (f, c) not in bot.stable_pairs())),
         "conv_band": E.CONV_BANDS[0], "conv_diff": d, "conv_se": se,
         "conv_gpff_med": conv_tab.loc[_G, "median convergence step"],
         "conv_ukf_med": conv_tab.loc["UKF", "median convergence step"],
@@ -1254,10 +1265,20 @@ def _prose_v3(reg, results) -> dict:
         ps = (f"Every plan is met: the largest asks for {int(plans['runs planned'].max())} runs, and every reading runs "
               f"the paper's {int(plans['runs per reading'].min())}.")
     else:
-        ps = (f"{len(short)} of {len(plans)} plans {'is' if len(short) == 1 else 'are'} not met by the paper's {int(plans['runs per reading'].min())} runs ("
-              + ", ".join(f"`{c}`: {int(r['runs planned'])}" for c, r in short.iterrows())
-              + "); a reading left undecided there says *too few runs* with the runs that would decide it, which "
-              f"`pfrepro run {PAPER} --runs R` gets.")
+        cl = {c.claim_id: c for c in reg.claims}
+        parts = []
+        for cid, r in short.iterrows():
+            c = cl[cid]
+            und = c.judgement.under("undecided")
+            what = (f"left *{c.verdict_text()}*" if und else
+                    "decided anyway: every admissible reading is already beyond 2 SE or a tie")
+            parts.append(f"`{cid}` (plan {int(r['runs planned'])}; {what})")
+        ps = (f"{len(short)} of {len(plans)} plans {'is' if len(short) == 1 else 'are'} not met by the paper's "
+              f"{int(plans['runs per reading'].min())} runs: " + "; ".join(parts) + ". A plan resolves the stated "
+              "size; an effect much larger than it, or an interval already excluding it, is decided on fewer runs. "
+              f"The runs a plan asks for are what `pfrepro run {PAPER} --runs R` would take; the per-run spreads "
+              "behind the large plans are heavy-tailed PF errors, where the median reading (`statistic=median`) "
+              "is the steadier measure.")
     fr = reg.to_frame()
     inc = fr[fr.verdict == "inconclusive"]
     if inc.empty:
