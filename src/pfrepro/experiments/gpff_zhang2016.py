@@ -771,7 +771,7 @@ def reading_filters(which: str) -> dict:
         for sch in PF_SCHEMES:
             lab = PF_START_X0 if sch == "systematic" else f"{PF_START_X0}, pf_resampling={sch}"
             out[lab] = (BootstrapParticleFilter(model, 500, m0=model.x0, **PF_SCHEMES[sch]),
-                        {"start": "x0", "pf_resampling": sch})
+                        {"pf_resampling": sch})           # the start is the comparison, not a choice
     elif which in ("cwpa_gaussian", "cwpa_mixture"):
         model = CWPA.zhang2016(which.split("_")[1])
         for meth in INTEGRATORS[1:]:
