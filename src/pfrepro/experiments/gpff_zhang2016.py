@@ -709,7 +709,7 @@ CHOICES = [
                "P_0|0 is printed as the vector (25, 25, 1, 1)^T; a covariance, so its diagonal (errata).",
                "sec 5.3, l.392"),
     FreeChoice("mse_std", "sample std, ddof = 1", DESIGN,
-               "Ours: the text says variance (方差, l.358, l.366), the table headers standard deviation (标准差); the "
+               "Ours: the text says variance (方差, l.359, l.366), the table headers standard deviation (标准差); the "
                "magnitudes fit a standard deviation, and ddof = 1 is our choice (ddof = 0 scales every spread by "
                "0.995, which moves no verdict). Our uncertainty column is the standard error of the mean.",
                "Tables 1-2, l.366, l.414"),
