@@ -245,3 +245,27 @@ def test_cmspf_table2_shows_the_printed_seconds_beside_the_ratios():
     cols = list(tab.columns)
     assert cols.index("time/s paper (printed)") + 1 == cols.index("time ratio to PF, paper")
     assert tab.loc["CMS-PF", "time/s paper (printed)"] == "0.1110" and tab.loc["EKF", "time/s paper (printed)"] == "0.0044"
+
+
+# ------------------------------------------------------------------ GPFF: every other table with a published value
+def test_gpff_reading_table_shows_printed_digits():
+    """The GPFF chapter's table of which reading the published numbers point to (``reading_table``) shows
+    every published mean it holds with the paper's digits (29.00, 28.50, 1.280; never 29, 28.5, 1.28)."""
+    from pfrepro.verdicts import gpff_zhang2016 as V
+
+    paper = "gpff_zhang2016"
+    data = published.load_printed(paper)
+    cells = data[data["column"].str.endswith("mean") | data["row"].str.endswith("mean")]
+    cells = cells[cells["table"].isin(["Table 1", "Table 2"])]
+    reg = ClaimsRegistry(paper)
+    want = {}
+    for i, (tab, row, col) in enumerate(zip(cells["table"], cells["row"], cells["column"])):
+        text = published.printed(paper, tab, row, col)
+        v = published.value(paper, tab, row, col)
+        reg.add(f"c{i}", f"{tab} {row} {col}", published=v, published_text=text, reproduced=v, se=0.01 * v,
+                reading_values={"ut=alpha=0.5": (v, 0.01 * v)})
+        want[f"c{i}"] = text
+    shown = V.reading_table(reg)["published"].to_dict()
+    assert shown == want
+    assert {"29.00", "28.50", "1.280"} <= set(shown.values())
+    assert len(want) == 8 + 24      # Table 1's eight means and Table 2's 24
