@@ -129,6 +129,10 @@ def test_combine_readings():
     assert (j.verdict, j.cause, j.runs_needed) == ("inconclusive", CAUSE_RUNS, 300)
     assert combine_readings({"a": _j("inconclusive", CAUSE_TIE)}).cause == CAUSE_TIE
     assert combine_readings({"a": _j(R), "b": _j("inconclusive", CAUSE_TIE)}).cause == CAUSE_READING
+    # fails under one reading, a tie under the other: it holds under none
+    assert combine_readings({"a": _j(N), "b": _j("inconclusive", CAUSE_TIE)}).verdict == N
+    j = combine_readings({"a": _j(N), "b": _j("inconclusive", CAUSE_TIE), "c": _j("inconclusive", CAUSE_RUNS)})
+    assert (j.verdict, j.cause) == ("inconclusive", CAUSE_RUNS)  # the undecided reading could still hold
 
 
 def test_excluded_readings_are_shown_not_counted():

@@ -279,8 +279,9 @@ def combine_readings(per_reading: dict) -> Judgement:
     * the same verdict (and cause) under every reading -> that verdict;
     * the direction shown under every reading, the printed size under some only -> *qualitatively
       reproduced* (the strongest statement true under every reading);
-    * the decided readings disagree (holds under some, fails or ties under others) -> *inconclusive*,
-      cause *depends on the reading* (:meth:`Judgement.under` names which);
+    * fails under some readings and ties under the others -> *not reproduced* (it holds under none);
+    * the decided readings disagree otherwise (holds under some, fails or ties under others) ->
+      *inconclusive*, cause *depends on the reading* (:meth:`Judgement.under` names which);
     * the decided readings agree and some reading is undecided -> *inconclusive*, cause *too few runs*
       (``runs_needed``: the most any undecided reading needs), or the undecided reading's own cause.
     """
@@ -298,6 +299,12 @@ def combine_readings(per_reading: dict) -> Judgement:
 
     kinds = [kind(j) for j in js]
     decided = {k for k in kinds if k != "undecided"}
+    if decided == {"fails", "ties"}:
+        # fails under some readings, no effect that matters under the others: it holds under none
+        # (unless an undecided reading could still show it: too few runs, below)
+        decided = {"fails"}
+        if "undecided" not in kinds:
+            return Judgement("not reproduced", "", None, rows)
     if len(decided) > 1:
         return Judgement("inconclusive", CAUSE_READING, None, rows)
     if "undecided" in kinds:
