@@ -170,7 +170,7 @@ def tables(results) -> dict:
     """The paper's tables from :func:`pfrepro.experiments.immpfor_zhou2017.run_all`'s results: Table 1
     (:func:`table1_frame`, the mean-likelihood rows named with their run count)."""
     tab1 = table1_frame(results.main, results.lik_pair, seed=results.seeds["checks"])
-    n_lik = results.counts["runs_lik"]
+    n_lik = results.reading_runs["lik=mean"]
     return {"Table 1": tab1.rename(index={n: f"{n}, {n_lik} runs" for n in EXTRA_ROWS[:2]})}
 
 
