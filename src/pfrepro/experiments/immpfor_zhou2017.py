@@ -49,7 +49,7 @@ __all__ = ["PAPER", "SCENARIO", "ALTERNATIVES", "SEEDS", "scenario", "truth_syst
            "SCENARIO_TAGS", "run_counts", "main_tag", "d_tags", "variant_tags", "ablation_steps", "own_name",
            "Zhou2017Results", "run_all", "today_given", "rel_paired", "rel_runs", "printed_effects", "MARGIN_REL",
            "MARGIN_DISTINCT", "plan", "turn_mask", "turn_vs_straight", "peak_rmse", "rel_unpaired",
-           "mismatched_distance", "distinct_fraction", "frequent"]
+           "mismatched_distance", "distinct_fraction", "frequent", "plan_choices"]
 
 #: key of this paper in ``pfrepro.published`` and the claims registry
 PAPER = "immpfor_zhou2017"
@@ -1035,6 +1035,18 @@ def _scenario_row(change, run_: Run, fav: Run, seed: int) -> dict:
             "fav": robustness(fav, "IMMPF", "IMMPFOR fav", seed=seed),
             "gain_rel": rel_runs(run_, "IMMPF", "IMMPFOR") + (int(run_.sim.y.shape[0]),),
             "fav_rel": rel_runs(fav, "IMMPF", "IMMPFOR fav") + (int(fav.sim.y.shape[0]),)}
+
+
+def plan_choices(results) -> list:
+    """One *design choice* row of the assumptions table per power plan of ``results`` (:func:`run_all`), its
+    value the runs that ran ("50 runs per reading (plan: 12 for 80 % power at the printed 39 %, main spread)")."""
+    out = []
+    for i, p in enumerate(results.plans or []):
+        what = "the printed effect" if p["statistic"] in ("peak", "mean") and "Table 1" in p["basis"] else "the margin"
+        out.append(FreeChoice(
+            f"plan_{i + 1}", f"{p['runs']} runs (plan: {p['plan']} for 80 % power at {what} {p['size']:.0%})", DESIGN,
+            f"{p['readings']}: {p['basis']}; at least {p['floor']}, at most {p['cap']} (budget).", "—"))
+    return out
 
 
 def run_all(runs: int | None = None, seeds=None, executor=None, steps=None) -> Zhou2017Results:
