@@ -16,7 +16,7 @@ from ..models.tracking import IDX_POS, IDX_VEL
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
 
-__all__ = ["d_sweep_figure", "table1_frame", "table1_shown", "fig1", "shade_turns", "rmse_plot", "fig2", "fig3", "fig4",
+__all__ = ["plans_table", "d_sweep_figure", "table1_frame", "table1_shown", "fig1", "shade_turns", "rmse_plot", "fig2", "fig3", "fig4",
            "fig5", "tables", "figures", "readings_table", "robustness_table", "equal_compute_table", "modes_table",
            "fig_modes", "fig_dsweep", "sweep_frames", "TABLES", "FIGURES", "N_STEPS", "PF_NAMES"]
 
@@ -170,7 +170,7 @@ def tables(results) -> dict:
     """The paper's tables from :func:`pfrepro.experiments.immpfor_zhou2017.run_all`'s results: Table 1
     (:func:`table1_frame`, the mean-likelihood rows named with their run count)."""
     tab1 = table1_frame(results.main, results.lik_pair, seed=results.seeds["checks"])
-    n_lik = results.counts["runs_lik"]
+    n_lik = results.reading_runs["lik=mean"]
     return {"Table 1": tab1.rename(index={n: f"{n}, {n_lik} runs" for n in EXTRA_ROWS[:2]})}
 
 
@@ -178,6 +178,15 @@ def figures(results) -> dict:
     """The paper's Figs. 1-5 from :func:`pfrepro.experiments.immpfor_zhou2017.run_all`'s results."""
     return {"Fig. 1": fig1(results.main), "Fig. 2": fig2(results.main), "Fig. 3": fig3(results.main),
             "Fig. 4": fig4(results.main), "Fig. 5": fig5(results.fig5)}
+
+
+def plans_table(results) -> pd.DataFrame:
+    """The power plans of :func:`pfrepro.experiments.immpfor_zhou2017.run_all` (fixed on the main run before
+    any reading ran): which readings, the runs that ran, the runs 80 % power needs, floor and cap, the size
+    resolved (printed effect or margin, relative) and the basis."""
+    rows = [{"readings": p["readings"], "runs": p["runs"], "plan": p["plan"], "floor": p["floor"], "cap": p["cap"],
+             "size": f"{p['size']:.0%}", "basis": p["basis"]} for p in (results.plans or [])]
+    return pd.DataFrame(rows, columns=["readings", "runs", "plan", "floor", "cap", "size", "basis"])
 
 
 def readings_table(results) -> pd.DataFrame:
