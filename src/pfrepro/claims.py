@@ -178,9 +178,9 @@ class Judgement:
     Attributes
     ----------
     verdict : str
-        One of :data:`VERDICTS`.
+        One of ``VERDICTS``.
     cause : str
-        For ``inconclusive``: one of :data:`CAUSES`; else ``""``.
+        For ``inconclusive``: one of ``CAUSES``; else ``""``.
     runs_needed : int or None
         For ``too few runs``: the runs that would decide the undecided reading(s) with 80 % power
         (:func:`pfrepro.stats.plan_runs` against the printed effect or the stated margin);
@@ -475,7 +475,7 @@ class Claim:
 
     @property
     def cause(self) -> str:
-        """Why an inconclusive claim is inconclusive (one of :data:`CAUSES`; ``""`` otherwise)."""
+        """Why an inconclusive claim is inconclusive (one of ``CAUSES``; ``""`` otherwise)."""
         return self.judgement.cause
 
     @property
@@ -655,7 +655,7 @@ def cause_text(c: Claim) -> str:
 
 def causes_table(claims, *, by: str = "paper") -> pd.DataFrame:
     """The inconclusive claims counted by cause: one row per ``by`` value (a paper), one column per
-    cause of :data:`CAUSES`, plus ``inconclusive`` (their sum) and a last row ``all claims``."""
+    cause of ``CAUSES``, plus ``inconclusive`` (their sum) and a last row ``all claims``."""
     rows = [{by: getattr(c, by), "cause": c.cause} for c in as_claims(claims) if c.verdict == "inconclusive"]
     df = pd.DataFrame(rows, columns=[by, "cause"])
     keys = list(dict.fromkeys(getattr(c, by) for c in as_claims(claims)))

@@ -1077,7 +1077,7 @@ class Ning2011Results:
         return self._get("ess", tag, runs, compute)
 
     def mech_reading(self, tag: str, runs: int) -> pd.DataFrame:
-        """:func:`mechanism` on ``runs`` runs under reading ``tag`` (:data:`MECH_READINGS`; ``"randn eta=<v>"``:
+        """:func:`mechanism` on ``runs`` runs under reading ``tag`` (``MECH_READINGS``; ``"randn eta=<v>"``:
         the randn carrier at eta = v)."""
         def compute():
             if tag.startswith("randn eta="):

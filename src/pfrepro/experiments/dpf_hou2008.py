@@ -48,11 +48,11 @@ SEEDS = {"sec51": 200851, "sec52": 200852}
 SEED_51 = SEEDS["sec51"]
 SEED_52 = SEEDS["sec52"]
 
-#: Power plans (issue 31). The per-run spread of each claim's paired difference under its MAIN reading,
-#: measured in the chapter's build before this plan existed (commit 2c2f16b: 100 runs in 5.1, 50 in 5.2,
-#: 30 in the 5.1 sweep; the same seeds), and the size each plan resolves: the printed effect where the paper
+#: The power plans -- the per-run spread of each claim's paired difference under its main reading,
+#: measured in an earlier build of this chapter (100 runs in 5.1, 50 in 5.2, 30 in the 5.1 sweep; the
+#: same seeds), and the size each plan resolves: the printed effect where the paper
 #: printed both sides, else the larger of the claim's stated margin (``pfrepro.verdicts.dpf_hou2008.MARGINS``)
-#: and the pilot's own |difference|. Fixed here before any reading runs; never updated from a later build.
+#: and the pilot's own ``|difference|``. Fixed here before any reading runs; never updated from a later build.
 #: ``claim: (sd per run, size, what the size is)``.
 PILOT = {
     "s51_dpf_beats_dekf_x": (0.1104, 0.4489, "the printed relative effect 1 − 0.345/0.626"),
@@ -72,7 +72,7 @@ PILOT = {
     "dual_more_stable_than_joint": (0.4046, 0.86, "the pilot's |difference| (> the margin 0.1)"),
     "dpf_beats_liu_west_theta_reentry": (1.457e-4, 2.298e-4, "the pilot's |difference| (> the margin 10⁻⁴)"),
 }
-#: the runs each plan asks for (:func:`pfrepro.stats.plan_runs`, 80 % power at |z| > 2)
+#: The runs each plan asks for (:func:`pfrepro.stats.plan_runs`, 80 % power at ``|z| > 2``)
 PLANS = {k: plan_runs(sd, size) for k, (sd, size, _) in PILOT.items()}
 #: what the budget pays: sec 5.1 main runs and its sweep/readings (the largest 5.1 plan, the cap's, capped by
 #: nothing: 250), sec 5.2 main runs and every 5.2 reading (the largest 5.2 plan, the altitude's)
@@ -234,8 +234,8 @@ CHOICES = [
 def plan_rows() -> list:
     """The power plans as assumptions-table rows (status design choice): one per claim of :data:`PILOT`."""
     return [FreeChoice(f"plan_{k}", f"{PLANS[k]} runs per reading; run: {RUNS_52 if k.startswith(('s52', 'dpf_beats_liu_west_theta_', 'dual_')) else RUNS_51}",
-                       DESIGN, f"80 % power at |z| > 2 for {why}, at the main reading's per-run sd {sd:.4g} (pilot: the "
-                               f"chapter's build before issue 31, same seeds)", "")
+                       DESIGN, f"80 % power at |z| > 2 for {why}, at the main reading's per-run sd {sd:.4g} (pilot: an "
+                               f"earlier build of this chapter, same seeds)", "")
             for k, (sd, size, why) in PILOT.items()]
 
 
@@ -811,9 +811,9 @@ RUN_COUNTS = (("S51", "runs"), ("S51", "grid_runs"), ("S51", "sens_runs"), ("S51
 def scaled_settings(runs=None) -> tuple[dict, dict]:
     """Copies of :data:`S51` and :data:`S52` with every Monte Carlo run count replaced by ``runs``.
 
-    ``runs=None`` keeps the chapter's counts (the power plans of :data:`PLANS`: :data:`RUNS_51` runs in
+    ``runs=None`` keeps the chapter's counts (the power plans of :data:`PLANS`: ``RUNS_51`` runs in
     sec 5.1, its sweep and readings too, the exact reference on 40, Fig. 5 on 100, the true-θ context rows
-    on 30; :data:`RUNS_52` in sec 5.2, every reading too, the literal reading on 10, Figs. 7-9 on 50). An
+    on 30; ``RUNS_52`` in sec 5.2, every reading too, the literal reading on 10, Figs. 7-9 on 50). An
     int replaces every count of :data:`RUN_COUNTS` (main runs, exact reference, sweeps and readings),
     so that ``runs=2`` is a quick run of every experiment; at least 2 (the paired comparisons need
     two runs). The module's own dicts are never changed.

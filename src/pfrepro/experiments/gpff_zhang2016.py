@@ -403,8 +403,8 @@ def cwpa_r_sensitivity(mc_mixture: MonteCarloResult, *, executor=None) -> pd.Dat
     return pd.DataFrame(rows).set_index("R given to KF and GPFF")
 
 
-#: readings of the asymmetric printed R2 (sec 5.1): the off-diagonal of the symmetrised matrix; 0.003 (the mean
-#: of the two printed entries) is the main one, each printed entry on its own is a reading
+#: The off-diagonal of the symmetrised R2 under each reading of the asymmetric printed matrix (sec 5.1);
+#: 0.003 (the mean of the two printed entries) is the main one, each printed entry on its own is a reading
 R2_OFFDIAG = ("0.003", "0.005", "0.001")
 
 
@@ -895,7 +895,7 @@ def eq15_check(d=3, m=2, lams=(0.2, 0.5, 0.8), n_points=20, seed=None) -> pd.Dat
     Gaussian q(., lambda) = N(x_l, P_l) and the affine field of eqs (24), (27): its left side
     (x - x_l)' P_l^-1 f - tr A, its right side, and log h - E[log h] (eq 8's left side, from which the
     right side is derived); and the left side with eq (14)'s printed sign (+ tr A). Maximum absolute
-    difference relative to the largest |log h - E log h| over the points."""
+    difference relative to the largest ``|log h - E log h|`` over the points."""
     rng = np.random.default_rng(_check_seed(seed, 9))
     mean, P, H, R, y = random_linear_problem(d, m, rng)
     Ri = np.linalg.inv(R)

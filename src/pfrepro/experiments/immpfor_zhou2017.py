@@ -698,7 +698,7 @@ MARGIN_DISTINCT = 0.10
 
 
 def plan(se: float, runs: int, size: float, floor: int, cap: int) -> int:
-    """Runs of a reading: :func:`pfrepro.stats.plan_runs` (80 % power at |z| > 2) for ``size`` at the per-run
+    """Runs of a reading: :func:`pfrepro.stats.plan_runs` (80 % power at ``|z| > 2``) for ``size`` at the per-run
     spread ``se * sqrt(runs)`` of the reading the plan is based on (fixed before the reading runs), at least
     ``floor`` (the design count), at most ``cap`` (the truths it can be paired with)."""
     from ..stats import plan_runs
@@ -971,18 +971,23 @@ class Zhou2017Results:
     plans : list
         One dict per power plan: ``readings``, ``runs`` (what ran), ``plan`` (what 80 % power needs),
         ``floor``, ``cap``, ``basis``, ``statistic``, ``size``.
-    rel, ekf_rel, equal_rel : dict
-        Relative paired differences ``(rel, se, runs)`` (:func:`rel_paired`): ``rel`` of ``d5``, ``fav5``,
-        ``dN_pf``, ``abl``; IMM-EKF vs IMMPFOR (Table 1 mean) and IMMPF(N_eq) vs IMMPFOR per reading tag.
+    rel : dict
+        Relative paired differences ``(rel, se, runs)`` (:func:`rel_paired`) of ``d5``, ``fav5``, ``dN_pf``, ``abl``.
+    ekf_rel : dict
+        The same for the IMM-EKF vs IMMPFOR (Table 1 mean), per reading tag.
+    equal_rel : dict
+        The same for IMMPF(N_eq) vs IMMPFOR, per reading tag.
     sets : dict
         ``"mismatch"`` (:func:`mismatched_distance`) and ``"distinct"`` (:func:`distinct_fraction`) ->
         filter name or reading tag -> per-run values, on the particle sets of the posterior comparison.
     turns : dict
         Reading -> ``(rel, se, runs)``: the IMMPF's per-run RMS position error near the turns against the other
         steps (:func:`turn_vs_straight`), l.217.
-    freq, freq_curves : dict
+    freq : dict
         The frequent-manoeuvre scenario (l.23, :func:`frequent`): ``(rel, se, runs)`` of the IMMPF's peak RMSE
-        against the main scenario's; its RMSE curve and extra turns.
+        against the main scenario's.
+    freq_curves : dict
+        Its RMSE curve and extra turns.
     """
 
     counts: dict

@@ -137,8 +137,8 @@ BOT_FLOW_REF_RUNS = 10
 #: the largest-N PFPF counts as converged when its estimated excess MSE over the posterior mean (1/N law, see
 #: :func:`pfrepro.verdicts.synthesis.bot_reference_tables`) is below this share of its own MSE (fixed before the runs)
 BOT_FLOW_REF_TOL = 0.05
-#: the bearings-only start as printed (offset) and centred on the truth (context: the paper excludes it,
-#: :data:`BOT_CENTRED_EXCLUDED`) -- the benchmark key of each
+#: The benchmark key of the bearings-only start as printed (offset) and of the start centred on the truth
+#: (context only, since the paper excludes it -- :data:`BOT_CENTRED_EXCLUDED`)
 BOT_READINGS = {"offset": "bot", "centred": "bot_centred"}
 #: runs per benchmark where fewer than ``RUNS`` are used (the centred BOT start: context, excluded from the verdicts)
 RUNS_OF = {"bot_centred": 50}

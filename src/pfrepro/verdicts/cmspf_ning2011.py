@@ -58,14 +58,14 @@ _MECH_SETS = ("PF resampled set", "PF candidates (N predicted)", "CMS-PF candida
 
 
 # -- the rule's sizes: printed effects and stated margins ----------------------------------------
-#: Smallest effect of interest where the paper prints no effect, stated before running: 5 % of the
+#: The smallest effect of interest where the paper prints no effect, stated before running -- 5 % of the
 #: published baseline's mean RMSE in the same table and setting (a difference below that is one no
 #: practitioner would pick a filter for, and it is the size the power plans resolve).
 MARGIN_FRAC = 0.05
 #: the same for statistics that are fractions (distinct fraction, KS distance, share of map particles
 #: kept): 5 percentage points
 MARGIN_FRACTION = 0.05
-#: the same for the effective sample size: 5 % of N
+#: The same for the effective sample size -- 5 % of N
 MARGIN_ESS_FRAC = 0.05
 #: A claim that asserts several orderings at once (at every N, against every filter, per carrier) has a
 #: printed effect (or a margin) per part. Each part's paired difference is divided by its own printed
@@ -123,7 +123,7 @@ def t1_margins():
 
 
 def t2_effects():
-    """Table 2's printed effects: EKF, UKF, PF minus CMS-PF, and 10 % of ESPF − |CMS-PF − ESPF|."""
+    """Table 2's printed effects: EKF, UKF, PF minus CMS-PF, and 10 % of ESPF − ``|CMS-PF − ESPF|``."""
     p = published.table(PAPER, "Table 2").loc["RMSE"]
     return [float(p[o] - p["CMS-PF"]) for o in ("EKF", "UKF", "PF")] + [
         float(0.1 * p["ESPF"] - abs(p["CMS-PF"] - p["ESPF"]))]

@@ -43,7 +43,7 @@ LOG_SIM = float(np.log(1.25))
 N52 = ("DPF", "DEKF", "Liu-West")
 
 #: The smallest effect of interest of every ordering whose both sides the paper did not print, stated up
-#: front (issue 31), in the units of the claim's paired difference: ``claim: (margin, why)``. An interval
+#: front, in the units of the claim's paired difference: ``claim: (margin, why)``. An interval
 #: inside (-margin, margin) is a tie; the margin is also the size a power plan resolves
 #: (:data:`pfrepro.experiments.dpf_hou2008.PILOT`). Not tuned to outcomes.
 MARGINS = {
@@ -64,7 +64,7 @@ MARGINS = {
     "dual_more_stable_than_joint": (0.10, "share of runs lost: 10 percentage points"),
 }
 
-#: Readings the paper's own text or printed numbers exclude: ``(choice, value): why`` (shown, not counted).
+#: The readings the paper's own text or printed numbers exclude, ``(choice, value)`` -> why (shown, not counted).
 EXCLUDED = {
     ("theta51", 0.2): "l.200, l.211: the sec 5.1 runs (Figs. 4, 5) have θ = 0.5; 0.2 is an initial guess, not a true value",
     ("theta51", 0.7): "l.200, l.211: the sec 5.1 runs (Figs. 4, 5) have θ = 0.5; 0.7 is an initial guess, not a true value",

@@ -51,29 +51,29 @@ COST_RATIO_MIN = 10
 #: the paper does not print. sis-degenerates: half a percent of N (5 particles) -- an ESS within 5
 #: particles of the "very few" bar does not decide it.
 MARGIN_FEW = 0.005 * E.N_PARTICLES
-#: resampling-limits-degeneracy: 10 % of N (100 particles) -- "far more effective particles" is at
+#: The margin of ``resampling-limits-degeneracy`` -- 10 % of N (100 particles) -- "far more effective particles" is at
 #: least a tenth of the particles
 MARGIN_RESAMPLING = 0.10 * E.N_PARTICLES
-#: prior-ignores-y: 1 % of N (10 particles) -- an ESS gain below a percent of N would not change the
+#: The margin of ``prior-ignores-y`` -- 1 % of N (10 particles) -- an ESS gain below a percent of N would not change the
 #: PF's accuracy
 MARGIN_PROPOSAL = 0.01 * E.N_PARTICLES
-#: more-particles-less-degeneracy: ten times the particles must buy at least one more effective
+#: The bar of ``more-particles-less-degeneracy`` -- ten times the particles must buy at least one more effective
 #: particle late in the run (below that "all but very few" still holds); the claim is decided on the
 #: gain minus this bar, with a tie margin of half a particle
 DEGEN_MIN_GAIN = 1.0
 DEGEN_MARGIN = 0.5
-#: ekf-error-truncation: a tenth of the paper's printed EKF RMSE on model 1 (3.0): a difference below
+#: The margin of ``ekf-error-truncation`` -- a tenth of the paper's printed EKF RMSE on model 1 (3.0); a difference below
 #: it does not decide where the EKF's error comes from (:func:`truncation_margin`)
 TRUNC_MARGIN_FRAC = 0.10
-#: kf-optimal-linear: the KF's estimate equals the exact posterior mean within 1e-3 posterior sd
+#: The tolerance of ``kf-optimal-linear`` -- the KF's estimate equals the exact posterior mean within 1e-3 posterior sd
 KF_TOL = 1e-3
-#: optimal-proposal-hard: the optimal proposal is bimodal at 1 % of the particle-steps or more (a
+#: The bar of ``optimal-proposal-hard`` -- the optimal proposal is bimodal at 1 % of the particle-steps or more (a
 #: sampler for it must handle two modes; it is no standard family)
 MIN_BIMODAL_SHARE = 0.01
 #: the paper's main claims (abstract and conclusion), far better under strong nonlinearity (7x),
 #: markedly better tracking (Figs. 1-4), about the same under weak nonlinearity, much costlier
 MAIN_CLAIMS = ("ratio-7x", "figs-pf-better", "close-weak-nonlinearity", "pf-cost")
-#: the statements of secs 0-2 that Table 1 does not test (issue 31), with their paper lines
+#: The statements of secs 0-2 that Table 1 does not test, with their paper lines
 STATEMENT_CLAIMS = {"kf-optimal-linear": "l.35", "more-particles-less-degeneracy": "l.135",
                     "more-particles-cost": "l.135", "optimal-proposal-hard": "l.137",
                     "prior-ignores-y": "l.145", "ekf-error-truncation": "l.181"}
@@ -211,7 +211,7 @@ def power_plans(results) -> list:
     """The power plan of every claim decided on a paired difference: per claim, the readings it covers,
     the per-run spread the plan uses (that of the claim's main reading), the size it resolves (the
     printed effect or the stated margin), the runs the plan asks for (:func:`pfrepro.stats.plan_runs`,
-    80 % power at |z| > 2) and the runs the readings ran. A list of dicts (the chapter's assumptions
+    80 % power at ``|z| > 2``) and the runs the readings ran. A list of dicts (the chapter's assumptions
     table shows one row per plan)."""
     R = results
     res, figs, n_t = R.res, R.figs, R.runs["table"]

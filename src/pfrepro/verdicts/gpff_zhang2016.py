@@ -19,7 +19,7 @@ paper printed where it printed both sides (each pair in units of its printed eff
 deciding, :func:`worst_pair`), else against a smallest effect of interest stated up front
 (:data:`MARGIN_REL`, :data:`CONV_MARGIN`). The UT setting the paper's Table 1 excludes
 (:data:`EXCLUDED_UT`) is shown and not counted. :func:`power_plans` gives each sized claim's plan, and
-:func:`items_table` the statements judged for the first time in issue 31 (sec 1, l.37; sec 2, l.83;
+:func:`items_table` the paper's statements judged beyond its tables and figures (sec 1, l.37; sec 2, l.83;
 sec 3.1, l.143; sec 5.3, l.398 and l.404). The
 module also gives the chapter's findings (:data:`MAIN_CLAIMS`, :func:`takeaway`) and every
 value the chapter glues (:func:`prose`).
@@ -58,13 +58,13 @@ GROWTH_MARGIN = 0.10
 KB_TOL_SOLVER = 1e-9
 #: ... and eqs (36), (37), (39), (40) and the corrected (38) hold to this finite-difference error
 KB_TOL_FD = 1e-6
-#: Where the paper prints no effect, the smallest effect of interest, stated up front (not tuned): a tenth of
+#: The smallest effect of interest where the paper prints no effect, stated up front and not tuned -- a tenth of
 #: a stated scale (the KF's MSE, the PF's printed MSE, the squared band), the same 10 % as the equivalence
 #: margin of Fig. 1(a) (``EQUIV_MARGIN``)
 MARGIN_REL = 0.10
-#: "converges faster" (Fig. 4): the smallest difference of interest, 10 steps (1 s of the 20 s track)
+#: The smallest difference of interest for "converges faster" (Fig. 4) -- 10 steps (1 s of the 20 s track)
 CONV_MARGIN = 10.0
-#: "EKF, UKF and GPFF converge to a small error range" (Fig. 4, l.398): the closing window, the last 20 steps (2 s)
+#: The closing window of "EKF, UKF and GPFF converge to a small error range" (Fig. 4, l.398) -- the last 20 steps (2 s)
 FINAL_STEPS = 20
 #: the UT setting the paper's own Table 1 excludes (our UKF diverges under it on UNG where the paper prints 51.49)
 EXCLUDED_UT = "ut=alpha=1e-3"
@@ -199,7 +199,8 @@ def cwpa_equivalence(results):
 def _record_cwpa(reg, results):
     margin, eq = cwpa_equivalence(results)
     reg.add("cwpa_gauss_equal", "Fig. 1(a): under Gaussian noise GPFF and KF have approximately the same MSE",
-            diff=eq["euler"][0], diff_se=eq["euler"][1],
+            diff=eq["euler"][0], diff_se=eq["euler"][1], margin=margin,
+            runs=len(results.cwpa["gaussian"].mse("KF")),
             readings=over("integrator", {m: v[2] for m, v in eq.items()}), depends_on=["integrator"],
             source="sec 5.1, Fig. 1(a)",
             note=f"equivalence: paired MSE difference GPFF − KF ± 2 SE inside ±{E.EQUIV_MARGIN:.0%} of the KF's mean "
@@ -919,7 +920,7 @@ def readings_disagree(reg) -> pd.DataFrame:
 
 def power_plans(reg) -> pd.DataFrame:
     """The power plan of every ordering judged against a size (a printed effect or a stated margin): the
-    runs that show that size with 80 % power at |z| > 2 (:func:`pfrepro.stats.plan_runs`) at the per-run
+    runs that show that size with 80 % power at ``|z| > 2`` (:func:`pfrepro.stats.plan_runs`) at the per-run
     spread of the main reading's deciding difference (the paper's 100 runs, run before any reading), against
     the runs every reading ran. One row per claim."""
     rows = []
@@ -956,7 +957,7 @@ def plan_choices(reg) -> list:
     return out
 
 
-#: the items issue 31 lists as not yet judged for this paper: (item, paper line, what judges it)
+#: The paper's statements judged beyond its tables and figures -- (item, paper line, what judges it)
 ITEMS = (
     ("eq (15) itself", "l.115", "equation check eq15_check (chapter, eqs 14-15)"),
     ("GPFF needs fewer particles than a PF", "l.37", "claim intro_fewer_particles"),
@@ -973,7 +974,7 @@ ITEMS = (
 
 
 def items_table(reg) -> pd.DataFrame:
-    """The items issue 31 listed as not judged, their paper lines and what now judges each (claim and verdict,
+    """The paper's statements judged beyond its tables and figures, their paper lines and what now judges each (claim and verdict,
     equation check or erratum)."""
     v = {c.claim_id: c.verdict_text() for c in reg.claims}
     rows = []

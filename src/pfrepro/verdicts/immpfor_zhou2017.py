@@ -14,12 +14,12 @@ What the paper claims (our copy lost every equation; the scenario is our reconst
 Every ordering is a paired difference over common truths, relative to the IMMPF's error
 (:func:`pfrepro.experiments.immpfor_zhou2017.rel_paired`), judged by :func:`pfrepro.claims.judge_ordering`
 under every reading of the free choices it rests on (:data:`pfrepro.experiments.immpfor_zhou2017.CHOICES`):
-Table 1's two orderings against the effects the table prints (:data:`EFFECTS`, direction and size), the
+Table 1's two orderings against the effects the table prints (``EFFECTS``, direction and size), the
 others against the margin stated up front (:data:`~pfrepro.experiments.immpfor_zhou2017.MARGIN_REL`). The runs
 of every reading come from the power plans :func:`run_all <pfrepro.experiments.immpfor_zhou2017.run_all>`
 fixes on the main run before any reading runs. Beyond the paper: equal computation, robustness across the
 reconstructed scenarios, a conventional IMM-EKF, and the explanation of the loss (the own-parent ablation).
-The items issue 31 found unjudged: the IMMPF's errors near the turns (l.217), large peaks under frequent
+The paper's statements judged beyond its tables and figures: the IMMPF's errors near the turns (l.217), large peaks under frequent
 manoeuvres (l.23), mismatched models holding particles near the truth (l.217, conclusion 2), standard
 resampling losing diversity (l.23), the EKF's weak nonlinearity (l.21, background: not checkable).
 """
@@ -81,7 +81,7 @@ EFFECTS = E.printed_effects()
 EKF_REASON = ("background cited to a textbook ([5], l.21): a statement about the EKF in general ('only for weak "
               "nonlinearity, else unstable or divergent'); the paper runs no EKF, and one scenario cannot show 'only'. "
               "Our IMM-EKF row of Table 1 is context, not a test of it")
-#: the items issue 31 found unjudged in this paper: (item, paper line, claim id that now judges it)
+#: The paper's statements judged beyond its tables and figures -- (item, paper line, claim id that judges it)
 ITEMS = (("IMMPF errors are large near 100 s and 200 s", "l.217", "immpf_errors_large_at_turns"),
          ("mismatched models give large peaks under frequent manoeuvres", "l.23", "frequent_manoeuvres_larger_peak"),
          ("every model, mismatched ones included, holds particles near the true mode", "l.217, conclusion 2 (l.227)",

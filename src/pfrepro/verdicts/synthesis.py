@@ -498,7 +498,7 @@ def plan_table(results) -> pd.DataFrame:
     """The power plan of every equal-budget claim (and Li 2012's): the runs behind it, the per-run spread of
     its paired difference (the main reading's own), the size the plan resolves (the benchmark's margin; the
     printed effect for Li 2012) and the runs 80 % power at ``|z| > 2`` needs (:func:`pfrepro.stats.plan_runs`).
-    The runs are fixed before any run (:data:`pfrepro.experiments.synthesis.RUNS`); a claim left undecided
+    The runs are fixed before any run (``pfrepro.experiments.synthesis.RUNS``); a claim left undecided
     reports the runs its plan needs (``runs_needed``), no run is added after an outcome. ``at these runs``:
     the comparison's word (the Li claim's verdict) on the runs it has."""
     vt = claim_rows(verdict_table(results))
