@@ -32,7 +32,8 @@ Per page it fails on
 ``number``    a number in a table broken over two lines ("0.00 38");
 ``word``      a word in a table broken over two lines ("systema" / "tic", "inconcl" / "usive"):
               a cell may wrap between words or after a ``_``, ``=`` or ``/`` it offers, never
-              inside a run of letters;
+              inside a run of letters (Chinese text, which wraps between any two characters,
+              is not a run of letters);
 ``figtext``   a figure whose smallest text (:data:`MIN_FONT_PT` at :data:`BOOK_DPI`) is shown
               smaller than :data:`MIN_TEXT_PX`; on a phone a link to the full-size image
               (tap to enlarge) is accepted instead;
@@ -477,7 +478,8 @@ PAGE_JS = r"""
   // a number on its own (not the "-1" of "k-1", nor digits inside a name such as "x2")
   const numRe = /(?<![\w.])[-+−]?\d+(?:[.,]\d+)*(?:[eE][-+−]?\d+)?%?/g;
   // a word: a run of letters (a break after "_", "=" or "/" is not inside one)
-  const wordRe = /\p{L}{4,}/gu;
+  // a run of letters; Han characters are not part of one (Chinese wraps between any two of them)
+  const wordRe = /(?:(?!\p{Script=Han})\p{L}){4,}/gu;
   let nOverlap = 0, nNumber = 0, nWord = 0, nEllipsis = 0;
   document.querySelectorAll('td, th').forEach(cell => {
     if (!col.contains(cell) || cell.closest('mjx-container') || !visible(cell)) return;

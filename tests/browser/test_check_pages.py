@@ -146,6 +146,14 @@ def test_word_broken_in_a_table_fails(tmp_path):
     body = ("<table style='table-layout:fixed;width:150px'><tr>"
             "<td style='width:150px;overflow-wrap:break-word'>pf_resampling=<wbr>systematic</td></tr></table>")
     _only(_run(tmp_path, _page(body)))
+    # Chinese wraps between any two characters: a quoted sentence over two lines is no broken word,
+    # while a Latin word beside it still is
+    body = ("<table style='table-layout:fixed;width:60px'><tr>"
+            "<td style='width:60px'>模型考察多维和非理想初值条件下各滤波器性能</td></tr></table>")
+    _only(_run(tmp_path, _page(body)))
+    body = ("<table style='table-layout:fixed;width:60px'><tr>"
+            "<td style='width:60px;overflow-wrap:anywhere'>非理想初值 inconclusive</td></tr></table>")
+    _only(_run(tmp_path, _page(body)), word=1)
 
 
 def test_ellipsis_in_a_table_fails(tmp_path):
