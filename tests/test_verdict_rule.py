@@ -197,6 +197,12 @@ def test_causes_on_the_page_and_in_the_scorecard():
     assert cause_text(by["runs"]) == f"too few runs (12 runs, {by['runs'].runs_needed} would decide)"
     assert cause_text(by["read"]) == "depends on the reading: holds under (a=1, b=1); fails under (a=2, b=1)"
     assert cause_text(by["ok"]) == ""
+    # too few runs under one reading: its own runs, not the main reading's
+    c = reg.add("und", "A beats E", diff=1.0, diff_se=0.1, runs=100, margin=0.5,
+                reading_diffs={"a=1": (1.0, 0.1, 100), "a=2": (0.3, 0.3, 25)})
+    assert cause_text(c) == f"too few runs (undecided under a=2 on 25 runs, {c.runs_needed} would decide)"
+    assert c.runs_needed > 25
+    reg.claims.remove(c)
     t = causes_table(reg)
     assert t.loc["p", CAUSE_READING] == 2 and t.loc["p", CAUSE_RUNS] == 1 and t.loc["all claims", "inconclusive"] == 3
     assert inconclusive_table(reg)["id"].tolist() == ["num", "runs", "read"]

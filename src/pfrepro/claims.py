@@ -636,19 +636,28 @@ def cause_text(c: Claim) -> str:
     j = c.judgement
     if j.verdict != "inconclusive":
         return ""
+
+    def names(rs):  # a joint reading "a=1, b=2" in parentheses, so the list stays readable
+        return ", ".join(f"({r})" if "," in r else r for r in rs)
+
     if j.cause == CAUSE_READING:
         number = any(r == MAIN_READING for r, _, _ in j.per_reading)
         word = ({"holds": "the number is matched", "fails": "not matched"} if number else
                 {"holds": "holds", "fails": "fails", "ties": "ties", "undecided": "undecided"})
-        def names(rs):  # a joint reading "a=1, b=2" in parentheses, so the list stays readable
-            return ", ".join(f"({r})" if "," in r else r for r in rs)
-
         parts = [f"{word[kind]} under {names(j.under(kind))}" for kind in word if j.under(kind)]
         return j.cause + (": " + "; ".join(parts) if parts else "")
     if j.cause == CAUSE_RUNS:
-        runs = c.runs or max((_diff_triple(v)[2] or 0 for v in (c.reading_diffs or {}).values()), default=0)
-        had = f"{runs} runs" if runs else ""
-        need = f"{j.runs_needed} would decide" if j.runs_needed else "no size stated to plan runs for"
+        undecided = j.under("undecided")
+        diffs = c.reading_diffs or {}
+        if undecided:   # the readings still undecided and their runs, not the main reading's
+            runs = sorted({_diff_triple(diffs[r])[2] for r in undecided if r in diffs} - {None})
+            had = f"undecided under {names(undecided)}" + (f" on {'/'.join(map(str, runs))} runs" if runs else "")
+        else:
+            runs = c.runs or max((_diff_triple(v)[2] or 0 for v in diffs.values()), default=0)
+            had = f"{runs} runs" if runs else ""
+        statement = bool(undecided) and not any(r in diffs for r in undecided)
+        need = (f"{j.runs_needed} would decide" if j.runs_needed else
+                "" if statement else "no size stated to plan runs for")
         return f"{j.cause} ({', '.join(x for x in (had, need) if x)})"
     return j.cause
 
