@@ -304,6 +304,12 @@ def test_takeaway_follows_the_verdicts():
     assert "depends on settings the paper does not print: of 16 readings it is better under 15" in text
     assert "the printed 26% is attained under 15" in text
     assert text.endswith("at equal computation it wins under 7 and loses under 1 of 8 readings.")
+    # better by less than the printed 26 % under one reading, reversed under another: attained under none
+    R = _with_stats(fixture(0.1, t1="rel"), "d=3", "mean_rel", (-0.05, 0.01))
+    reg, _ = decide(R)
+    text = V.takeaway(reg, R)
+    assert "depends on settings the paper does not print" in text
+    assert "the printed 26% is attained under none of them" in text and "attained under 0" not in text
 
 
 def _chapter_glue_keys():

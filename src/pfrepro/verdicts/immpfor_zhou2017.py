@@ -361,7 +361,8 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
                  + f", worse than that or short of Table 1's {eff} under {nf}"
                  + (f", tied within ±{E.MARGIN_REL:.0%} under {nt}" if nt else "")
                  + (f", undecided under {nu}" if nu else "")
-                 + f"; the printed {eff} is attained under {len(attained)}")
+                 + (f"; the printed {eff} is attained under none of them" if not attained else
+                    f"; the printed {eff} is attained under {len(attained)}"))
     eh, ef, et, eu, en = _counts(eq)
     if eq.verdict == "reproduced":
         second = "at equal computation it still wins, so its extra density evaluations pay off"
