@@ -20,17 +20,21 @@ typed). :func:`verdict` turns those numbers into one of five verdicts:
     the paper gives nothing we can compare with (no number and no testable
     statement).
 ``inconclusive``
-    the evidence does not decide: an ordering claim whose paired difference lies
-    within ``Z_CRIT`` standard errors of zero (our runs cannot tell the two apart);
-    a cost claim that the deterministic cost count does not decide; a conclusion
-    whose admissible readings of the paper disagree.
+    the evidence does not decide, always with its cause (``CAUSES``): the admissible
+    readings of the paper disagree (*depends on the reading*), the interval holds both no
+    effect and the effect that matters (*too few runs*, with the runs a power plan says would
+    decide it), the difference is shown smaller than the claim's stated margin (*tie within the
+    stated margin*), or a cost count does not decide.
 
 Ordering claims ("A beats B") are decided on paired differences over common
 random numbers: the chapter passes ``diff``, the mean over runs of a per-run
 difference oriented so that the claim asserts ``diff > 0`` (e.g. RMSE of B minus
-RMSE of A, on the same truths), and its standard error ``diff_se``
-(:func:`pfrepro.stats.paired_difference`). The claim holds if ``diff > Z_CRIT * diff_se``,
-is contradicted if ``diff < -Z_CRIT * diff_se``, and is undecided otherwise.
+RMSE of A, on the same truths), its standard error ``diff_se``
+(:func:`pfrepro.stats.paired_difference`) and the ``runs`` behind it. The direction is shown if
+``diff > Z_CRIT * diff_se`` and reversed if ``diff < -Z_CRIT * diff_se``. Where the paper printed
+both sides of the comparison, ``effect`` (the printed effect in ``diff``'s units) makes the rule
+test the size too (:func:`judge_ordering`, the truth table of CONTRIBUTING.md); elsewhere ``margin``
+states the smallest effect of interest up front.
 
 Cost claims (``basis="count"``) are decided on a deterministic count of what each
 filter asks of its model (:mod:`pfrepro.cost`), which does not move with machine
@@ -38,17 +42,15 @@ load; the published number (a ratio of the paper's seconds) and our measured tim
 are context and are not matched numerically: ``qualitative`` is the count's answer,
 and ``None`` (the count does not decide) gives ``inconclusive``.
 
-A conclusion that depends on an ambiguous reading of the paper passes ``readings``,
-a mapping from each admissible reading to whether the statement holds under it
-(True / False / None); the claim holds if it holds under every reading, fails if it
-fails under every reading, and is ``inconclusive`` otherwise. A published *number*
-judged under several readings passes ``reading_values`` (reading -> ``(ours, se)``
-under it, besides the main reading's ``reproduced``/``se``): it is ``reproduced`` only
-if it is matched under every reading, and ``inconclusive`` if some readings match it
-and others do not. Which free choices a claim rests on is declared in ``depends_on``
-and checked against the chapter's assumptions table (:mod:`pfrepro.choices`). An
-absolute number that the paper's unpublished settings decide passes
-``not_checkable="<why>"``: its verdict is ``not checkable`` whatever the numbers.
+A conclusion that depends on an ambiguous reading of the paper is judged under every
+admissible reading: ``reading_diffs`` (reading -> ``(diff, se, runs)``) for an ordering,
+``readings`` (reading -> True / False / None) for a yes/no statement, ``reading_values``
+(reading -> ``(ours, se)``) for a published number; ``excluded`` names readings the paper's own
+text or numbers rule out (shown, not counted). :func:`combine_readings` makes one verdict of
+them. Which free choices a claim rests on is declared in ``depends_on`` and checked against
+the chapter's assumptions table (:mod:`pfrepro.choices`). An absolute number that the paper's
+unpublished settings decide passes ``not_checkable="<why>"``: its verdict is ``not checkable``
+whatever the numbers.
 
 :func:`claims_table` turns a chapter's claims (or the scorecard's) into the compact
 table every page shows: the claim, ours ± SE, published (± its SE), what was judged
