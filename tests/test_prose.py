@@ -13,6 +13,16 @@ def test_plural_and_count_is():
     assert prose.count_is(3, "reproduced") == "3 are reproduced"
 
 
+def test_join_and():
+    import pytest
+
+    assert prose.join_and(["a"]) == "a"
+    assert prose.join_and(["a", "b"]) == "a and b"
+    assert prose.join_and(x for x in "abc") == "a, b and c"
+    with pytest.raises(ValueError):
+        prose.join_and([])
+
+
 def test_verdict_sentence_agrees_in_number():
     s = prose.verdict_sentence(["reproduced", "inconclusive", "inconclusive"])
     assert s == ("Of 3 claims, 1 is reproduced, 0 are qualitatively reproduced, 0 are not reproduced "

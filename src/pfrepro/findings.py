@@ -73,7 +73,7 @@ def cause_sentence(claims) -> str:
     """The inconclusive claims by cause in words, e.g. "of the 5 inconclusive, 3 depend on the reading
     and 2 need more runs" (``""`` when none is inconclusive)."""
     from .claims import CAUSE_COUNT, CAUSE_READING, CAUSE_RUNS, CAUSE_TIE
-    from .prose import plural
+    from .prose import join_and, plural
 
     causes = [c.cause for c in claims if c.verdict == "inconclusive"]
     if not causes:
@@ -87,8 +87,7 @@ def cause_sentence(claims) -> str:
         n = causes.count(cause)
         if n:
             parts.append(f"{n} {one if n == 1 else many}")
-    listed = parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " and " + parts[-1]
-    return f"of the {plural(len(causes), 'inconclusive claim')}, {listed}" if len(causes) > 1 else (
+    return f"of the {plural(len(causes), 'inconclusive claim')}, {join_and(parts)}" if len(causes) > 1 else (
         f"the inconclusive claim {parts[0].split(' ', 1)[1]}")
 
 

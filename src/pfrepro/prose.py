@@ -16,7 +16,7 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
-__all__ = ["glue_value", "glue_md", "glue_all", "Md", "glue_figure", "plural", "count_is", "verdict_sentence", "VERDICT_ORDER",
+__all__ = ["glue_value", "glue_md", "glue_all", "Md", "glue_figure", "plural", "count_is", "join_and", "verdict_sentence", "VERDICT_ORDER",
            "MISSING", "use_book_tables", "text_columns"]
 
 #: how a table shows a missing value (NaN), a dash with its meaning on hover, never "NaN"
@@ -209,6 +209,14 @@ def plural(n: int, one: str, many: str | None = None) -> str:
     return f"{n} {one if n == 1 else many}"
 
 
+def join_and(items) -> str:
+    """``"a"``, ``"a and b"``, ``"a, b and c"``: a list in running text (``ValueError`` if empty)."""
+    items = [str(i) for i in items]
+    if not items:
+        raise ValueError("join_and needs at least one item")
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
+
+
 def count_is(n: int, predicate: str) -> str:
     """``"1 is reproduced"``, ``"0 are reproduced"``, ``"3 are reproduced"``."""
     return f"{n} {'is' if n == 1 else 'are'} {predicate}"
@@ -246,5 +254,4 @@ def verdict_sentence(verdicts: Iterable[str] | Mapping[str, int], noun: str = "c
     order, always = list(order), set(always)
     parts = [count_is(counts.get(v, 0), v) for v in order if v in always or counts.get(v, 0)]
     parts += [count_is(n, v) for v, n in counts.items() if v not in order and n]
-    listed = parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + " and " + parts[-1]
-    return f"Of {plural(total, noun)}, {listed}"
+    return f"Of {plural(total, noun)}, {join_and(parts)}"

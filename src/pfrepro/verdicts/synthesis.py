@@ -44,7 +44,7 @@ from ..experiments.synthesis import (ALPHA, BOT_CENTRED_EXCLUDED, BOT_FLOW_REF_T
                                      BenchResult, _cost, _frontier_names)
 from ..experiments.synthesis import distance_table
 from ..metrics import mse
-from ..prose import Md, plural
+from ..prose import Md, join_and, plural
 from ..stats import holm, p_two_sided, plan_runs, ratio_of_means
 from .ekf_pf_li2012 import pf_beats_ekf
 
@@ -532,11 +532,6 @@ _SCALAR = ("ung_zhang", "ung_li", "ung_ning")
 _SETTING = {"ung_zhang": "GPFF", "ung_li": "Li", "ung_ning": "CMS-PF"}
 
 
-def _and(items) -> str:
-    items = list(items)
-    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
-
-
 def takeaway(reg: ClaimsRegistry, results) -> str:
     """What a practitioner should take away from the synthesis, generated from its claims and rankings.
 
@@ -582,7 +577,7 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
     elif len(better) == n:
         first = f"Every method proposed in the papers is better than {base} at the same number of model evaluations"
     else:
-        first = (f"Of the methods proposed in the papers, only {_and(better)} "
+        first = (f"Of the methods proposed in the papers, only {join_and(better)} "
                  f"{'is' if len(better) == 1 else 'are'} better than {base} at the same number of model "
                  f"evaluations ({len(better)} of {plural(n, 'comparison')})")
     keys = [k for k in results if k != BOT_READINGS["centred"]]
@@ -597,10 +592,10 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
     if len(groups) == 1:
         parts.append(f"{next(iter(groups))} on the scalar growth model")
     elif groups:
-        parts.append(_and(f"{p} on the {_and(s)} setting{'s' if len(s) > 1 else ''}" for p, s in groups.items())
+        parts.append(join_and(f"{p} on the {join_and(s)} setting{'s' if len(s) > 1 else ''}" for p, s in groups.items())
                      + " of the scalar growth model")
     parts += [f"{use[k]} for {_PROBLEM_PHRASE.get(k, k)}" for k in keys if k not in _SCALAR]
-    return f"{first}. What to use, the cheapest method that no other is shown to beat: {_and(parts)}."
+    return f"{first}. What to use, the cheapest method that no other is shown to beat: {join_and(parts)}."
 
 
 # --------------------------------------------------------------------------- the chapter's prose
