@@ -716,7 +716,7 @@ PAGE_JS = r"""
   // names of parameters and functions, so these two apply to the reader's chapters only
   if (!OPT.api && !OPT.apiIndex) internalRules.push(
     // None as a value (the English "None of them" goes on with a lower-case word), "= none"
-    ['None', /(?<![\w`])None(?![\w`])(?!\s+[a-z])|=\s*none\b/g],
+    ['None', /(?<![\w`])None(?![\w`])(?!\s+[a-z])|=\s*[Nn]one\b/g],
     // a snake_case identifier (a claim id, a choice or column name); x86_64 is a word
     ['claim id', /(?<![\w./:@-])(?!x86_64\b)[a-z][a-z0-9]*(?:_[a-z0-9]+)+(?![\w/@]|\.\w|\(|-\w)/g]);
   let nInternal = 0;
@@ -725,8 +725,11 @@ PAGE_JS = r"""
       const sp = spans.find(s => m.index >= s[0] && m.index < s[1]);
       const ctxStart = Math.max(0, m.index - 30);
       const ctx = flat.slice(ctxStart, ctxStart + 60).replace(/\s+/g, ' ').trim();
+      // "x_k", "w_0", "sigma_v": plain-text maths rather than an id (it fails all the same: the
+      // reader should see x with a subscript k)
+      const kind = what === 'claim id' && /^(?:[a-z]{1,3}|sigma|sum|max|min)_[a-z0-9]{1,2}$/.test(m[0]) ? 'ASCII subscript' : what;
       if (nInternal++ < OPT.maxInternal)
-        fails.push({kind: 'internal', what: (sp ? label(sp[2]) : 'text') + ' ' + what,
+        fails.push({kind: 'internal', what: (sp ? label(sp[2]) : 'text') + ' ' + kind,
                     detail: `${JSON.stringify(m[0])} in "${ctx}"`, box: sp ? box(sp[2]) : undefined});
     }
   }
