@@ -77,9 +77,13 @@ from .stats import CommonRunsError, common_runs, paired_difference
 __all__ = ["Claim", "ClaimsRegistry", "verdict", "judge", "judge_ordering", "combine_readings", "Judgement",
            "CAUSES", "CAUSE_READING", "CAUSE_RUNS", "CAUSE_TIE", "CAUSE_COUNT", "VERDICTS", "claims_dir", "load_all_claims",
            "DEFAULT_REL_TOL", "Z_CRIT", "ordering_holds", "weakest_ordering",
-           "readings_hold", "claims_table", "causes_table", "inconclusive_table", "cause_text", "as_claims", "plan_problems", "BASES", "number_matches", "check_saved_claims"]
+           "readings_hold", "claims_table", "causes_table", "inconclusive_table", "cause_text", "as_claims", "plan_problems", "BASES", "number_matches", "check_saved_claims",
+           "VERDICT_HREF", "verdict_html"]
 
 VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive")
+#: where the book defines the verdict words: the scorecard's section labelled ``verdict-scale``,
+#: relative to a page of ``book/`` (every chapter, the introduction and the scorecard itself)
+VERDICT_HREF = "99_scorecard.html#verdict-scale"
 #: relative tolerance for numeric claims when none is stated
 DEFAULT_REL_TOL = 0.10
 #: a published value within Z_CRIT standard errors of ours counts as inside our uncertainty
@@ -684,6 +688,31 @@ def inconclusive_table(claims) -> pd.DataFrame:
     rows = [{"paper": c.paper, "id": c.claim_id, "claim": c.text, "cause": c.cause, "why": cause_text(c),
              "runs needed": c.runs_needed} for c in as_claims(claims) if c.verdict == "inconclusive"]
     return pd.DataFrame(rows, columns=["paper", "id", "claim", "cause", "why", "runs needed"])
+
+
+def verdict_html(text: str, href: str = VERDICT_HREF, *, escape=None) -> str:
+    """A verdict as HTML for the book's tables and findings: the verdict word a link to its
+    definition (``href``, the scorecard's verdict scale), whatever follows it (the cause of an
+    inconclusive verdict, ``Claim.verdict_text``) after it as text.
+
+    ``text``: a verdict of :data:`VERDICTS`, alone or followed by a space and more words, e.g.
+    ``"inconclusive (too few runs: 140 would decide)"``; text that starts with no verdict word is
+    returned escaped, without a link. ``escape``: how the rest is turned into HTML (default
+    ``html.escape``; the tables pass their number-keeping escaper). The link carries the class
+    ``pf-verdict pf-verdict-<word>`` the stylesheet colours verdicts by.
+    """
+    import html
+
+    if not isinstance(text, str):
+        raise TypeError(f"verdict_html: text must be a str, got {type(text).__name__}")
+    escape = escape or html.escape
+    word = next((v for v in sorted(VERDICTS, key=len, reverse=True)
+                 if text == v or text.startswith(v + " ")), None)
+    if word is None:
+        return escape(text)
+    cls = "pf-verdict pf-verdict-" + word.replace(" ", "-")
+    return (f'<a class="{cls}" href="{html.escape(href, quote=True)}">{html.escape(word)}</a>'
+            + escape(text[len(word):]))
 
 
 def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFrame:
