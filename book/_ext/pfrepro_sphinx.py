@@ -9,9 +9,15 @@
   module's docstring and the members it does *not* re-export through the package (those are
   documented once, under the package) and that it defines itself (a name it imports from a
   sibling, kept importable there, is documented with the sibling), so nothing is documented twice.
+* "(module docstring)" in a docstring (a class or function pointing to the method its module's
+  docstring describes) becomes a link to that module's section of the reference ("see
+  ``pfrepro.filters.dual_pf``"), or to the nearest package documented, so the pointer leads
+  somewhere on the page instead of naming a Python attribute the reader cannot open.
 """
 import importlib
 import inspect
+import re
+from pathlib import Path
 
 from docutils import nodes
 from docutils.statemachine import StringList
@@ -84,9 +90,62 @@ class ModuleRest(_Generated):
         return self._parse(lines)
 
 
+#: the phrases a docstring uses to point at its module's docstring, and what each becomes
+_MODULE_DOCSTRING = (
+    (re.compile(r"\((?:see )?(?:the )?module docstring\)"), "(see :mod:`{mod}`)"),
+    (re.compile(r"\b[Ss]ee (?:the )?module docstring"), "see :mod:`{mod}`"),
+    (re.compile(r"\b(?:the |its )?module docstring"), ":mod:`{mod}`"),
+)
+_DIRECTIVE_MODULE = re.compile(r"^\s*\.\.\s+(?:automodule|pfrepro-module|py:module)::\s+(\S+)", re.M)
+
+
+def documented_modules(srcdir) -> set[str]:
+    """The modules the API pages document (each has a ``module-<name>`` target to link to)."""
+    found = set()
+    for page in Path(srcdir).glob("**/api/*.md"):
+        if "_build" not in page.parts:
+            found.update(_DIRECTIVE_MODULE.findall(page.read_text(encoding="utf-8")))
+    return found
+
+
+def module_target(name: str, documented: set[str]) -> str | None:
+    """``name`` if documented, else its nearest documented package (None if there is none)."""
+    while name:
+        if name in documented:
+            return name
+        name = name.rpartition(".")[0]
+    return None
+
+
+def link_module_docstring(lines: list[str], module: str, documented: set[str]) -> None:
+    """Rewrite "(module docstring)" pointers in ``lines`` (in place) into links to ``module``."""
+    target = module_target(module, documented)
+    for i, line in enumerate(lines):
+        if "module docstring" not in line:
+            continue
+        for rx, repl in _MODULE_DOCSTRING:
+            if target:
+                line = rx.sub(repl.format(mod=target), line)
+            else:  # nothing documented to link to: name the module, as code
+                line = rx.sub(repl.replace(":mod:`{mod}`", "``{mod}``").format(mod=module), line)
+        lines[i] = line
+
+
+def _process_docstring(app, what, name, obj, options, lines):
+    if what == "module":
+        return
+    module = getattr(obj, "__module__", None) or name.rpartition(".")[0]
+    if not isinstance(module, str):
+        return
+    if not hasattr(app.env, "_pfrepro_documented"):
+        app.env._pfrepro_documented = documented_modules(app.srcdir)
+    link_module_docstring(lines, module, app.env._pfrepro_documented)
+
+
 def setup(app):
     _one_blas_thread_in_kernels()
     app.connect("config-inited", _tuples)
+    app.connect("autodoc-process-docstring", _process_docstring)
     app.add_directive("pfrepro-summary", PackageSummary)
     app.add_directive("pfrepro-module", ModuleRest)
     return {"parallel_read_safe": True, "parallel_write_safe": True}

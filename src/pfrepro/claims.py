@@ -81,8 +81,8 @@ __all__ = ["Claim", "ClaimsRegistry", "verdict", "judge", "judge_ordering", "com
            "VERDICT_HREF", "verdict_html"]
 
 VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive")
-#: where the book defines the verdict words: the scorecard's section labelled ``verdict-scale``,
-#: relative to a page of ``book/`` (every chapter, the introduction and the scorecard itself)
+#: Where the book defines the verdict words (the scorecard's section labelled ``verdict-scale``),
+#: relative to a page of ``book/`` (every chapter, the introduction and the scorecard itself).
 VERDICT_HREF = "99_scorecard.html#verdict-scale"
 #: relative tolerance for numeric claims when none is stated
 DEFAULT_REL_TOL = 0.10
@@ -695,7 +695,7 @@ def verdict_html(text: str, href: str = VERDICT_HREF, *, escape=None) -> str:
     definition (``href``, the scorecard's verdict scale), whatever follows it (the cause of an
     inconclusive verdict, ``Claim.verdict_text``) after it as text.
 
-    ``text``: a verdict of :data:`VERDICTS`, alone or followed by a space and more words, e.g.
+    ``text``: a verdict of ``VERDICTS``, alone or followed by a space and more words, e.g.
     ``"inconclusive (too few runs: 140 would decide)"``; text that starts with no verdict word is
     returned escaped, without a link. ``escape``: how the rest is turned into HTML (default
     ``html.escape``; the tables pass their number-keeping escaper). The link carries the class

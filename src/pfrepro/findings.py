@@ -21,8 +21,8 @@ from .prose import verdict_sentence
 __all__ = ["findings_html", "chapter_findings", "cause_sentence", "save_findings", "load_findings", "book_findings_html",
            "intro_coverage", "RULE_HREF", "verdict_link"]
 
-#: where the verdict words are defined: the scorecard's verdict scale (``(verdict-scale)=``),
-#: the same target as the claims tables' verdict links (:data:`pfrepro.claims.VERDICT_HREF`)
+#: Where the verdict words are defined (the scorecard's verdict scale), the same target as the
+#: claims tables' verdict links, :data:`pfrepro.claims.VERDICT_HREF`.
 RULE_HREF = VERDICT_HREF
 
 

@@ -1,0 +1,56 @@
+"""book/_ext/pfrepro_sphinx.py: "(module docstring)" pointers in docstrings become links."""
+import importlib.util
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+_spec = importlib.util.spec_from_file_location("pfrepro_sphinx", ROOT / "book/_ext/pfrepro_sphinx.py")
+ext = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(ext)
+
+DOCUMENTED = {"pfrepro.filters", "pfrepro.filters.dual_pf", "pfrepro.models"}
+
+
+@pytest.mark.parametrize("before, after", [
+    ("Hou & Yin's dual particle filter (module docstring).",
+     "Hou & Yin's dual particle filter (see :mod:`pfrepro.filters.dual_pf`)."),
+    ("ESPF as reconstructed; see the module docstring.", "ESPF as reconstructed; see :mod:`pfrepro.filters.dual_pf`."),
+    ("Steps 2.1-2.5 of the module docstring: predict", "Steps 2.1-2.5 of :mod:`pfrepro.filters.dual_pf`: predict"),
+    ("(see the module docstring)", "(see :mod:`pfrepro.filters.dual_pf`)"),
+    ("A line that says nothing of it.", "A line that says nothing of it."),
+])
+def test_module_docstring_pointer_becomes_a_link(before, after):
+    lines = [before]
+    ext.link_module_docstring(lines, "pfrepro.filters.dual_pf", DOCUMENTED)
+    assert lines == [after]
+
+
+def test_an_undocumented_module_links_to_its_package_or_is_named():
+    lines = ["The UNGM (module docstring)."]
+    ext.link_module_docstring(lines, "pfrepro.models.ungm", DOCUMENTED)
+    assert lines == ["The UNGM (see :mod:`pfrepro.models`)."]
+    lines = ["Nothing documented (module docstring)."]
+    ext.link_module_docstring(lines, "elsewhere.mod", DOCUMENTED)
+    assert lines == ["Nothing documented (see ``elsewhere.mod``)."]
+
+
+def test_documented_modules_are_read_from_the_api_pages():
+    found = ext.documented_modules(ROOT / "book")
+    assert {"pfrepro.filters", "pfrepro.filters.dual_pf", "pfrepro.claims"} <= found
+    assert all(re.fullmatch(r"[\w.]+", m) for m in found)
+
+
+def test_no_docstring_pointer_is_left_unlinked():
+    """Every "module docstring" in the package's docstrings is one the extension rewrites."""
+    bad = []
+    documented = ext.documented_modules(ROOT / "book")
+    for path in sorted((ROOT / "src/pfrepro").rglob("*.py")):
+        for no, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            if "module docstring" in line:
+                probe = [line]
+                ext.link_module_docstring(probe, "pfrepro.x", documented | {"pfrepro.x"})
+                if "module docstring" in probe[0]:
+                    bad.append(f"{path.name}:{no}: {line.strip()}")
+    assert not bad, "\n".join(bad)
