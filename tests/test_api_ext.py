@@ -15,10 +15,14 @@ DOCUMENTED = {"pfrepro.filters", "pfrepro.filters.dual_pf", "pfrepro.models"}
 
 @pytest.mark.parametrize("before, after", [
     ("Hou & Yin's dual particle filter (module docstring).",
-     "Hou & Yin's dual particle filter (see :mod:`pfrepro.filters.dual_pf`)."),
-    ("ESPF as reconstructed; see the module docstring.", "ESPF as reconstructed; see :mod:`pfrepro.filters.dual_pf`."),
-    ("Steps 2.1-2.5 of the module docstring: predict", "Steps 2.1-2.5 of :mod:`pfrepro.filters.dual_pf`: predict"),
-    ("(see the module docstring)", "(see :mod:`pfrepro.filters.dual_pf`)"),
+     "Hou & Yin's dual particle filter (described with :mod:`pfrepro.filters.dual_pf`)."),
+    ("ESPF as reconstructed; see the module docstring.",
+     "ESPF as reconstructed; see the description of :mod:`pfrepro.filters.dual_pf`."),
+    ("Steps 2.1-2.5 of the module docstring: predict",
+     "Steps 2.1-2.5 of the description of :mod:`pfrepro.filters.dual_pf`: predict"),
+    ("(see the module docstring)", "(described with :mod:`pfrepro.filters.dual_pf`)"),
+    ("The verdict word (see there and the module docstring).",
+     "The verdict word (see there and the description of :mod:`pfrepro.filters.dual_pf`)."),
     ("A line that says nothing of it.", "A line that says nothing of it."),
 ])
 def test_module_docstring_pointer_becomes_a_link(before, after):
@@ -30,10 +34,10 @@ def test_module_docstring_pointer_becomes_a_link(before, after):
 def test_an_undocumented_module_links_to_its_package_or_is_named():
     lines = ["The UNGM (module docstring)."]
     ext.link_module_docstring(lines, "pfrepro.models.ungm", DOCUMENTED)
-    assert lines == ["The UNGM (see :mod:`pfrepro.models`)."]
+    assert lines == ["The UNGM (described with :mod:`pfrepro.models`)."]
     lines = ["Nothing documented (module docstring)."]
     ext.link_module_docstring(lines, "elsewhere.mod", DOCUMENTED)
-    assert lines == ["Nothing documented (see ``elsewhere.mod``)."]
+    assert lines == ["Nothing documented (described with ``elsewhere.mod``)."]
 
 
 def test_documented_modules_are_read_from_the_api_pages():

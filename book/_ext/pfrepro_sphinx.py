@@ -10,9 +10,10 @@
   documented once, under the package) and that it defines itself (a name it imports from a
   sibling, kept importable there, is documented with the sibling), so nothing is documented twice.
 * "(module docstring)" in a docstring (a class or function pointing to the method its module's
-  docstring describes) becomes a link to that module's section of the reference ("see
-  ``pfrepro.filters.dual_pf``"), or to the nearest package documented, so the pointer leads
-  somewhere on the page instead of naming a Python attribute the reader cannot open.
+  docstring describes) becomes a link to that module's section of the reference ("described
+  with ``pfrepro.filters.dual_pf``", "see the description of ``pfrepro.claims``"), or to the
+  nearest package documented, so the pointer leads somewhere on the page instead of naming a
+  Python attribute the reader cannot open.
 """
 import importlib
 import inspect
@@ -92,9 +93,8 @@ class ModuleRest(_Generated):
 
 #: the phrases a docstring uses to point at its module's docstring, and what each becomes
 _MODULE_DOCSTRING = (
-    (re.compile(r"\((?:see )?(?:the )?module docstring\)"), "(see :mod:`{mod}`)"),
-    (re.compile(r"\b[Ss]ee (?:the )?module docstring"), "see :mod:`{mod}`"),
-    (re.compile(r"\b(?:the |its )?module docstring"), ":mod:`{mod}`"),
+    (re.compile(r"\((?:see )?(?:the )?module docstring\)"), "(described with :mod:`{mod}`)"),
+    (re.compile(r"\b(?:the |its )?module docstring"), "the description of :mod:`{mod}`"),
 )
 _DIRECTIVE_MODULE = re.compile(r"^\s*\.\.\s+(?:automodule|pfrepro-module|py:module)::\s+(\S+)", re.M)
 

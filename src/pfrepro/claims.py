@@ -439,32 +439,60 @@ def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, q
 
 @dataclass
 class Claim:
-    """One claim of one paper, with the numbers its verdict is computed from."""
+    """One claim of one paper, with the numbers its verdict is computed from.
 
+    A chapter records claims with :meth:`ClaimsRegistry.add`, whose arguments are these fields;
+    the verdict is never stored, it is recomputed from them (:attr:`verdict`).
+    """
+
+    #: The paper's key, e.g. ``"gpff_zhang2016"``.
     paper: str
+    #: The claim's id within its paper (the anchor of its row in the chapter).
     claim_id: str
+    #: The claim in words, with where the paper makes it.
     text: str
+    #: The published number, if the paper prints one.
     published: float | None = None
+    #: Our number for it (a Monte Carlo mean).
     reproduced: float | None = None
+    #: The standard error of our number.
     se: float | None = None
+    #: Relative tolerance for a number without standard errors (``DEFAULT_REL_TOL`` unless stated).
     rel_tol: float | None = DEFAULT_REL_TOL
+    #: Whether a yes/no statement holds in our runs (no number compared).
     qualitative: bool | None = None
-    source: str = ""   # where in the paper (table/figure/section)
-    note: str = ""     # what was compared, in a few words
-    diff: float | None = None     # paired difference (claim asserts diff > 0), see paired_difference
-    diff_se: float | None = None  # its standard error
-    published_se: float | None = None  # the paper's own standard error (printed spread / per-run rows)
-    basis: str = ""               # "count": a cost claim decided on a deterministic cost count
-    readings: dict | None = None  # reading of the paper -> does the statement hold under it
-    reading_values: dict | None = None  # reading -> [ours, se] of a published number under it
-    depends_on: list | None = None      # free choices (pfrepro.choices) the verdict rests on
-    not_checkable: str = ""             # why the paper's unpublished settings decide this number
-    published_text: str | None = None   # ``published`` exactly as the paper prints it (pfrepro.published.printed)
-    effect: float | None = None         # the printed effect, oriented like diff (> 0): its size is tested
-    margin: float | None = None         # smallest effect of interest, stated up front (no printed effect)
-    runs: int | None = None             # runs behind diff (the main reading)
-    reading_diffs: dict | None = None   # reading -> [diff, se, runs] of the ordering under it
-    excluded: dict | None = None        # reading -> why the paper excludes it (shown, not counted)
+    #: Where in the paper (table, figure, section).
+    source: str = ""
+    #: What was compared, in a few words.
+    note: str = ""
+    #: Paired difference the claim asserts is positive (``pfrepro.stats.paired_difference``).
+    diff: float | None = None
+    #: The standard error of ``diff``.
+    diff_se: float | None = None
+    #: The paper's own standard error (a printed spread or per-run rows).
+    published_se: float | None = None
+    #: ``"count"`` for a cost claim decided on a deterministic cost count, else ``""``.
+    basis: str = ""
+    #: Reading of the paper -> does the statement hold under it.
+    readings: dict | None = None
+    #: Reading -> ``[ours, se]`` of a published number under it.
+    reading_values: dict | None = None
+    #: The free choices (``pfrepro.choices``) the verdict rests on.
+    depends_on: list | None = None
+    #: Why the paper's unpublished settings decide this number (then it is not checkable).
+    not_checkable: str = ""
+    #: ``published`` exactly as the paper prints it (``pfrepro.published.printed``).
+    published_text: str | None = None
+    #: The printed effect, oriented like ``diff`` (> 0): its size is tested.
+    effect: float | None = None
+    #: The smallest effect of interest, stated up front when the paper prints no effect.
+    margin: float | None = None
+    #: The runs behind ``diff`` (the main reading).
+    runs: int | None = None
+    #: Reading -> ``[diff, se, runs]`` of the ordering under it.
+    reading_diffs: dict | None = None
+    #: Reading -> why the paper excludes it (shown, not counted).
+    excluded: dict | None = None
 
     @property
     def judgement(self) -> Judgement:

@@ -643,7 +643,7 @@ PAGE_JS = r"""
     const words = text.split(/\s+/).filter(w => /[\p{L}\p{N}]/u.test(w)).length;
     if (words < 3) return;
     const lines = linesOf(rects);
-    if (lines >= words && nNarrow++ < 100)
+    if (lines >= words && nNarrow++ < 400)
       fails.push({kind: 'narrow', what: label(cell) + (cell.dataset.label ? ` [${cell.dataset.label}]` : ''),
                   detail: `${words} words on ${lines} lines (one word per line): ` + JSON.stringify(text.trim().replace(/\s+/g, ' ').slice(0, 60)), box: box(cell)});
   });
@@ -737,10 +737,12 @@ PAGE_JS = r"""
   col.querySelectorAll('td, th').forEach(cell => {
     if (!shown(cell)) return;
     const t = cell.textContent.trim();
-    const m = t.match(/(?<![\w.])(?:nan|NaN|<NA>|NaT)(?![\w])/);
-    if (m && nInternal++ < OPT.maxInternal)
+    // a value cell ("nan", "0.5 ± nan"), not a sentence that names NaN ("runs stopped (NaN from ...)")
+    const nanRe = /(?<![\w.])(?:nan|NaN|<NA>|NaT)(?![\w])/g;
+    const m = t.match(nanRe);
+    if (m && !/\p{L}/u.test(t.replace(nanRe, '')) && nInternal++ < OPT.maxInternal)
       fails.push({kind: 'internal', what: label(cell) + ' nan in a table',
-                  detail: `${JSON.stringify(m[0])} in "${t.replace(/\s+/g, ' ').slice(0, 60)}"`, box: box(cell)});
+                  detail: `${JSON.stringify(m[0])} as a value in "${t.replace(/\s+/g, ' ').slice(0, 60)}"`, box: box(cell)});
   });
 
   return {mathjax, fails, notes, column: Math.round(colWidth), title: document.title};

@@ -303,6 +303,8 @@ def test_nan_shown_as_a_table_value_fails(tmp_path):
         got = _fails(tmp_path, _page(f"<table><tr><td>{cell}</td></tr></table>"), kind="internal")
         assert len(got) == 1 and "nan" in got[0]["what"], (cell, got)
     _only(_run(tmp_path, _page("<table><tr><td>finance and nanometres</td></tr></table>")))
+    # a sentence in a cell that names NaN is not a value
+    _only(_run(tmp_path, _page("<table><tr><td>Some runs diverged (NaN from that step on)</td></tr></table>")))
 
 
 def test_internal_words_where_they_belong_pass(tmp_path):
