@@ -58,3 +58,50 @@ def test_no_docstring_pointer_is_left_unlinked():
                 if "module docstring" in probe[0]:
                     bad.append(f"{path.name}:{no}: {line.strip()}")
     assert not bad, "\n".join(bad)
+
+
+def _class_with_fields(described=("x", "P"), members=(("x", ""), ("P", ""), ("runs", "Number of runs."))):
+    """A doctree like autodoc's: a class whose "Variables" field list describes some fields, then an
+    attribute entry per member (empty unless it has its own docstring)."""
+    from docutils import nodes
+    from docutils.utils import new_document
+    from docutils.frontend import get_default_settings
+    from docutils.parsers.rst import Parser
+    from sphinx import addnodes
+
+    doc = new_document("test", get_default_settings(Parser))
+    cls = addnodes.desc(objtype="class")
+    cls += addnodes.desc_signature(ids=["pkg.R"], fullname="R")
+    content = addnodes.desc_content()
+    items = nodes.bullet_list()
+    for name in described:
+        items += nodes.list_item("", nodes.paragraph("", "", nodes.strong(text=name), nodes.Text(f" – the {name}")))
+    content += nodes.field_list("", nodes.field("", nodes.field_name(text="Variables"), nodes.field_body("", items)))
+    for name, text in members:
+        m = addnodes.desc(objtype="attribute")
+        m += addnodes.desc_signature(ids=[f"pkg.R.{name}"], fullname=f"R.{name}")
+        body = addnodes.desc_content()
+        if text:
+            body += nodes.paragraph(text=text)
+        m += body
+        content += m
+    cls += content
+    doc += cls
+    return doc
+
+
+def test_a_field_described_by_its_class_is_listed_once():
+    from sphinx import addnodes
+
+    doc = _class_with_fields()
+    assert ext.merge_described_fields(doc) == 2
+    left = [d for d in doc.findall(addnodes.desc) if d.get("objtype") == "attribute"]
+    assert [d[0]["fullname"] for d in left] == ["R.runs"]      # it has a description of its own
+    # the anchors moved to the field's line, so links to R.x still land on its description
+    lines = {li.astext().split(" ")[0]: li["ids"] for li in doc.findall(lambda n: n.tagname == "list_item")}
+    assert lines == {"x": ["pkg.R.x"], "P": ["pkg.R.P"]}
+
+
+def test_fields_without_a_description_in_the_class_stay():
+    doc = _class_with_fields(described=())
+    assert ext.merge_described_fields(doc) == 0
