@@ -26,8 +26,10 @@ def _reg():
 @pytest.mark.parametrize("word", VERDICTS)
 def test_every_verdict_word_links_to_the_scale(word):
     out = verdict_html(word)
-    assert out == (f'<a class="pf-verdict pf-verdict-{word.replace(" ", "-")}" href="{VERDICT_HREF}">'
+    assert out == (f'<a class="pf-verdict-link pf-verdict-{word.replace(" ", "-")}" href="{VERDICT_HREF}">'
                    f"{word}</a>")
+    # the findings' class (no wrap, no underline) on request
+    assert verdict_html(word, cls="pf-verdict").startswith('<a class="pf-verdict pf-verdict-')
 
 
 def test_the_longest_verdict_word_is_linked_and_the_cause_follows_as_text():
@@ -35,7 +37,7 @@ def test_the_longest_verdict_word_is_linked_and_the_cause_follows_as_text():
     assert ">qualitatively reproduced</a>" in verdict_html("qualitatively reproduced")
     assert ">not reproduced</a>" in verdict_html("not reproduced")
     out = verdict_html("inconclusive (too few runs: 140 would decide) <b>")
-    assert out.startswith('<a class="pf-verdict pf-verdict-inconclusive"')
+    assert out.startswith('<a class="pf-verdict-link pf-verdict-inconclusive"')
     assert out.endswith("</a> (too few runs: 140 would decide) &lt;b&gt;")
     # a custom escaper for the rest (the tables keep their numbers on one line)
     assert verdict_html("inconclusive (x)", escape=str.upper).endswith("</a> (X)")

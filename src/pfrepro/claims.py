@@ -718,7 +718,7 @@ def inconclusive_table(claims) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["paper", "id", "claim", "cause", "why", "runs needed"])
 
 
-def verdict_html(text: str, href: str = VERDICT_HREF, *, escape=None) -> str:
+def verdict_html(text: str, href: str = VERDICT_HREF, *, escape=None, cls: str = "pf-verdict-link") -> str:
     """A verdict as HTML for the book's tables and findings: the verdict word a link to its
     definition (``href``, the scorecard's verdict scale), whatever follows it (the cause of an
     inconclusive verdict, ``Claim.verdict_text``) after it as text.
@@ -726,8 +726,10 @@ def verdict_html(text: str, href: str = VERDICT_HREF, *, escape=None) -> str:
     ``text``: a verdict of ``VERDICTS``, alone or followed by a space and more words, e.g.
     ``"inconclusive (too few runs: 140 would decide)"``; text that starts with no verdict word is
     returned escaped, without a link. ``escape``: how the rest is turned into HTML (default
-    ``html.escape``; the tables pass their number-keeping escaper). The link carries the class
-    ``pf-verdict pf-verdict-<word>`` the stylesheet colours verdicts by.
+    ``html.escape``; the tables pass their number-keeping escaper). The link carries the classes
+    ``cls`` and ``pf-verdict-<word>`` (the stylesheet colours verdicts by the latter); the default
+    ``pf-verdict-link`` keeps the theme's link underline and lets a long verdict wrap in a
+    narrow table column (the findings' ``pf-verdict`` links do not wrap).
     """
     import html
 
@@ -738,8 +740,8 @@ def verdict_html(text: str, href: str = VERDICT_HREF, *, escape=None) -> str:
                  if text == v or text.startswith(v + " ")), None)
     if word is None:
         return escape(text)
-    cls = "pf-verdict pf-verdict-" + word.replace(" ", "-")
-    return (f'<a class="{cls}" href="{html.escape(href, quote=True)}">{html.escape(word)}</a>'
+    classes = f"{cls} pf-verdict-" + word.replace(" ", "-")
+    return (f'<a class="{html.escape(classes, quote=True)}" href="{html.escape(href, quote=True)}">{html.escape(word)}</a>'
             + escape(text[len(word):]))
 
 

@@ -30,8 +30,8 @@ def verdict_link(verdict: str) -> str:
     """The verdict word as a link to its definition, styled like the claims tables' verdicts."""
     if verdict not in VERDICTS:
         raise ValueError(f"verdict_link: verdict must be one of {VERDICTS}, got {verdict!r}")
-    return verdict_html(verdict).replace(f">{html.escape(verdict)}</a>",
-                                         f"><strong>{html.escape(verdict)}</strong></a>")
+    return verdict_html(verdict, cls="pf-verdict").replace(f">{html.escape(verdict)}</a>",
+                                                           f"><strong>{html.escape(verdict)}</strong></a>")
 
 
 def _claim_line(paper: str, c: Claim) -> str:
