@@ -50,8 +50,8 @@ Per page it fails on
               shown as cards at that width, are exempt);
 ``narrow``    a table cell (or card line) of three or more words wrapped one word per line
               (as many lines as words, counted from the text's line boxes);
-``internal``  internal words in the reader's text (code, math, API signatures and the claims
-              tables excluded): issue numbers ("issue 22", "(#22", "#22"), module aliases
+``internal``  internal words in the reader's text (code, math and API signatures excluded;
+              claims tables may show claim ids): issue numbers ("issue 22", "(#22", "#22"), module aliases
               (``E.x``, ``S.x``, ``F.x``), ``None`` as a value, Python dict/list reprs,
               unrendered glue (``{glue:``, ``glue(``), and ``nan`` / ``NaN`` shown as a table
               value everywhere; ``None`` as a value and snake_case identifiers (claim ids,
@@ -680,7 +680,7 @@ PAGE_JS = r"""
   // Code, math, the API pages' signatures and the claims tables/cards are not reader prose here.
   // Collapsed dropdowns are read too (the reader opens them); hidden elements are not.
   const internalSkip = 'script, style, pre, code, kbd, samp, textarea, mjx-container, mjx-assistive-mml, .math, ' +
-    '.highlight, .cell_input, .headerlink, table.pf-claims, .sig, dt.sig, .sig-name, .sig-prename, ' +
+    '.highlight, .cell_input, .headerlink, .sig, dt.sig, .sig-name, .sig-prename, ' +
     '.bd-sidebar-primary, .bd-sidebar-secondary, .prev-next-area, .pf-internal-ok';
   const shown = el => {
     for (let a = el; a && a !== document.documentElement; a = a.parentElement) {
@@ -703,7 +703,8 @@ PAGE_JS = r"""
     if (!pe || !n.textContent.trim() || pe.closest(internalSkip) || !shown(pe)) continue;
     const b = blockOf(pe);
     if (b !== lastBlock) { flat += '\n'; lastBlock = b; }
-    spans.push([flat.length, flat.length + n.textContent.length, pe]);
+    // claims tables (cards on a phone) may show claim ids and reading names; the rest applies there too
+    spans.push([flat.length, flat.length + n.textContent.length, pe, !!pe.closest('table.pf-claims')]);
     flat += n.textContent;
   }
   const internalRules = [
@@ -715,14 +716,16 @@ PAGE_JS = r"""
   // the API reference documents Python: None is a value there and snake_case names are the
   // names of parameters and functions, so these two apply to the reader's chapters only
   if (!OPT.api && !OPT.apiIndex) internalRules.push(
-    // None as a value (the English "None of them" goes on with a lower-case word), "= none"
-    ['None', /(?<![\w`])None(?![\w`])(?!\s+[a-z])|=\s*[Nn]one\b/g],
+    // None as a value (the English "None of them" goes on with a lower-case word), "d = none"
+    // ("cap=none", a reading's name, is an id like "integrator=euler": claims tables show them)
+    ['None', /(?<![\w`])None(?![\w`])(?!\s+[a-z])|\s=\s*[Nn]one\b/g],
     // a snake_case identifier (a claim id, a choice or column name); x86_64 is a word
     ['claim id', /(?<![\w./:@-])(?!x86_64\b)[a-z][a-z0-9]*(?:_[a-z0-9]+)+(?![\w/@]|\.\w|\(|-\w)/g]);
   let nInternal = 0;
   for (const [what, re] of internalRules) {
     for (const m of flat.matchAll(re)) {
       const sp = spans.find(s => m.index >= s[0] && m.index < s[1]);
+      if (what === 'claim id' && sp && sp[3]) continue;
       const ctxStart = Math.max(0, m.index - 30);
       const ctx = flat.slice(ctxStart, ctxStart + 60).replace(/\s+/g, ' ').trim();
       // "x_k", "w_0", "sigma_v": plain-text maths rather than an id (it fails all the same: the

@@ -313,7 +313,8 @@ def test_internal_words_where_they_belong_pass(tmp_path):
             "<span class='math'><mjx-container>x_k</mjx-container></span>; built on x86_64.</p>"
             "<pre>glue(\"ratio\", r)  # issue 22\nd = None</pre>"
             "<div class='highlight'><span>{'main': 1}</span></div>"
-            "<table class='pf-claims'><tr><td>bot_pf4000_worse</td><td>reproduced</td></tr></table>"
+            "<table class='pf-claims'><tr><td>bot_pf4000_worse</td><td>reproduced</td>"
+            "<td>n_th=2: holds; cap=none: fails</td></tr></table>"
             "<p class='pf-internal-ok'>the id bot_pf4000_worse, explained</p>"
             "<p style='display:none'>issue 22 hidden</p>"
             "<p>Equation 3 of <a href='https://example.org/a_b/c_d.pdf'>the paper</a> and section 5.2.</p>")
@@ -322,6 +323,14 @@ def test_internal_words_where_they_belong_pass(tmp_path):
     # a closed dropdown is read (the reader opens it)
     got = _fails(tmp_path, _page("<details><summary>more</summary><p>see issue 22</p></details>"), kind="internal")
     assert len(got) == 1, got
+
+
+def test_claims_tables_may_show_ids_but_nothing_else_internal(tmp_path):
+    table = "<table class='pf-claims'><tr><td>bot_pf4000_worse</td><td>{}</td></tr></table>"
+    _only(_run(tmp_path, _page(table.format("reproduced"))))
+    for text, what in (("held at d = None", "None"), ("see issue 22", "issue number"), ("nan", "nan")):
+        got = _fails(tmp_path, _page(table.format(text)), kind="internal")
+        assert len(got) == 1 and what in got[0]["what"], (text, got)
 
 
 def test_api_pages_document_python(tmp_path):
