@@ -77,9 +77,13 @@ from .stats import CommonRunsError, common_runs, paired_difference
 __all__ = ["Claim", "ClaimsRegistry", "verdict", "judge", "judge_ordering", "combine_readings", "Judgement",
            "CAUSES", "CAUSE_READING", "CAUSE_RUNS", "CAUSE_TIE", "CAUSE_COUNT", "VERDICTS", "claims_dir", "load_all_claims",
            "DEFAULT_REL_TOL", "Z_CRIT", "ordering_holds", "weakest_ordering",
-           "readings_hold", "claims_table", "causes_table", "inconclusive_table", "cause_text", "as_claims", "plan_problems", "BASES", "number_matches", "check_saved_claims"]
+           "readings_hold", "claims_table", "causes_table", "inconclusive_table", "cause_text", "as_claims", "plan_problems", "BASES", "number_matches", "check_saved_claims",
+           "VERDICT_HREF", "verdict_html"]
 
 VERDICTS = ("reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive")
+#: Where the book defines the verdict words (the scorecard's section labelled ``verdict-scale``),
+#: relative to a page of ``book/`` (every chapter, the introduction and the scorecard itself).
+VERDICT_HREF = "99_scorecard.html#verdict-scale"
 #: relative tolerance for numeric claims when none is stated
 DEFAULT_REL_TOL = 0.10
 #: a published value within Z_CRIT standard errors of ours counts as inside our uncertainty
@@ -435,32 +439,60 @@ def verdict(published=None, reproduced=None, se=None, rel_tol=DEFAULT_REL_TOL, q
 
 @dataclass
 class Claim:
-    """One claim of one paper, with the numbers its verdict is computed from."""
+    """One claim of one paper, with the numbers its verdict is computed from.
 
+    A chapter records claims with :meth:`ClaimsRegistry.add`, whose arguments are these fields;
+    the verdict is never stored, it is recomputed from them (:attr:`verdict`).
+    """
+
+    #: The paper's key, e.g. ``"gpff_zhang2016"``.
     paper: str
+    #: The claim's id within its paper (the anchor of its row in the chapter).
     claim_id: str
+    #: The claim in words, with where the paper makes it.
     text: str
+    #: The published number, if the paper prints one.
     published: float | None = None
+    #: Our number for it (a Monte Carlo mean).
     reproduced: float | None = None
+    #: The standard error of our number.
     se: float | None = None
+    #: Relative tolerance for a number without standard errors (``DEFAULT_REL_TOL`` unless stated).
     rel_tol: float | None = DEFAULT_REL_TOL
+    #: Whether a yes/no statement holds in our runs (no number compared).
     qualitative: bool | None = None
-    source: str = ""   # where in the paper (table/figure/section)
-    note: str = ""     # what was compared, in a few words
-    diff: float | None = None     # paired difference (claim asserts diff > 0), see paired_difference
-    diff_se: float | None = None  # its standard error
-    published_se: float | None = None  # the paper's own standard error (printed spread / per-run rows)
-    basis: str = ""               # "count": a cost claim decided on a deterministic cost count
-    readings: dict | None = None  # reading of the paper -> does the statement hold under it
-    reading_values: dict | None = None  # reading -> [ours, se] of a published number under it
-    depends_on: list | None = None      # free choices (pfrepro.choices) the verdict rests on
-    not_checkable: str = ""             # why the paper's unpublished settings decide this number
-    published_text: str | None = None   # ``published`` exactly as the paper prints it (pfrepro.published.printed)
-    effect: float | None = None         # the printed effect, oriented like diff (> 0): its size is tested
-    margin: float | None = None         # smallest effect of interest, stated up front (no printed effect)
-    runs: int | None = None             # runs behind diff (the main reading)
-    reading_diffs: dict | None = None   # reading -> [diff, se, runs] of the ordering under it
-    excluded: dict | None = None        # reading -> why the paper excludes it (shown, not counted)
+    #: Where in the paper (table, figure, section).
+    source: str = ""
+    #: What was compared, in a few words.
+    note: str = ""
+    #: Paired difference the claim asserts is positive (``pfrepro.stats.paired_difference``).
+    diff: float | None = None
+    #: The standard error of ``diff``.
+    diff_se: float | None = None
+    #: The paper's own standard error (a printed spread or per-run rows).
+    published_se: float | None = None
+    #: ``"count"`` for a cost claim decided on a deterministic cost count, else ``""``.
+    basis: str = ""
+    #: Reading of the paper -> does the statement hold under it.
+    readings: dict | None = None
+    #: Reading -> ``[ours, se]`` of a published number under it.
+    reading_values: dict | None = None
+    #: The free choices (``pfrepro.choices``) the verdict rests on.
+    depends_on: list | None = None
+    #: Why the paper's unpublished settings decide this number (then it is not checkable).
+    not_checkable: str = ""
+    #: ``published`` exactly as the paper prints it (``pfrepro.published.printed``).
+    published_text: str | None = None
+    #: The printed effect, oriented like ``diff`` (> 0): its size is tested.
+    effect: float | None = None
+    #: The smallest effect of interest, stated up front when the paper prints no effect.
+    margin: float | None = None
+    #: The runs behind ``diff`` (the main reading).
+    runs: int | None = None
+    #: Reading -> ``[diff, se, runs]`` of the ordering under it.
+    reading_diffs: dict | None = None
+    #: Reading -> why the paper excludes it (shown, not counted).
+    excluded: dict | None = None
 
     @property
     def judgement(self) -> Judgement:
@@ -684,6 +716,33 @@ def inconclusive_table(claims) -> pd.DataFrame:
     rows = [{"paper": c.paper, "id": c.claim_id, "claim": c.text, "cause": c.cause, "why": cause_text(c),
              "runs needed": c.runs_needed} for c in as_claims(claims) if c.verdict == "inconclusive"]
     return pd.DataFrame(rows, columns=["paper", "id", "claim", "cause", "why", "runs needed"])
+
+
+def verdict_html(text: str, href: str = VERDICT_HREF, *, escape=None, cls: str = "pf-verdict-link") -> str:
+    """A verdict as HTML for the book's tables and findings: the verdict word a link to its
+    definition (``href``, the scorecard's verdict scale), whatever follows it (the cause of an
+    inconclusive verdict, ``Claim.verdict_text``) after it as text.
+
+    ``text``: a verdict of ``VERDICTS``, alone or followed by a space and more words, e.g.
+    ``"inconclusive (too few runs: 140 would decide)"``; text that starts with no verdict word is
+    returned escaped, without a link. ``escape``: how the rest is turned into HTML (default
+    ``html.escape``; the tables pass their number-keeping escaper). The link carries the classes
+    ``cls`` and ``pf-verdict-<word>`` (the stylesheet colours verdicts by the latter); the default
+    ``pf-verdict-link`` keeps the theme's link underline and lets a long verdict wrap in a
+    narrow table column (the findings' ``pf-verdict`` links do not wrap).
+    """
+    import html
+
+    if not isinstance(text, str):
+        raise TypeError(f"verdict_html: text must be a str, got {type(text).__name__}")
+    escape = escape or html.escape
+    word = next((v for v in sorted(VERDICTS, key=len, reverse=True)
+                 if text == v or text.startswith(v + " ")), None)
+    if word is None:
+        return escape(text)
+    classes = f"{cls} pf-verdict-" + word.replace(" ", "-")
+    return (f'<a class="{html.escape(classes, quote=True)}" href="{html.escape(href, quote=True)}">{html.escape(word)}</a>'
+            + escape(text[len(word):]))
 
 
 def claims_table(claims, *, ids: bool = True, paper: bool = False) -> pd.DataFrame:

@@ -10,18 +10,19 @@ Counting. :func:`count_model_calls` runs a filter once with its model wrapped in
 :class:`CountingModel` proxy: every call of a counted method adds the number of states
 passed through it, ``prod(x.shape[:-1])`` (a particle cloud ``(runs, N, d)`` counts
 ``runs * N``; a single state ``(d,)`` counts 1). No filter code changes. The counted
-methods and their column names:
+methods and their column names (a column is named after its method unless the table gives
+another name):
 
-================= ============================ ================================
-column            model method                 what it is
-================= ============================ ================================
-``transitions``   ``sample_transition``        states drawn from p(x_k | x_{k-1})
-``likelihoods``   ``log_likelihood``           likelihood evaluations p(y_k | x)
-``f``             ``f``                        noise-free transitions (EKF/UKF, ESPF, grid)
-``h``             ``h``                        measurement-function evaluations (UKF, GPFF)
-``jacobian_f``    ``jacobian_f``               Jacobians of f (EKF)
-``jacobian_h``    ``jacobian_h``               Jacobians of h (EKF)
-================= ============================ ================================
+=========================================== ==========================================
+column (the model method it counts)         what it is
+=========================================== ==========================================
+``transitions`` (``sample_transition``)     states drawn from p(x_k | x_{k-1})
+``likelihoods`` (``log_likelihood``)        likelihood evaluations p(y_k | x)
+``f``                                       noise-free transitions (EKF/UKF, ESPF, grid)
+``h``                                       measurement-function evaluations (UKF, GPFF)
+``jacobian_f``                              Jacobians of f (EKF)
+``jacobian_h``                              Jacobians of h (EKF)
+=========================================== ==========================================
 
 Parameterised models (:class:`~pfrepro.models.parameterized.ParameterizedModel`: ``f(x, k,
 theta)``, ``sample_transition(x, k, theta, rng)``, ``jacobian_f(x, k, theta)``) evaluate the

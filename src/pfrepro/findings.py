@@ -2,7 +2,8 @@
 the book's summary in the introduction, generated from the claims (never typed).
 
 A chapter calls :func:`chapter_findings` right after :meth:`pfrepro.papers.Paper.run`. It glues
-an HTML block -- one line per main claim (its text, the verdict word linked to the verdict rule,
+an HTML block -- one line per main claim (its text, the verdict word linked to its definition
+on the scorecard's verdict scale,
 ours against the printed number, a link to the claim's row in the chapter's claims table), the
 count of every verdict, and the one thing a practitioner should take away -- and saves the same
 summary to ``<claims dir>/findings/<paper>.json``. The introduction is read after the chapters
@@ -14,20 +15,23 @@ import html
 import json
 from pathlib import Path
 
-from .claims import Claim, ClaimsRegistry, _pm, cause_text, claims_dir
+from .claims import VERDICT_HREF, VERDICTS, Claim, ClaimsRegistry, _pm, cause_text, claims_dir, verdict_html
 from .prose import verdict_sentence
 
 __all__ = ["findings_html", "chapter_findings", "cause_sentence", "save_findings", "load_findings", "book_findings_html",
            "intro_coverage", "RULE_HREF", "verdict_link"]
 
-#: where the verdict words are defined (the scorecard's section "The rule")
-RULE_HREF = "99_scorecard.html#the-rule"
+#: Where the verdict words are defined (the scorecard's verdict scale), the same target as the
+#: claims tables' verdict links, :data:`pfrepro.claims.VERDICT_HREF`.
+RULE_HREF = VERDICT_HREF
 
 
 def verdict_link(verdict: str) -> str:
     """The verdict word as a link to its definition, styled like the claims tables' verdicts."""
-    cls = "pf-verdict pf-verdict-" + verdict.replace(" ", "-")
-    return f'<a class="{cls}" href="{RULE_HREF}"><strong>{html.escape(verdict)}</strong></a>'
+    if verdict not in VERDICTS:
+        raise ValueError(f"verdict_link: verdict must be one of {VERDICTS}, got {verdict!r}")
+    return verdict_html(verdict, cls="pf-verdict").replace(f">{html.escape(verdict)}</a>",
+                                                           f"><strong>{html.escape(verdict)}</strong></a>")
 
 
 def _claim_line(paper: str, c: Claim) -> str:

@@ -34,14 +34,30 @@ Per page it fails on
               a cell may wrap between words or after a ``_``, ``=`` or ``/`` it offers, never
               inside a run of letters (Chinese text, which wraps between any two characters,
               is not a run of letters);
-``figtext``   a figure whose smallest text (:data:`MIN_FONT_PT` at :data:`BOOK_DPI`) is shown
-              smaller than :data:`MIN_TEXT_PX`; on a phone a link to the full-size image
-              (tap to enlarge) is accepted instead;
+``figtext``   a figure image whose smallest text, as displayed, is smaller than the body text
+              (the computed font-size of the article's paragraphs, measured in the page): on
+              screen it is ``min_pt * dpi / 72 * (shown width / natural width)`` CSS px, with
+              ``data-dpi`` and ``data-min-pt`` (desktop drawing) or ``data-phone-min-pt`` (the
+              phone drawing, when the ``<picture>`` chose it) on the image; an image without
+              them (a plain matplotlib PNG) fails as "not made for the width it is read at"
+              (see pfrepro.plotting's responsive figures); no tap-to-enlarge exemption;
 ``rst``       (API pages) raw reStructuredText in the text (``double back-quotes``, ``:class:``
               roles), or a numpydoc "(type)" slot holding a description;
 ``ellipsis``  table text cut with "…" (typed, pandas' "..." or ``text-overflow: ellipsis``);
 ``figure``    a numbered figure (with caption) that holds no image, e.g. a table that shared the
-              figure's notebook cell and got its caption.
+              figure's notebook cell and got its caption;
+``columns``   a table showing more than :data:`MAX_COLUMNS` columns (claims tables, and any table
+              shown as cards at that width, are exempt);
+``narrow``    a table cell (or card line) of three or more words wrapped one word per line
+              (as many lines as words, counted from the text's line boxes);
+``internal``  internal words in the reader's text (code, math and API signatures excluded;
+              claims tables may show claim ids): issue numbers ("issue 22", "(#22", "#22"), module aliases
+              (``E.x``, ``S.x``, ``F.x``), ``None`` as a value, Python dict/list reprs,
+              unrendered glue (``{glue:``, ``glue(``), and ``nan`` / ``NaN`` shown as a table
+              value everywhere; ``None`` as a value and snake_case identifiers (claim ids,
+              choice and column names) outside the API reference and Sphinx's indexes, which
+              document Python. An element with class ``pf-internal-ok`` is exempt (for text
+              that is about such words).
 
 Every page is read at each width of :data:`WIDTHS` (a laptop, 1366 px, and a phone, 400 px;
 below :data:`PHONE_MAX` wide equations may scroll in a visibly cued box of their own).
@@ -70,7 +86,8 @@ from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
 KINDS = ("console", "network", "math", "tex", "image", "table", "equation", "overflow", "link",
-         "wide", "overlap", "number", "word", "figtext", "rst", "ellipsis", "figure")
+         "wide", "overlap", "number", "word", "figtext", "rst", "ellipsis", "figure",
+         "columns", "narrow", "internal")
 
 #: viewports every page is read at: a laptop and a phone (CSS px)
 WIDTHS = (1366, 400)
@@ -81,12 +98,10 @@ PHONE_MAX = 800
 #: "local" or a visible scrollbar); anything else wider than the viewport fails ``wide``
 SCROLL_ALLOWED = ("div.math > mjx-container", "span.math", "div.cell_output div.output",
                   "div.pst-scrollable-table-container", "div.highlight pre")
-#: figure text: the book's figures are rendered at BOOK_DPI with no text under MIN_FONT_PT
-#: (pfrepro.plotting, checked by tests/test_bookinfo_plotting.py); on screen that text is
-#: MIN_FONT_PT * BOOK_DPI / 72 * (displayed width / natural width) CSS px, which must be >= MIN_TEXT_PX
-BOOK_DPI = 150
-MIN_FONT_PT = 8.0
-MIN_TEXT_PX = 8.0
+#: a table may show at most this many columns (claims tables, cards on a phone, are exempt)
+MAX_COLUMNS = 8
+#: internal-word hits listed per page view (the rest are counted in the summary only)
+MAX_INTERNAL_HITS = 500
 #: a numpydoc "(type)" slot longer than this holds a description, not a type
 MAX_TYPE_CHARS = 60
 LOCAL_SCHEMES = ("file:", "data:", "blob:", "about:", "chrome:", "chrome-extension:", "devtools:")
@@ -284,7 +299,8 @@ class Browser:
 # first typeset and for every image to settle, then measures. Returns a JSON-able report.
 PAGE_JS = r"""
 (async () => {
-  const OPT = window.__pfopt || {phone: false, api: false, scrollAllowed: [], minFontPt: 0, dpi: 72, minTextPx: 0, maxTypeChars: 1e9};
+  const OPT = window.__pfopt || {phone: false, api: false, apiIndex: false, scrollAllowed: [], maxTypeChars: 1e9,
+                                 maxColumns: 1e9, maxInternal: 0};
   const sleep = ms => new Promise(r => setTimeout(r, ms));
   const t0 = performance.now();
   // MathJax 3 is loaded with `defer`/`async`: wait for its startup promise, if the page has one
@@ -531,21 +547,105 @@ PAGE_JS = r"""
       fails.push({kind: 'ellipsis', what: label(cell), detail: 'text cut by text-overflow: ellipsis', box: box(cell)});
   });
 
-  // ---- figure text: the smallest figure text, as displayed, is at least minTextPx
+  // ---- body text: the computed font-size of the article's paragraphs (the most text wins), the
+  // yardstick of the figure-text rule
+  const bodyPx = (() => {
+    const tally = new Map();
+    col.querySelectorAll('p').forEach(p => {
+      if (p.closest('table, figure, figcaption, .cell_output, .admonition, aside, nav, footer, dl.field-list, .sig')) return;
+      const n = p.textContent.trim().length;
+      if (!n || !visible(p)) return;
+      const fs = parseFloat(getComputedStyle(p).fontSize);
+      tally.set(fs, (tally.get(fs) || 0) + n);
+    });
+    let best = parseFloat(getComputedStyle(col).fontSize), most = -1;
+    for (const [fs, n] of tally) if (n > most) { best = fs; most = n; }
+    return best;
+  })();
+  notes.push(`body text ${bodyPx}px`);
+
+  // ---- figure text: every figure image in the article is made for the width it is read at
+  // (the responsive-figure contract: data-dpi, data-min-pt, data-phone-min-pt), and its smallest
+  // text, as displayed, is at least the body text: min_pt * dpi / 72 * (shown width / natural width)
   let nSmall = 0;
   imgs.forEach(i => {
-    if (!col.contains(i) || !i.naturalWidth) return;
+    // (Sphinx's own interface icons, the module index's +/- togglers, are no figures)
+    if (!col.contains(i) || !i.naturalWidth || !visible(i) || i.matches('img.toggler')) return;
     const r = i.getBoundingClientRect();
     if (r.width < 2) return;
-    const px = OPT.minFontPt * OPT.dpi / 72 * (r.width / i.naturalWidth);
-    if (px + 1e-6 >= OPT.minTextPx) return;
-    // on a phone a figure may instead open full size when tapped (a link to the image itself)
-    const a = i.closest('a[href]');
-    const src = decodeURI(i.src.split('#')[0]);
-    if (OPT.phone && a && decodeURI(a.href.split('#')[0]) === src) return;
-    if (nSmall++ < 5)
-      fails.push({kind: 'figtext', what: label(i) + ' ' + (i.getAttribute('src') || '').split('/').pop().slice(0, 40),
-                  detail: `figure text ${px.toFixed(1)}px on screen < ${OPT.minTextPx}px (shown ${Math.round(r.width)}px of ${i.naturalWidth}px)` + (OPT.phone ? ', and no tap-to-enlarge link' : ''), box: box(i)});
+    const name = label(i) + ' ' + ((i.getAttribute('alt') || (i.getAttribute('src') || '').split('/').pop()).slice(0, 50));
+    const dpi = parseFloat(i.dataset.dpi), minPt = parseFloat(i.dataset.minPt), phonePt = parseFloat(i.dataset.phoneMinPt);
+    if (!(dpi > 0) || !(minPt > 0) || !(phonePt > 0)) {
+      if (nSmall++ < 50)
+        fails.push({kind: 'figtext', what: name, detail: `figure not made for the width it is read at (no data-dpi / data-min-pt / data-phone-min-pt); shown ${Math.round(r.width)}px of ${i.naturalWidth}px`, box: box(i)});
+      return;
+    }
+    // the <picture> shows the phone drawing when its <source> matched
+    const phoneSrc = !!i.currentSrc && i.currentSrc !== i.src;
+    const pt = phoneSrc ? phonePt : minPt;
+    const px = pt * dpi / 72 * (r.width / i.naturalWidth);
+    if (px + 0.05 >= bodyPx) return;
+    if (nSmall++ < 50)
+      fails.push({kind: 'figtext', what: name,
+                  detail: `figure text ${px.toFixed(1)}px on screen < body text ${bodyPx}px (${phoneSrc ? 'phone' : 'desktop'} drawing, ${pt}pt at ${dpi} dpi shown ${Math.round(r.width)}px of ${i.naturalWidth}px)`, box: box(i)});
+  });
+
+  // ---- columns per table: at most maxColumns shown (claims tables, cards on a phone, are exempt)
+  const tableName = t => {
+    const cap = t.querySelector('caption');
+    if (cap && cap.textContent.trim()) return 'caption ' + JSON.stringify(cap.textContent.trim().slice(0, 60));
+    const fig = t.closest('figure');
+    const fc = fig && fig.querySelector('figcaption');
+    if (fc && fc.textContent.trim()) return 'caption ' + JSON.stringify(fc.textContent.trim().slice(0, 60));
+    const hs = [...t.querySelectorAll('th')].map(h => h.textContent.trim()).filter(Boolean);
+    if (hs.length) return 'headers ' + JSON.stringify(hs.slice(0, 3).join(' | ').slice(0, 60));
+    return 'first cell ' + JSON.stringify((t.querySelector('td') || t).textContent.trim().slice(0, 60));
+  };
+  const isCards = t => t.classList.contains('pf-claims') ||
+    [...t.querySelectorAll('td')].slice(0, 3).some(c => getComputedStyle(c).display === 'block');
+  col.querySelectorAll('table').forEach(t => {
+    if (t.closest('mjx-container') || !visible(t) || isCards(t)) return;
+    let most = 0;
+    for (const row of t.rows) {
+      let n = 0;
+      for (const c of row.cells) if (visible(c) && c.getBoundingClientRect().width > 0) n += c.colSpan || 1;
+      most = Math.max(most, n);
+    }
+    if (most > OPT.maxColumns)
+      fails.push({kind: 'columns', what: label(t) + ' ' + tableName(t),
+                  detail: `table shows ${most} columns (at most ${OPT.maxColumns})`, box: box(t)});
+  });
+
+  // ---- one word per line: a cell (or card line) of >= 3 words wrapped to as many lines as words
+  const linesOf = rects => {
+    const lines = [];
+    [...rects].filter(q => q.width > 0 && q.height > 0).sort((a, b) => a.top - b.top).forEach(q => {
+      const mid = (q.top + q.bottom) / 2;
+      const l = lines.find(l => mid >= l.top && mid <= l.bottom);
+      if (l) { l.top = Math.min(l.top, q.top); l.bottom = Math.max(l.bottom, q.bottom); }
+      else lines.push({top: q.top, bottom: q.bottom});
+    });
+    return lines.length;
+  };
+  let nNarrow = 0;
+  col.querySelectorAll('td, th').forEach(cell => {
+    if (cell.closest('mjx-container') || !visible(cell) || cell.getBoundingClientRect().width === 0) return;
+    const w3 = document.createTreeWalker(cell, NodeFilter.SHOW_TEXT);
+    const rects = [];
+    let text = '';
+    for (let n = w3.nextNode(); n; n = w3.nextNode()) {
+      if (!n.textContent.trim() || n.parentElement.closest('mjx-container, .math, script, style')) continue;
+      text += ' ' + n.textContent;
+      const rg = document.createRange();
+      rg.selectNodeContents(n);
+      rects.push(...rg.getClientRects());
+    }
+    const words = text.split(/\s+/).filter(w => /[\p{L}\p{N}]/u.test(w)).length;
+    if (words < 3) return;
+    const lines = linesOf(rects);
+    if (lines >= words && nNarrow++ < 400)
+      fails.push({kind: 'narrow', what: label(cell) + (cell.dataset.label ? ` [${cell.dataset.label}]` : ''),
+                  detail: `${words} words on ${lines} lines (one word per line): ` + JSON.stringify(text.trim().replace(/\s+/g, ' ').slice(0, 60)), box: box(cell)});
   });
 
   // ---- figures: every captioned figure shows an image (a table in a figure cell gets the caption too)
@@ -575,6 +675,79 @@ PAGE_JS = r"""
         fails.push({kind: 'rst', what: label(em), detail: `"(type)" slot holds ${t.length} characters: ` + JSON.stringify(t.slice(0, 60)), box: box(li || em)});
     });
   }
+  // ---- internal words in the reader's text: issue numbers, module aliases, None, dict/list
+  // reprs, unrendered glue, claim ids outside the claims tables, and nan shown as a table value.
+  // Code, math, the API pages' signatures and the claims tables/cards are not reader prose here.
+  // Collapsed dropdowns are read too (the reader opens them); hidden elements are not.
+  const internalSkip = 'script, style, pre, code, kbd, samp, textarea, mjx-container, mjx-assistive-mml, .math, ' +
+    '.highlight, .cell_input, .headerlink, .sig, dt.sig, .sig-name, .sig-prename, ' +
+    '.bd-sidebar-primary, .bd-sidebar-secondary, .prev-next-area, .pf-internal-ok';
+  const shown = el => {
+    for (let a = el; a && a !== document.documentElement; a = a.parentElement) {
+      if (a.tagName === 'DETAILS' && !a.open) continue;  // content of a closed dropdown counts
+      const st = getComputedStyle(a);
+      if (st.display === 'none' && !(a.parentElement && a.parentElement.tagName === 'DETAILS')) return false;
+      if (st.visibility === 'hidden') return false;
+    }
+    return true;
+  };
+  const blockOf = el => { for (let a = el; a; a = a.parentElement)
+    if (!/^(inline|contents)/.test(getComputedStyle(a).display)) return a; return el; };
+  // one string of the page's reader text; a block boundary reads as a line break
+  let flat = '';
+  const spans = [];  // [start, end, element] for labels
+  let lastBlock = null;
+  const w4 = document.createTreeWalker(col, NodeFilter.SHOW_TEXT);
+  for (let n = w4.nextNode(); n; n = w4.nextNode()) {
+    const pe = n.parentElement;
+    if (!pe || !n.textContent.trim() || pe.closest(internalSkip) || !shown(pe)) continue;
+    const b = blockOf(pe);
+    if (b !== lastBlock) { flat += '\n'; lastBlock = b; }
+    // claims tables (cards on a phone) may show claim ids and reading names; the rest applies there too
+    spans.push([flat.length, flat.length + n.textContent.length, pe, !!pe.closest('table.pf-claims')]);
+    flat += n.textContent;
+  }
+  const internalRules = [
+    ['issue number', /\bissues?\s+#?\d+|\(#\d+|(?<![\w&#/])#\d+\b/gi],
+    ['module alias', /(?<![\w.])[ESF]\.(?!g\.|e\.)[A-Za-z_][A-Za-z_0-9]*/g],
+    ['dict/list repr', /\{'|\['|'\s*:\s|',\s*'/g],
+    ['unrendered glue', /\{glue:|\bglue\(/g],
+  ];
+  // the API reference documents Python: None is a value there and snake_case names are the
+  // names of parameters and functions, so these two apply to the reader's chapters only
+  if (!OPT.api && !OPT.apiIndex) internalRules.push(
+    // None as a value (the English "None of them" goes on with a lower-case word), "d = none"
+    // ("cap=none", a reading's name, is an id like "integrator=euler": claims tables show them)
+    ['None', /(?<![\w`])None(?![\w`])(?!\s+[a-z])|\s=\s*[Nn]one\b/g],
+    // a snake_case identifier (a claim id, a choice or column name); x86_64 is a word
+    ['claim id', /(?<![\w./:@-])(?!x86_64\b)[a-z][a-z0-9]*(?:_[a-z0-9]+)+(?![\w/@]|\.\w|\(|-\w)/g]);
+  let nInternal = 0;
+  for (const [what, re] of internalRules) {
+    for (const m of flat.matchAll(re)) {
+      const sp = spans.find(s => m.index >= s[0] && m.index < s[1]);
+      if (what === 'claim id' && sp && sp[3]) continue;
+      const ctxStart = Math.max(0, m.index - 30);
+      const ctx = flat.slice(ctxStart, ctxStart + 60).replace(/\s+/g, ' ').trim();
+      // "x_k", "w_0", "sigma_v": plain-text maths rather than an id (it fails all the same: the
+      // reader should see x with a subscript k)
+      const kind = what === 'claim id' && /^(?:[a-z]{1,3}|sigma|sum|max|min)_[a-z0-9]{1,2}$/.test(m[0]) ? 'ASCII subscript' : what;
+      if (nInternal++ < OPT.maxInternal)
+        fails.push({kind: 'internal', what: (sp ? label(sp[2]) : 'text') + ' ' + kind,
+                    detail: `${JSON.stringify(m[0])} in "${ctx}"`, box: sp ? box(sp[2]) : undefined});
+    }
+  }
+  // nan shown as a table value (any table, claims tables included)
+  col.querySelectorAll('td, th').forEach(cell => {
+    if (!shown(cell)) return;
+    const t = cell.textContent.trim();
+    // a value cell ("nan", "0.5 ± nan"), not a sentence that names NaN ("runs stopped (NaN from ...)")
+    const nanRe = /(?<![\w.])(?:nan|NaN|<NA>|NaT)(?![\w])/g;
+    const m = t.match(nanRe);
+    if (m && !/\p{L}/u.test(t.replace(nanRe, '')) && nInternal++ < OPT.maxInternal)
+      fails.push({kind: 'internal', what: label(cell) + ' nan in a table',
+                  detail: `${JSON.stringify(m[0])} as a value in "${t.replace(/\s+/g, ' ').slice(0, 60)}"`, box: box(cell)});
+  });
+
   return {mathjax, fails, notes, column: Math.round(colWidth), title: document.title};
 })()
 """
@@ -654,6 +827,11 @@ def broken_links(root: Path, page: Path, _cache: dict = {}) -> list[dict]:
     return out
 
 
+def is_api_index(rel: str) -> bool:
+    """Sphinx's generated indexes (names of functions and modules, not prose): no claim-id scan."""
+    return rel.split("/")[-1] in ("genindex.html", "py-modindex.html", "search.html")
+
+
 def is_api_page(rel: str) -> bool:
     """Pages of the API reference (generated from docstrings): checked for raw reST too."""
     return "/api/" in f"/{rel}"
@@ -687,8 +865,9 @@ def check(root: Path, pages: list[Path], chromium: str, width: int, height: int,
             try:
                 target, session = browser.open(page.resolve().as_uri())
                 opt = {"phone": width < PHONE_MAX, "api": is_api_page(rel),
-                       "scrollAllowed": list(SCROLL_ALLOWED), "minFontPt": MIN_FONT_PT,
-                       "dpi": BOOK_DPI, "minTextPx": MIN_TEXT_PX, "maxTypeChars": MAX_TYPE_CHARS}
+                       "apiIndex": is_api_index(rel), "scrollAllowed": list(SCROLL_ALLOWED),
+                       "maxTypeChars": MAX_TYPE_CHARS, "maxColumns": MAX_COLUMNS,
+                       "maxInternal": MAX_INTERNAL_HITS}
                 browser.evaluate(session, f"window.__pfopt = {json.dumps(opt)}; true")
                 report = browser.evaluate(session, PAGE_JS, timeout=90)
                 browser.pump(0.3)  # late console messages

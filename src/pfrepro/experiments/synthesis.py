@@ -1,4 +1,4 @@
-"""Synthesis of the five papers (issue 13): every method of the book on the papers' benchmarks,
+"""Synthesis of the five papers: every method of the book on the papers' benchmarks,
 at equal cost, against a reference that knows the answer (paper key ``synthesis``; not a paper).
 
 Question: which of the papers' proposed improvements beats a well-made bootstrap particle

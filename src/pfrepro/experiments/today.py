@@ -1,4 +1,4 @@
-"""Each paper's method against today's methods on the paper's own benchmark (issue 22).
+"""Each paper's method against today's methods on the paper's own benchmark.
 
 The section "Against today's methods" at the end of each paper chapter: a small, paired
 comparison on the first runs of the chapter's own truths (its seed, its per-run streams), the

@@ -1,8 +1,8 @@
 """Filters: the Kalman family, particle filters and their resampling schemes, grid filters,
 the papers' filters (GPFF, CMS-PF, ESPF, dual PF, IMM-PF) and today's methods.
 
-``__all__`` lists every public class of the filter modules (a test checks it), and the API
-reference's summary table is generated from it.
+Every filter is importable from here (``from pfrepro.filters import KalmanFilter``), whichever
+module defines it.
 """
 from .auxiliary import AuxiliaryParticleFilter
 from .base import Filter, FilterDivergenceError, FilterDivergenceWarning, FilterResult, GaussianFilter

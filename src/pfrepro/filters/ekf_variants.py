@@ -18,7 +18,7 @@ __all__ = ["PreviousEstimateJacobianEKF"]
 
 
 class PreviousEstimateJacobianEKF(ExtendedKalmanFilter):
-    """EKF with B_k = dh/dx evaluated at x_{k-1|k-1} (not at x_{k|k-1} as in Li et al. 2012, eq 10).
+    """EKF with :math:`B_k = dh/dx` at :math:`x_{k-1|k-1}`, not at :math:`x_{k|k-1}` (Li et al. 2012, eq 10).
 
     Predict exactly as eq (11): x_{k|k-1} = f(x_{k-1|k-1}), P_{k|k-1} = A P A^T + Q
     with A = df/dx at x_{k-1|k-1}. Update with the innovation y_k - h(x_{k|k-1})
