@@ -170,16 +170,6 @@ def test_every_figure_text_is_readable_at_the_column_width():
     assert not bad, "\n".join(bad)
 
 
-def test_browser_check_uses_the_same_limits():
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("check_pages", ROOT / "tests/browser/check_pages.py")
-    cp = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(cp)
-    assert (cp.BOOK_DPI, cp.MIN_FONT_PT, cp.MIN_TEXT_PX) == (plotting.BOOK_DPI, plotting.MIN_FONT_PT,
-                                                           plotting.MIN_TEXT_PX)
-
-
 def test_method_colours():
     assert plotting.method_color("PF (500)") == plotting.method_color("PF, published") == plotting.METHOD_COLORS["PF"]
     assert plotting.method_color("IMMPFOR (mean lik.)") == plotting.METHOD_COLORS["IMMPFOR"]

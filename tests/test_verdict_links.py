@@ -48,6 +48,16 @@ def test_the_longest_verdict_word_is_linked_and_the_cause_follows_as_text():
         verdict_html(None)
 
 
+def test_claims_table_html_links_each_verdict():
+    out = bookinfo.anchored_claims(claims_table(_reg()), "ekf_pf_li2012").data
+    links = re.findall(r'<td data-label="verdict"[^>]*><a class="pf-verdict-link [^"]+" href="([^"]+)">([^<]+)</a>', out)
+    assert [w for _, w in links] == ["reproduced", "not reproduced", "inconclusive"], out
+    assert {h for h, _ in links} == {VERDICT_HREF}
+    # the ids keep their anchors, the other cells stay escaped text
+    assert 'id="claim-ekf_pf_li2012-cell"' in out
+    assert "The EKF&#x27;s RMSE" in out or "The EKF's RMSE" in out
+
+
 def test_the_plain_table_has_no_html():
     # the DataFrame (CLI, CSV) keeps plain verdict text; only the book's HTML links it
     assert list(claims_table(_reg())["verdict"])[:2] == ["reproduced", "not reproduced"]

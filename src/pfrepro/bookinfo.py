@@ -112,8 +112,9 @@ def anchored_claims(table, paper: str, id_col: str | None = None, *, float_forma
 
     ``table``: a DataFrame with one row per claim and a column of claim ids (``id`` or
     ``claim_id``, or ``id_col``), e.g. ``pfrepro.claims.claims_table(reg)``. Each id cell becomes
-    ``<span id="claim-<paper>-<id>">id</span>``; every other cell is escaped text (floats with
-    ``float_format``, missing values as "–"). Returns an ``IPython.display.HTML``.
+    ``<span id="claim-<paper>-<id>">id</span>``; a ``verdict`` column's verdict word becomes a link
+    to its definition (:func:`pfrepro.claims.verdict_html`); every other cell is escaped text
+    (floats with ``float_format``, missing values as "–"). Returns an ``IPython.display.HTML``.
     """
     import math
 
@@ -138,6 +139,12 @@ def anchored_claims(table, paper: str, id_col: str | None = None, *, float_forma
     for col in t.columns:
         t[col] = [cell(v) for v in t[col]]
     t[id_col] = [claim_anchor_html(paper, i) for i in ids]
+    if "verdict" in table.columns:  # the verdict word links to its definition (the scorecard's scale)
+        from .claims import verdict_html
+        def keep_numbers(text):
+            return nowrap_numbers(html.escape(text))
+        t["verdict"] = [verdict_html(v, escape=keep_numbers) if isinstance(v, str) else cell(v)
+                        for v in table.reset_index(drop=True)["verdict"]]
     return HTML(labelled_table_html(t, classes=classes))
 
 
