@@ -31,12 +31,13 @@ BOOK_STYLE = {
 }
 
 
-#: width in CSS px at which a figure in a cell output is shown (the book's theme at a 1366 px wide
-#: window, the 757 px text column less the output's padding; measured by tests/browser/check_pages.py)
+#: Width in CSS px at which a figure in a cell output is shown in a 1366 px wide window (the
+#: book's 757 px text column less the output's padding).
 COLUMN_PX = 741
-#: smallest type size (points) any figure of the book may use (ticks, legends, annotations)
+#: Smallest type size (points) of a figure drawn once, as the command line saves it; the book's
+#: figures are drawn per layout at :attr:`Layout.min_pt` (10.5 pt and 12 pt).
 MIN_FONT_PT = 8.0
-#: smallest size (CSS px) that figure text may have on screen at :data:`COLUMN_PX`
+#: Smallest size (CSS px) that the text of a figure drawn once has at :data:`COLUMN_PX`.
 MIN_TEXT_PX = 8.0
 
 
