@@ -30,6 +30,8 @@ from pathlib import Path
 __all__ = ["main", "build_parser", "UsageError"]
 
 EXIT_USAGE = 2
+#: the file of ``pfrepro run``'s output directory that holds the measured times (table, row, column, value)
+TIMINGS_FILE = "timings.csv"
 #: seconds to wait for a --scheduler to answer, and for its first worker
 DEFAULT_CONNECT_TIMEOUT = 10.0
 
@@ -218,7 +220,6 @@ def cmd_run(args) -> int:
 
     if "matplotlib.pyplot" not in sys.modules:
         matplotlib.use("Agg")  # files only: no window
-    import matplotlib.pyplot as plt
 
     from .export import write_table
 
@@ -245,21 +246,26 @@ def cmd_run(args) -> int:
             client.close()
         elif executor is not None:
             executor.shutdown()
-    written = []
+    written, timed = [], []
     for label, df in rep.tables.items():
         written.append(write_table(df, out / f"{_slug(label)}.csv"))
     for label, fig in rep.figures.items():
-        path = out / f"{_slug(label)}.png"
-        fig.savefig(path, dpi=max(150, fig.dpi), bbox_inches="tight")
-        plt.close(fig)
-        written.append(path)
+        written.append(_save_figure(fig, out / f"{_slug(label)}.png"))
     written.append(rep.claims.save(out / "claims"))
+    # measured times differ between any two runs: a file of their own, so that every other
+    # file is the same bytes for the same runs and seeds (serial, --jobs or --scheduler)
+    if len(rep.timings):
+        timed.append(write_table(rep.timings, out / TIMINGS_FILE))
+    for label, fig in rep.timing_figures.items():
+        timed.append(_save_figure(fig, out / f"timings_{_slug(label)}.png"))
     print(f"{paper.key}: {paper.citation}")
     for k, v in rep.settings.items():
         print(f"  {k}: {v}")
-    print(f"wrote {len(written)} files to {out} in {time.perf_counter() - t0:.1f} s:")
+    print(f"wrote {len(written) + len(timed)} files to {out} in {time.perf_counter() - t0:.1f} s:")
     for path in written:
         print(f"  {path.relative_to(out)}")
+    for path in timed:
+        print(f"  {path.relative_to(out)}  (measured times: differ between runs)")
     df = rep.claims.to_frame()
     print(f"\nverdicts of the {len(df)} claims (the chapter's claims, decided by the same code):")
     for v, n in rep.verdict_counts().items():
@@ -268,6 +274,14 @@ def cmd_run(args) -> int:
         print()
         print(_claims_table(df))
     return 0
+
+
+def _save_figure(fig, path: Path) -> Path:
+    import matplotlib.pyplot as plt
+
+    fig.savefig(path, dpi=max(150, fig.dpi), bbox_inches="tight")
+    plt.close(fig)
+    return path
 
 
 # -- --scheduler ------------------------------------------------------------------------------
