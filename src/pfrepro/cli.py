@@ -368,11 +368,14 @@ def _probe_scheduler(address: str, timeout: float) -> None:
     import threading
 
     from distributed.comm import connect
+    from distributed.security import Security
 
     result = {}
+    # TLS (tls://) takes its certificates from dask's configuration, as the Client does
+    conn_args = Security().get_connection_args("client")
 
     async def probe():
-        comm = await asyncio.wait_for(connect(address, timeout=timeout), timeout)
+        comm = await asyncio.wait_for(connect(address, timeout=timeout, **conn_args), timeout)
         await comm.close()
 
     def target():
