@@ -313,7 +313,7 @@ def _double(start, size):
 
 
 def test_code_identity_is_checked_on_every_task(monkeypatch):
-    from pfrepro import codeid
+    from pfrepro import _codeid as codeid
 
     ident = codeid.identity()
     assert "pfrepro.models.linear" in ident and "pfrepro.montecarlo" in ident and "numpy" in ident
@@ -346,7 +346,7 @@ def test_code_identity_is_checked_on_every_task(monkeypatch):
 
 def test_stale_module_is_named(tmp_path, monkeypatch):
     """A module whose file changed after this process imported it is stale (the worker's hint)."""
-    from pfrepro import codeid
+    from pfrepro import _codeid as codeid
 
     mod = tmp_path / "pfrepro_stale_probe.py"
     mod.write_text("X = 1\n")

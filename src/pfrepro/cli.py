@@ -17,7 +17,7 @@ same environment, e.g. ``pip install -e .`` of the same commit): the files are t
 bytes either way (per-run random streams, :mod:`pfrepro.montecarlo`).
 Bad arguments -- an unreachable scheduler included -- end with a one-line message on
 stderr and exit code 2, and so does a run stopped because a worker runs other code than
-this process (checked on every task: :mod:`pfrepro.codeid`) or because the scheduler has
+this process (checked on every task: ``pfrepro._codeid``) or because the scheduler has
 had no worker for ``--worker-timeout`` seconds.
 """
 from __future__ import annotations
@@ -297,9 +297,9 @@ def _worker_environment_probe():
     """A function reporting the versions and the pfrepro code identity of the process it runs in.
 
     Built in a closure so that it is pickled by value (cloudpickle): a worker that cannot
-    import pfrepro, or runs one without :mod:`pfrepro.codeid`, can still run it and say so.
+    import pfrepro, or runs one without ``pfrepro._codeid``, can still run it and say so.
     The code identity is that of the modules as the worker imported them
-    (:func:`pfrepro.codeid.identity`), with the ones edited on disk since (``stale``).
+    (``pfrepro._codeid.identity``), with the ones edited on disk since (``stale``).
     """
     def probe():
         import importlib
@@ -312,7 +312,7 @@ def _worker_environment_probe():
             except Exception as exc:  # noqa: BLE001 - reported, not raised
                 out[name] = f"cannot import ({type(exc).__name__}: {exc})"
         try:
-            cid = importlib.import_module("pfrepro.codeid")
+            cid = importlib.import_module("pfrepro._codeid")
             out["code"], out["stale"] = cid.identity(), cid.stale_modules()
         except Exception as exc:  # noqa: BLE001
             out["code"], out["stale"] = f"cannot tell ({type(exc).__name__}: {exc})", []
@@ -375,7 +375,8 @@ def _probe_scheduler(address: str, timeout: float) -> None:
     conn_args = Security().get_connection_args("client")
 
     async def probe():
-        comm = await asyncio.wait_for(connect(address, timeout=timeout, **conn_args), timeout)
+        # distributed's own timeout first (it names a refused connection); ours if it hangs anyway
+        comm = await asyncio.wait_for(connect(address, timeout=timeout, **conn_args), timeout + 1.0)
         await comm.close()
 
     def target():
@@ -386,7 +387,7 @@ def _probe_scheduler(address: str, timeout: float) -> None:
 
     t = threading.Thread(target=target, name="pfrepro-scheduler-probe", daemon=True)
     t.start()
-    t.join(timeout + 1.0)
+    t.join(timeout + 2.0)
     if t.is_alive():
         raise TimeoutError(f"no answer within {timeout:g} s")
     if "error" in result:
@@ -400,7 +401,7 @@ def _connect_scheduler(address: str, timeout: float):
     within ``timeout`` seconds (a silent port, a web server and a dashboard included), the
     scheduler has no worker within ``timeout`` seconds, or a worker runs another environment
     (python, numpy, scipy, or pfrepro version, or pfrepro code as it imported it,
-    :mod:`pfrepro.codeid`) than this process: its numbers could then differ from a serial
+    ``pfrepro._codeid``) than this process: its numbers could then differ from a serial
     run. Workers that join later are checked on every task they get.
     """
     try:
@@ -522,7 +523,7 @@ def _one_line(exc: BaseException) -> str:
 
 
 def _run_stopped_errors() -> tuple:
-    from .codeid import CodeIdentityError
+    from .montecarlo import CodeIdentityError
     from .montecarlo import WorkersLostError
 
     return (CodeIdentityError, WorkersLostError)

@@ -14,8 +14,8 @@ the streams of its own runs (``start=``), and the chunks' results are concatenat
 in run order -- bit-identical to the serial call.
 
 Every task sent to an executor carries this process's code identity
-(:func:`pfrepro.codeid.identity`); a worker whose loaded pfrepro code or numpy/scipy/Python
-versions differ refuses it with a :class:`~pfrepro.codeid.CodeIdentityError` naming the worker,
+(:func:`code_identity`); a worker whose loaded pfrepro code or numpy/scipy/Python
+versions differ refuses it with a :class:`CodeIdentityError` naming the worker,
 which stops the call. On a dask cluster, a call whose scheduler has had no worker for
 ``worker_timeout`` seconds (:func:`dask_executor`) stops with a :class:`WorkersLostError`
 instead of waiting for ever.
@@ -29,11 +29,14 @@ import sys
 import concurrent.futures
 import time
 import zlib
+from time import monotonic as _monotonic   # the cluster watch's clock (tests replace time.perf_counter)
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import codeid
+from . import _codeid as codeid
+from ._codeid import CodeIdentityError
+from ._codeid import identity as code_identity
 from .metrics import mse, rmse
 from .models.base import Simulation
 from .results import FilterResult
@@ -41,7 +44,7 @@ from .rng import RunStreams
 from .validation import check_positive_int
 
 __all__ = ["MonteCarloResult", "run_monte_carlo", "map_runs", "run_chunks", "process_pool", "dask_executor", "filter_rng", "truth_rng",
-           "WorkersLostError", "DEFAULT_WORKER_TIMEOUT",
+           "WorkersLostError", "DEFAULT_WORKER_TIMEOUT", "CodeIdentityError", "code_identity",
            "truth_streams", "filter_streams", "time_single_run", "time_filters", "time_filter_repeats", "progress_enabled"]
 
 
@@ -324,7 +327,7 @@ class _WorkerWatch:
         return n is None or n > 0
 
     def __call__(self) -> None:
-        now = time.monotonic()
+        now = _monotonic()
         if self._ok():
             self.since = None
         elif self.since is None:
@@ -345,7 +348,7 @@ def _watch(executor):
 
 
 def _submit(executor, expected: dict, fn, *args):
-    """``executor.submit(fn, *args)`` run under the code-identity check (:func:`pfrepro.codeid.checked_call`)."""
+    """``executor.submit(fn, *args)`` run under the code-identity check (``pfrepro._codeid.checked_call``)."""
     return executor.submit(codeid.checked_call, expected, fn, *args)
 
 
