@@ -134,8 +134,8 @@ class Paper:
                             settings=dict(results.settings), timings=timings, timing_figures=timing_figures)
 
 
-#: every paper the command line knows; add a paper here (one entry)
 _GPFF_TIMES = ("time / GPFF(100)", "batch time / GPFF(100)")
+#: every paper the command line knows; add a paper here (one entry)
 PAPERS: tuple[Paper, ...] = (
     Paper("gpff_zhang2016", ("gpff", "zhang2016"), "book/20_gpff.md",
           timing_columns=(("Table 1", _GPFF_TIMES), ("Table 2", _GPFF_TIMES))),
