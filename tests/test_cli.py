@@ -244,36 +244,98 @@ def test_immpf_table1_frame_matches_the_experiment():
 
 
 # -- --jobs 1 and --jobs 2 write the same bytes -------------------------------------------------
-class _TickClock:
-    """A deterministic stand-in for ``time.perf_counter`` (1 s a call): the timing columns and
-    the time panels then depend on the call sequence only, which is the same for every --jobs
-    (timing always runs serially in the main process)."""
-
-    def __init__(self):
-        self.t = 0.0
-
-    def perf_counter(self):
-        self.t += 1.0
-        return self.t
-
-
-def test_every_output_file_is_byte_identical_for_jobs_1_and_2(tmp_path, capsys, monkeypatch):
+def test_every_output_file_is_byte_identical_for_jobs_1_and_2(tmp_path, capsys):
     """Issue 21: the grid filter's numbers differed in the last bits with the batch size, so
-    `--jobs 2` wrote other "exact" numbers than `--jobs 1`. Every file (tables, figures, claims)
-    must be the same bytes; only the wall clock is replaced (measured seconds are not numbers of
-    the experiment)."""
-    from pfrepro import montecarlo
-
+    `--jobs 2` wrote other "exact" numbers than `--jobs 1`. Every results file (tables, figures,
+    claims) must be the same bytes, with the real clock (measured times go to timings.csv, which
+    li2012 does not write), and with 4 runs on 2 workers: chunks of one run."""
     outs = []
     for jobs in (1, 2):
-        monkeypatch.setattr(montecarlo, "time", _TickClock())
         out = tmp_path / f"jobs{jobs}"
-        code = cli.main(["run", "li2012", "--runs", "3", "--seed", "7", "--jobs", str(jobs), "--out", str(out)])
+        code = cli.main(["run", "li2012", "--runs", "4", "--seed", "7", "--jobs", str(jobs), "--out", str(out)])
         assert code == 0
         outs.append(out)
     capsys.readouterr()
     files = sorted(p.relative_to(outs[0]) for p in outs[0].rglob("*") if p.is_file())
     assert {p.relative_to(outs[1]) for p in outs[1].rglob("*") if p.is_file()} == set(files)
     assert any(f.suffix == ".png" for f in files) and any(f.suffix == ".csv" for f in files)
+    assert cli.TIMINGS_FILE not in {str(f) for f in files}
     for f in files:
         assert (outs[0] / f).read_bytes() == (outs[1] / f).read_bytes(), f"{f} differs between --jobs 1 and 2"
+
+
+# -- measured times: a file of their own ------------------------------------------------------------
+def test_split_timings_moves_the_declared_columns():
+    t1 = pd.DataFrame({"MSE": [1.0, 2.0], "time [s]": [0.1, 0.2], "ratio": [1.0, 2.0]},
+                      index=pd.Index(["EKF", "PF"], name="filter"))
+    t2 = pd.DataFrame({"x": [3.0]}, index=pd.MultiIndex.from_tuples([("pos", "PF")]))
+    tables, times = papers.split_timings({"Table 1": t1, "Table 2": t2}, {"Table 1": ("time [s]", "ratio")})
+    assert list(tables["Table 1"].columns) == ["MSE"] and tables["Table 2"] is t2
+    assert list(t1.columns) == ["MSE", "time [s]", "ratio"]                 # the caller's frame untouched
+    assert list(times.columns) == list(papers.TIMING_COLUMNS)
+    assert times.values.tolist() == [["Table 1", "EKF", "time [s]", 0.1], ["Table 1", "EKF", "ratio", 1.0],
+                                     ["Table 1", "PF", "time [s]", 0.2], ["Table 1", "PF", "ratio", 2.0]]
+    _, t = papers.split_timings({"T": t2.assign(s=[0.5])}, {"T": ("s",)})
+    assert t["row"].tolist() == ["pos / PF"]
+    with pytest.raises(KeyError, match="no timing column"):
+        papers.split_timings({"Table 1": t1}, {"Table 1": ("seconds",)})
+    with pytest.raises(KeyError, match="which the paper does not have"):
+        papers.split_timings({"Table 1": t1}, {"Table 9": ("time [s]",)})
+
+
+def test_declared_timing_columns_are_the_papers_measured_times():
+    """Every declared column is a measured time that the paper's table code writes (a renamed
+    column would otherwise stay in the table and make two runs' files differ)."""
+    import inspect
+
+    declared = {p.key: dict(p.timing_columns) for p in papers.PAPERS if p.timing_columns}
+    assert set(declared) == {"gpff_zhang2016", "cmspf_ning2011"}
+    for p in papers.PAPERS:
+        src = inspect.getsource(p.figures_module) + inspect.getsource(p.experiments_module)
+        for label, cols in dict(p.timing_columns).items():
+            assert label in p.tables
+            for c in cols:
+                assert f'"{c}"' in src and "time" in c, (p.key, label, c)
+
+
+def test_run_writes_measured_times_to_their_own_file(tmp_path, capsys, monkeypatch):
+    """Through the command line: the declared columns leave table1.csv for timings.csv, a figures
+    module's timing_figures go to timings_<fig>.png, and the run says which files hold measured times."""
+    import types
+
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from pfrepro.claims import ClaimsRegistry
+
+    class Results:
+        settings = {"runs": 2}
+
+    def fig(title):
+        f, ax = plt.subplots()
+        ax.set_title(title)
+        return f
+
+    mods = {
+        "experiments": types.SimpleNamespace(run_all=lambda **kw: Results(), CHOICES={}),
+        "verdicts": types.SimpleNamespace(record_claims=lambda reg, r: reg.add("c1", "a claim", reproduced=1.0)),
+        "figures": types.SimpleNamespace(
+            TABLES=("Table 1",), FIGURES=("Fig. 1",),
+            tables=lambda r: {"Table 1": pd.DataFrame({"rmse": [1.5], "time [s]": [0.25]}, index=["PF"])},
+            figures=lambda r: {"Fig. 1": fig("rmse")}, timing_figures=lambda r: {"Fig. 1": fig("time")}),
+    }
+    for kind, mod in mods.items():
+        monkeypatch.setitem(sys.modules, f"pfrepro.{kind}.fake_paper", mod)
+    fake = papers.Paper("fake_paper", ("fake",), "book/none.md", citation="Fake (2024)",
+                        timing_columns=(("Table 1", ("time [s]",)),))
+    monkeypatch.setattr(papers, "get_paper", lambda name: fake)
+    monkeypatch.setattr(ClaimsRegistry, "save", lambda self, d: (Path(d).mkdir(parents=True, exist_ok=True),
+                                                                Path(d) / "fake_paper.json")[1])
+    code, out, err = run_cli(["run", "fake", "--out", str(tmp_path)], capsys)
+    assert code == 0, err
+    assert pd.read_csv(tmp_path / "table1.csv").columns.tolist() == ["Unnamed: 0", "rmse"]
+    times = pd.read_csv(tmp_path / cli.TIMINGS_FILE)
+    assert times.values.tolist() == [["Table 1", "PF", "time [s]", 0.25]]
+    assert (tmp_path / "fig1.png").exists() and (tmp_path / "timings_fig1.png").exists()
+    assert f"{cli.TIMINGS_FILE}  (measured times: differ between runs)" in out

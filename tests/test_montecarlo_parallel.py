@@ -4,6 +4,8 @@ Run i's numbers depend on the experiment seed, the filter's name and i only: the
 bit-identical in batches of 1, 8 and 100 runs, when the experiment grows from 10 to 20
 runs, and serially, in a ProcessPoolExecutor and on a real dask LocalCluster.
 """
+import concurrent.futures
+import sys
 from concurrent.futures import ProcessPoolExecutor
 from functools import partial
 
@@ -14,7 +16,7 @@ from pfrepro.filters import (BootstrapParticleFilter, ExtendedKalmanFilter, Gaus
                              GridFilter, UnscentedKalmanFilter)
 from pfrepro.filters.cmspf import CMSParticleFilter, OracleCMSParticleFilter
 from pfrepro.filters.espf import EvolutionSamplingParticleFilter
-from pfrepro.models import CWPA, UNGM, BearingsOnly
+from pfrepro.models import CWPA, UNGM, BearingsOnly, StateSpaceModel
 from pfrepro.montecarlo import (filter_streams, map_runs, process_pool, progress_enabled, run_chunks,
                                 run_monte_carlo, truth_streams)
 
@@ -214,3 +216,145 @@ def test_bootstrap_pf_run_blocks_change_no_number(monkeypatch):
     coll = [w for w in rec if issubclass(w.category, particle.WeightCollapseWarning)]
     assert len(coll) == 1 and "2 of 105 run-steps" in str(coll[0].message)
     assert res.diagnostics["n_collapsed"] == 2
+
+
+# -- a run's arithmetic does not depend on the batch (multi-dimensional models, chunks of one run) -----
+class _Inline(concurrent.futures.Executor):
+    """An executor running each task at submit, in this process: chunks without processes."""
+
+    _max_workers = 2
+
+    def submit(self, fn, *args, **kwargs):
+        f = concurrent.futures.Future()
+        try:
+            f.set_result(fn(*args, **kwargs))
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller
+            f.set_exception(exc)
+        return f
+
+
+class _OwnModel(StateSpaceModel):
+    """A reader's own model written as the tutorial says (``x @ F.T``, ``x[..., 0]``): a
+    constant-velocity target measured in range and bearing."""
+
+    def __init__(self):
+        dt = 0.5
+        self.F = np.array([[1, 0, dt, 0], [0, 1, 0, dt], [0, 0, 1, 0], [0, 0, 0, 1.0]])
+        Q = 0.05 * np.array([[dt ** 3 / 3, 0, dt ** 2 / 2, 0], [0, dt ** 3 / 3, 0, dt ** 2 / 2],
+                             [dt ** 2 / 2, 0, dt, 0], [0, dt ** 2 / 2, 0, dt]])
+        super().__init__(4, 2, Q, np.diag([0.1, 0.01]), [10.0, 5.0, -0.3, 0.2], [10.0, 5.0, -0.3, 0.2],
+                         np.diag([1.0, 1.0, 0.1, 0.1]))
+
+    def f(self, x, k):
+        return x @ self.F.T
+
+    def h(self, x):
+        return np.stack([np.hypot(x[..., 0], x[..., 1]), np.arctan2(x[..., 1], x[..., 0])], axis=-1)
+
+
+def _dense_linear():
+    from conftest import random_linear_model
+
+    m = random_linear_model(7, nx=3, ny=2)
+    m.truth_init = "prior"           # the initial state drawn through the Cholesky factor of P0 too
+    return m
+
+
+MULTI_D = {"linear 3-D": _dense_linear, "CWPA": CWPA.zhang2016,
+           "CWPA mixture": lambda: CWPA.zhang2016("mixture"), "BOT": BearingsOnly.zhang2016, "own model": _OwnModel}
+
+
+@pytest.mark.parametrize("name", list(MULTI_D))
+def test_truth_of_a_run_is_the_same_in_every_split(name):
+    """Runs 5 split 1+4, 2+3, 4+1, 1+1+1+1+1 equal the serial batch bit for bit (a 2-D (runs, n) @ F.T
+    had given a lone run other last bits: 1e-16 in the truth, 1e-14 after the filters)."""
+    model = MULTI_D[name]()
+    full = model.simulate(20, 5, truth_streams(SEED, 5))
+    for split in ((1, 4), (2, 3), (4, 1), (1, 1, 1, 1, 1)):
+        starts = np.cumsum((0,) + split[:-1])
+        parts = [model.simulate(20, n, truth_streams(SEED, n, int(s))) for s, n in zip(starts, split)]
+        np.testing.assert_array_equal(np.concatenate([p.x for p in parts]), full.x, err_msg=str(split))
+        np.testing.assert_array_equal(np.concatenate([p.y for p in parts]), full.y, err_msg=str(split))
+
+
+@pytest.mark.parametrize("name", ["linear 3-D", "CWPA", "BOT"])
+def test_run_monte_carlo_in_chunks_of_one_run_equals_serial(name):
+    """Truth and every filter that uses the model's f and h (EKF, UKF, PF, GPFF) in chunks of one run
+    and of two and three runs: bit-identical to one serial batch. (The Kalman filter, which applies
+    the matrices itself, is a filter's own arithmetic and is not covered here.)"""
+    model = MULTI_D[name]()
+    filters = {"EKF": ExtendedKalmanFilter(model), "UKF": UnscentedKalmanFilter(model), "PF": BootstrapParticleFilter(model, 40),
+               "GPFF": GaussianParticleFlowFilter(model, 20, n_steps=4)}
+    serial = run_monte_carlo(model, filters, 12, 5, SEED, progress=False)
+    for chunks in (5, 2):
+        _same(serial, run_monte_carlo(model, filters, 12, 5, SEED, executor=_Inline(), chunks=chunks,
+                                      progress=False))
+
+
+def test_batch_matmul_rows_do_not_depend_on_the_batch():
+    from pfrepro.models.base import batch_matmul
+
+    rng = np.random.default_rng(3)
+    for n in (2, 3, 4, 6):
+        A = rng.standard_normal((n + 1, n))
+        X = rng.standard_normal((9, 40, n))
+        for runs in range(1, 9):
+            np.testing.assert_array_equal(batch_matmul(X[:runs, 0], A)[0], batch_matmul(X[:1, 0], A)[0])
+            np.testing.assert_array_equal(batch_matmul(X[:runs], A)[0], batch_matmul(X[:1], A)[0])
+        np.testing.assert_allclose(batch_matmul(X[:, 0], A), X[:, 0] @ A.T, rtol=1e-13, atol=1e-13)
+        np.testing.assert_array_equal(batch_matmul(X, A), X @ A.T)       # clouds: the matmul itself
+    with pytest.raises(ValueError, match="batch_matmul"):
+        batch_matmul(np.ones((3, 2)), np.ones((2, 3)))
+
+
+# -- code identity on every task ------------------------------------------------------------------
+def _double(start, size):
+    return np.arange(start, start + size) * 2
+
+
+def test_code_identity_is_checked_on_every_task(monkeypatch):
+    from pfrepro import _codeid as codeid
+
+    ident = codeid.identity()
+    assert "pfrepro.models.linear" in ident and "pfrepro.montecarlo" in ident and "numpy" in ident
+    assert codeid.differences(ident) == []
+    np.testing.assert_array_equal(codeid.checked_call(ident, _double, 2, 3), [4, 6, 8])
+    other = dict(ident, **{"pfrepro.models.linear": "0" * 16})
+    with pytest.raises(codeid.CodeIdentityError, match=r"worker process \d+ .*pfrepro\.models\.linear differ"):
+        codeid.checked_call(other, _double, 0, 1)
+    with pytest.raises(codeid.CodeIdentityError, match=r"numpy .* \(sender 0\.0\)"):
+        codeid.checked_call(dict(ident, numpy="0.0"), _double, 0, 1)
+
+    def imports_other_code(start, size):      # a module imported while the task runs, from other sources
+        monkeypatch.setitem(codeid._RECORDS, "pfrepro.lazily_imported", "f" * 16)
+        return _double(start, size)
+
+    with pytest.raises(codeid.CodeIdentityError, match="pfrepro.lazily_imported"):
+        codeid.checked_call(ident, imports_other_code, 0, 1)
+    # map_runs and run_monte_carlo submit through the check (the expected identity is this process's)
+    seen = []
+
+    class Spy(_Inline):
+        def submit(self, fn, *args, **kwargs):
+            seen.append((fn, args[0]))
+            return super().submit(fn, *args, **kwargs)
+
+    np.testing.assert_array_equal(map_runs(_double, 4, Spy(), chunks=2), _double(0, 4))
+    run_monte_carlo(UNG, {"PF": BootstrapParticleFilter(UNG, 10)}, 3, 2, SEED, executor=Spy(), progress=False)
+    assert seen and all(fn is codeid.checked_call and exp == codeid.identity() for fn, exp in seen)
+
+
+def test_stale_module_is_named(tmp_path, monkeypatch):
+    """A module whose file changed after this process imported it is stale (the worker's hint)."""
+    from pfrepro import _codeid as codeid
+
+    mod = tmp_path / "pfrepro_stale_probe.py"
+    mod.write_text("X = 1\n")
+    fake = type(sys)("pfrepro.stale_probe")
+    fake.__file__ = str(mod)
+    monkeypatch.setitem(sys.modules, "pfrepro.stale_probe", fake)
+    monkeypatch.delitem(codeid._RECORDS, "pfrepro.stale_probe", raising=False)
+    assert "pfrepro.stale_probe" not in codeid.stale_modules()     # recorded now, as on disk
+    mod.write_text("X = 2\n")
+    assert "pfrepro.stale_probe" in codeid.stale_modules()
+    monkeypatch.delitem(codeid._RECORDS, "pfrepro.stale_probe")

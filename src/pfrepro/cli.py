@@ -16,7 +16,9 @@ workers of a running dask.distributed scheduler (several machines; every worker 
 same environment, e.g. ``pip install -e .`` of the same commit): the files are the same
 bytes either way (per-run random streams, :mod:`pfrepro.montecarlo`).
 Bad arguments -- an unreachable scheduler included -- end with a one-line message on
-stderr and exit code 2.
+stderr and exit code 2, and so does a run stopped because a worker runs other code than
+this process (checked on every task: ``pfrepro._codeid``) or because the scheduler has
+had no worker for ``--worker-timeout`` seconds.
 """
 from __future__ import annotations
 
@@ -30,8 +32,12 @@ from pathlib import Path
 __all__ = ["main", "build_parser", "UsageError"]
 
 EXIT_USAGE = 2
+#: the file of ``pfrepro run``'s output directory that holds the measured times (table, row, column, value)
+TIMINGS_FILE = "timings.csv"
 #: seconds to wait for a --scheduler to answer, and for its first worker
 DEFAULT_CONNECT_TIMEOUT = 10.0
+#: seconds a --scheduler run goes on waiting while the scheduler has no worker
+DEFAULT_WORKER_TIMEOUT = 60.0
 
 
 class UsageError(Exception):
@@ -94,7 +100,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="run on the workers of a dask.distributed scheduler, e.g. tcp://HOST:8786 "
                         "(every worker needs this environment: pip install -e .); not with --jobs")
     r.add_argument("--connect-timeout", type=_positive_float("--connect-timeout"), default=DEFAULT_CONNECT_TIMEOUT,
-                   metavar="SECONDS", help=f"give up on --scheduler after this long (default {DEFAULT_CONNECT_TIMEOUT:g})")
+                   metavar="SECONDS", help="give up on --scheduler when it has not answered, or has no worker, "
+                                           f"after this long (default {DEFAULT_CONNECT_TIMEOUT:g})")
+    r.add_argument("--worker-timeout", type=_positive_float("--worker-timeout"), default=DEFAULT_WORKER_TIMEOUT,
+                   metavar="SECONDS", help="stop a --scheduler run when the scheduler has had no worker for this "
+                                           f"long (default {DEFAULT_WORKER_TIMEOUT:g})")
     r.add_argument("--out", default=None, help="output directory (default: ./pfrepro-<paper>)")
     s = sub.add_parser("scorecard", help="the claims of a book build or of a run")
     s.add_argument("--format", choices=("table", "csv", "json"), default="table")
@@ -218,7 +228,6 @@ def cmd_run(args) -> int:
 
     if "matplotlib.pyplot" not in sys.modules:
         matplotlib.use("Agg")  # files only: no window
-    import matplotlib.pyplot as plt
 
     from .export import write_table
 
@@ -229,7 +238,7 @@ def cmd_run(args) -> int:
         client = _connect_scheduler(args.scheduler, args.connect_timeout)
         from .montecarlo import dask_executor
 
-        executor = dask_executor(client)
+        executor = dask_executor(client, worker_timeout=args.worker_timeout)
     elif (args.jobs or 1) > 1:
         from .montecarlo import process_pool
 
@@ -245,21 +254,26 @@ def cmd_run(args) -> int:
             client.close()
         elif executor is not None:
             executor.shutdown()
-    written = []
+    written, timed = [], []
     for label, df in rep.tables.items():
         written.append(write_table(df, out / f"{_slug(label)}.csv"))
     for label, fig in rep.figures.items():
-        path = out / f"{_slug(label)}.png"
-        fig.savefig(path, dpi=max(150, fig.dpi), bbox_inches="tight")
-        plt.close(fig)
-        written.append(path)
+        written.append(_save_figure(fig, out / f"{_slug(label)}.png"))
     written.append(rep.claims.save(out / "claims"))
+    # measured times differ between any two runs: a file of their own, so that every other
+    # file is the same bytes for the same runs and seeds (serial, --jobs or --scheduler)
+    if len(rep.timings):
+        timed.append(write_table(rep.timings, out / TIMINGS_FILE))
+    for label, fig in rep.timing_figures.items():
+        timed.append(_save_figure(fig, out / f"timings_{_slug(label)}.png"))
     print(f"{paper.key}: {paper.citation}")
     for k, v in rep.settings.items():
         print(f"  {k}: {v}")
-    print(f"wrote {len(written)} files to {out} in {time.perf_counter() - t0:.1f} s:")
+    print(f"wrote {len(written) + len(timed)} files to {out} in {time.perf_counter() - t0:.1f} s:")
     for path in written:
         print(f"  {path.relative_to(out)}")
+    for path in timed:
+        print(f"  {path.relative_to(out)}  (measured times: differ between runs)")
     df = rep.claims.to_frame()
     print(f"\nverdicts of the {len(df)} claims (the chapter's claims, decided by the same code):")
     for v, n in rep.verdict_counts().items():
@@ -270,18 +284,26 @@ def cmd_run(args) -> int:
     return 0
 
 
+def _save_figure(fig, path: Path) -> Path:
+    import matplotlib.pyplot as plt
+
+    fig.savefig(path, dpi=max(150, fig.dpi), bbox_inches="tight")
+    plt.close(fig)
+    return path
+
+
 # -- --scheduler ------------------------------------------------------------------------------
 def _worker_environment_probe():
-    """A function reporting the versions and the pfrepro source digest of the process it runs in.
+    """A function reporting the versions and the pfrepro code identity of the process it runs in.
 
     Built in a closure so that it is pickled by value (cloudpickle): a worker that cannot
-    import pfrepro can still run it and say so.
+    import pfrepro, or runs one without ``pfrepro._codeid``, can still run it and say so.
+    The code identity is that of the modules as the worker imported them
+    (``pfrepro._codeid.identity``), with the ones edited on disk since (``stale``).
     """
     def probe():
-        import hashlib
         import importlib
         import platform
-        from pathlib import Path
 
         out = {"python": ".".join(platform.python_version_tuple()[:2])}
         for name in ("numpy", "scipy", "pfrepro"):
@@ -290,16 +312,42 @@ def _worker_environment_probe():
             except Exception as exc:  # noqa: BLE001 - reported, not raised
                 out[name] = f"cannot import ({type(exc).__name__}: {exc})"
         try:
-            root = Path(importlib.import_module("pfrepro").__file__).parent
-            h = hashlib.sha256()
-            for f in sorted(root.rglob("*")):
-                if f.suffix in (".py", ".csv") and f.is_file():
-                    h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes() + b"\0")
-            out["pfrepro source"] = h.hexdigest()[:12]
-        except Exception:  # noqa: BLE001
-            out["pfrepro source"] = "unknown"
+            cid = importlib.import_module("pfrepro._codeid")
+            out["code"], out["stale"] = cid.identity(), cid.stale_modules()
+        except Exception as exc:  # noqa: BLE001
+            out["code"], out["stale"] = f"cannot tell ({type(exc).__name__}: {exc})", []
         return out
     return probe
+
+
+def _local_environment() -> dict:
+    """What :func:`_worker_environment_probe` reports, for this process."""
+    return _worker_environment_probe()()
+
+
+def _environment_difference(here: dict, there: dict) -> str:
+    """'' when a worker's report ``there`` matches this process's ``here``, else what differs and what to do."""
+    diff = [f"{k} {there.get(k)!r} (here {v!r})" for k, v in here.items()
+            if k not in ("code", "stale") and there.get(k) != v]
+    code_here, code_there = here.get("code"), there.get("code")
+    stale = []
+    if not isinstance(code_there, dict) or not isinstance(code_here, dict):
+        diff.append(f"pfrepro code identity {code_there if not isinstance(code_there, dict) else 'unknown here'}")
+    else:
+        mods = sorted(m for m in set(code_here) | set(code_there)
+                      if m.startswith("pfrepro") and code_here.get(m) != code_there.get(m))
+        if mods:
+            shown = ", ".join(mods[:3]) + (f" and {len(mods) - 3} more" if len(mods) > 3 else "")
+            diff.append(f"pfrepro source of {shown}")
+            stale = [m for m in mods if m in (there.get("stale") or ())]
+    if not diff:
+        return ""
+    if stale and len(diff) == 1:
+        hint = "it imported them before they were edited on disk: restart it (Ctrl-C, then dask worker ... again)"
+    else:
+        hint = ("install the same pfrepro (pip install -e . of this commit) and packages on every worker "
+                "and restart it")
+    return f"{'; '.join(diff)}; {hint}"
 
 
 def _first_line(exc: BaseException) -> str:
@@ -308,28 +356,53 @@ def _first_line(exc: BaseException) -> str:
 
 
 def _probe_scheduler(address: str, timeout: float) -> None:
-    """Open and close one connection to ``address`` (distributed's handshake included), in a
-    thread of its own so that a caller's running event loop (Jupyter) does not matter."""
+    """Open and close one connection to ``address`` (distributed's handshake included), within
+    ``timeout`` seconds.
+
+    In a daemon thread of its own (so that a caller's running event loop, e.g. Jupyter's, does
+    not matter), which is left behind, never joined, when it does not finish in time: a port
+    that accepts the connection and then stays silent (a web server, a dashboard) cannot hold
+    the command, on the way out either. Raises what the connection raised, or ``TimeoutError``.
+    """
     import asyncio
-    from concurrent.futures import ThreadPoolExecutor
+    import threading
 
     from distributed.comm import connect
+    from distributed.security import Security
+
+    result = {}
+    # TLS (tls://) takes its certificates from dask's configuration, as the Client does
+    conn_args = Security().get_connection_args("client")
 
     async def probe():
-        comm = await connect(address, timeout=timeout)
+        # distributed's own timeout first (it names a refused connection); ours if it hangs anyway
+        comm = await asyncio.wait_for(connect(address, timeout=timeout, **conn_args), timeout + 1.0)
         await comm.close()
 
-    with ThreadPoolExecutor(1) as pool:
-        pool.submit(asyncio.run, probe()).result(timeout=2 * timeout + 5)
+    def target():
+        try:
+            asyncio.run(probe())
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller
+            result["error"] = exc
+
+    t = threading.Thread(target=target, name="pfrepro-scheduler-probe", daemon=True)
+    t.start()
+    t.join(timeout + 2.0)
+    if t.is_alive():
+        raise TimeoutError(f"no answer within {timeout:g} s")
+    if "error" in result:
+        raise result["error"]
 
 
 def _connect_scheduler(address: str, timeout: float):
     """A ``dask.distributed.Client`` of the scheduler at ``address``, checked before any work.
 
     One-line :class:`UsageError` (exit 2) when the address is malformed, nothing answers
-    within ``timeout`` seconds, the scheduler has no worker within ``timeout`` seconds, or a
-    worker runs another environment (python, numpy, scipy, or pfrepro version or source)
-    than this process: its numbers could then differ from a serial run.
+    within ``timeout`` seconds (a silent port, a web server and a dashboard included), the
+    scheduler has no worker within ``timeout`` seconds, or a worker runs another environment
+    (python, numpy, scipy, or pfrepro version, or pfrepro code as it imported it,
+    ``pfrepro._codeid``) than this process: its numbers could then differ from a serial
+    run. Workers that join later are checked on every task they get.
     """
     try:
         from distributed import Client
@@ -344,7 +417,11 @@ def _connect_scheduler(address: str, timeout: float):
     except ValueError as exc:
         raise UsageError(f"--scheduler {address!r} is not a scheduler address ({_first_line(exc)}); "
                          f"expected tcp://HOST:PORT (the default port is 8786)") from None
-    except (OSError, TimeoutError) as exc:
+    except TimeoutError:
+        raise UsageError(f"no dask scheduler answered at {address!r} within {timeout:g} s (what listens there "
+                         f"does not speak dask: a silent port, the scheduler's dashboard or another web "
+                         f"server?); {hint}") from None
+    except OSError as exc:
         raise UsageError(f"no dask scheduler reachable at {address!r} within {timeout:g} s "
                          f"({_first_line(exc)}); {hint}") from None
     except Exception as exc:  # noqa: BLE001 - something answered, but not a dask scheduler
@@ -360,18 +437,15 @@ def _connect_scheduler(address: str, timeout: float):
         except (TimeoutError, OSError):
             raise UsageError(f"the dask scheduler at {address!r} has no worker after {timeout:g} s; start "
                              f"workers with `dask worker {address} --nthreads 1`") from None
-        probe = _worker_environment_probe()
-        here = probe()
+        here = _local_environment()
         try:
-            there = client.run(probe)
+            there = client.run(_worker_environment_probe())
         except Exception as exc:  # noqa: BLE001
             raise UsageError(f"cannot check the workers of {address!r}: {_first_line(exc)}") from None
         for worker, env in sorted(there.items()):
-            diff = [f"{k} {env.get(k)!r} (here {v!r})" for k, v in here.items() if env.get(k) != v]
+            diff = _environment_difference(here, env)
             if diff:
-                raise UsageError(f"worker {worker} runs another environment than this process: {'; '.join(diff)}; "
-                                 f"install the same pfrepro (pip install -e . of this commit) and packages "
-                                 f"on every worker and restart it")
+                raise UsageError(f"worker {worker} runs another environment than this process: {diff}")
     except BaseException:
         client.close()
         raise
@@ -444,6 +518,21 @@ def _first_bad_claims_file(d: Path):
 COMMANDS = {"list": cmd_list, "run": cmd_run, "scorecard": cmd_scorecard}
 
 
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split()) or type(exc).__name__
+
+
+def _run_stopped_errors() -> tuple:
+    from .montecarlo import CodeIdentityError
+    from .montecarlo import WorkersLostError
+
+    return (CodeIdentityError, WorkersLostError)
+
+
+#: errors that stop a run on an executor for a reason the user can fix (reported in one line, exit 2)
+_RUN_STOPPED = _run_stopped_errors()
+
+
 def main(argv=None) -> int:
     """Entry point of the ``pfrepro`` console script and ``python -m pfrepro``; returns the exit code."""
     try:
@@ -451,6 +540,9 @@ def main(argv=None) -> int:
         return COMMANDS[args.command](args)
     except UsageError as exc:
         print(f"pfrepro: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except _RUN_STOPPED as exc:   # a worker on other code, or no worker left: one line, exit 2
+        print(f"pfrepro: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print("pfrepro: interrupted", file=sys.stderr)

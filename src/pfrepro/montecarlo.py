@@ -12,6 +12,13 @@ Parallel work: :func:`run_monte_carlo` and :func:`map_runs` accept any
 ``Client.get_executor()``); the runs are cut into contiguous chunks, each chunk builds
 the streams of its own runs (``start=``), and the chunks' results are concatenated
 in run order -- bit-identical to the serial call.
+
+Every task sent to an executor carries this process's code identity
+(:func:`code_identity`); a worker whose loaded pfrepro code or numpy/scipy/Python
+versions differ refuses it with a :class:`CodeIdentityError` naming the worker,
+which stops the call. On a dask cluster, a call whose scheduler has had no worker for
+``worker_timeout`` seconds (:func:`dask_executor`) stops with a :class:`WorkersLostError`
+instead of waiting for ever.
 """
 from __future__ import annotations
 
@@ -22,10 +29,14 @@ import sys
 import concurrent.futures
 import time
 import zlib
+from time import monotonic as _monotonic   # the cluster watch's clock (tests replace time.perf_counter)
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import _codeid as codeid
+from ._codeid import CodeIdentityError
+from ._codeid import identity as code_identity
 from .metrics import mse, rmse
 from .models.base import Simulation
 from .results import FilterResult
@@ -33,6 +44,7 @@ from .rng import RunStreams
 from .validation import check_positive_int
 
 __all__ = ["MonteCarloResult", "run_monte_carlo", "map_runs", "run_chunks", "process_pool", "dask_executor", "filter_rng", "truth_rng",
+           "WorkersLostError", "DEFAULT_WORKER_TIMEOUT", "CodeIdentityError", "code_identity",
            "truth_streams", "filter_streams", "time_single_run", "time_filters", "time_filter_repeats", "progress_enabled"]
 
 
@@ -253,9 +265,25 @@ def process_pool(max_workers: int | None = None):
     return ProcessPoolExecutor(max_workers=max_workers, initializer=_init_worker)
 
 
-def dask_executor(client):
+#: seconds a dask call waits while its scheduler has no worker before it stops (:class:`WorkersLostError`)
+DEFAULT_WORKER_TIMEOUT = 60.0
+#: seconds between two looks at the cluster while waiting for a task
+_POLL_SECONDS = 0.5
+
+
+class WorkersLostError(RuntimeError):
+    """Every worker of the dask scheduler left (or the scheduler went away) during a call, for longer
+    than the executor's ``worker_timeout``; the call's remaining tasks are cancelled."""
+
+
+def dask_executor(client, worker_timeout: float = DEFAULT_WORKER_TIMEOUT):
     """A ``concurrent.futures`` executor on the workers of a dask.distributed ``client``, for
     :func:`run_monte_carlo` / :func:`map_runs`.
+
+    ``worker_timeout``: a call that finds the scheduler without any worker (or the client
+    disconnected) for this many seconds cancels its tasks and raises :class:`WorkersLostError`
+    (a worker restarted by its nanny within that time changes nothing). Each task is checked
+    against this process's code identity on the worker (module docstring).
 
     Runs ``_init_worker`` on every worker first (one BLAS thread, freed memory kept for
     reuse): a dask nanny starts its workers with ``MALLOC_TRIM_THRESHOLD_`` set, which also
@@ -267,8 +295,61 @@ def dask_executor(client):
     Tasks are submitted with ``pure=False`` (no hashing of their large arguments). Changes no
     number: the results are bit-identical to the serial call.
     """
+    if not (isinstance(worker_timeout, (int, float)) and not isinstance(worker_timeout, bool)
+            and 0 < worker_timeout < float("inf")):
+        raise ValueError(f"worker_timeout must be a finite number of seconds > 0, got {worker_timeout!r}")
     client.run(_init_worker)
-    return client.get_executor(pure=False)
+    ex = client.get_executor(pure=False)
+    ex.pfrepro_worker_timeout = float(worker_timeout)
+    return ex
+
+
+def _dask_client(executor):
+    client = getattr(executor, "_client", None)          # dask.distributed ClientExecutor
+    return client if client is not None and hasattr(client, "scheduler_info") else None
+
+
+class _WorkerWatch:
+    """Raises :class:`WorkersLostError` once a dask executor's scheduler has had no worker (or the
+    client has not been connected) for ``limit`` seconds. Reads the worker count the client
+    refreshes in the background (every 2 s by default), so a look never blocks."""
+
+    def __init__(self, client, limit: float):
+        self.client, self.limit, self.since = client, float(limit), None
+
+    def _ok(self) -> bool:
+        if str(getattr(self.client, "status", "running")) != "running":
+            return False
+        info = getattr(self.client, "_scheduler_identity", None) or {}
+        n = info.get("n_workers")
+        if n is None:
+            n = len(info.get("workers") or {}) if "workers" in info else None
+        return n is None or n > 0
+
+    def __call__(self) -> None:
+        now = _monotonic()
+        if self._ok():
+            self.since = None
+        elif self.since is None:
+            self.since = now
+        elif now - self.since >= self.limit:
+            status = str(getattr(self.client, "status", "running"))
+            why = "" if status == "running" else f" (the client lost the scheduler: {status})"
+            raise WorkersLostError(
+                f"the dask scheduler has had no worker for {self.limit:g} s{why}; the run is stopped. Start "
+                f"workers (`dask worker ADDRESS --nthreads 1`) and run the command again")
+
+
+def _watch(executor):
+    client = _dask_client(executor)
+    if client is None:
+        return None
+    return _WorkerWatch(client, getattr(executor, "pfrepro_worker_timeout", DEFAULT_WORKER_TIMEOUT))
+
+
+def _submit(executor, expected: dict, fn, *args):
+    """``executor.submit(fn, *args)`` run under the code-identity check (``pfrepro._codeid.checked_call``)."""
+    return executor.submit(codeid.checked_call, expected, fn, *args)
 
 
 def _n_workers(executor) -> int:
@@ -363,12 +444,15 @@ _BROKEN_POOL_HINT = (
     "was killed. The pool is unusable now; create a new one")
 
 
-def _gather(futures: list, bar) -> list:
+def _gather(futures: list, bar, watch=None) -> list:
     from concurrent.futures.process import BrokenProcessPool
 
     out = []
     try:
         for f in futures:
+            if watch is not None:    # wait in short slices, looking at the cluster in between
+                while not concurrent.futures.wait([f], timeout=_POLL_SECONDS).done:
+                    watch()
             out.append(f.result())
             bar.update(1)
     except BaseException as e:
@@ -401,7 +485,9 @@ def map_runs(fn, runs: int, executor=None, *, chunks: int | None = None, progres
                 res.append(fn(start, size))
                 bar.update(1)
         else:
-            res = _gather([executor.submit(fn, start, size) for start, size in parts], bar)
+            expected = codeid.identity()
+            res = _gather([_submit(executor, expected, fn, start, size) for start, size in parts], bar,
+                          _watch(executor))
     finally:
         bar.close()
     return _concat(res)
@@ -538,16 +624,23 @@ def run_monte_carlo(model, filters: dict, T: int, runs: int, seed: int, *, execu
                 results[name], batch[name] = _filter_chunk(filt, name, sim.y, seed, 0)
                 bar.update(1)
         else:
+            expected, watch = codeid.identity(), _watch(executor)
             if sim is None:
-                sim = _concat(_gather([executor.submit(_simulate_chunk, model, T, seed, s, n)
-                                       for s, n in parts], bar))
-            futures = {name: [executor.submit(_filter_chunk, filt, name, sim.y[s:s + n], seed, s)
+                sim = _concat(_gather([_submit(executor, expected, _simulate_chunk, model, T, seed, s, n)
+                                       for s, n in parts], bar, watch))
+            futures = {name: [_submit(executor, expected, _filter_chunk, filt, name, sim.y[s:s + n], seed, s)
                               for s, n in parts] for name, filt in filters.items()}
-            for name, fs in futures.items():
-                bar.set_postfix_str(name)
-                out = _gather(fs, bar)
-                results[name] = _concat([r for r, _ in out])
-                batch[name] = float(sum(t for _, t in out))
+            try:
+                for name, fs in futures.items():
+                    bar.set_postfix_str(name)
+                    out = _gather(fs, bar, watch)
+                    results[name] = _concat([r for r, _ in out])
+                    batch[name] = float(sum(t for _, t in out))
+            except BaseException:
+                for fs in futures.values():     # the other filters' tasks too
+                    for f in fs:
+                        f.cancel()
+                raise
     finally:
         bar.close()
     reps = time_filter_repeats(filters, sim.y[:1], seed, timing_repeats) if time_per_run else {}

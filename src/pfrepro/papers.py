@@ -15,6 +15,13 @@ Adding a paper is one :class:`Paper` entry in :data:`PAPERS`. Each paper has thr
 
 The chapter and the command line both go through :meth:`Paper.run`, so they save the same
 claims for the same runs and seeds.
+
+Measured times (wall clock) differ between any two runs, so :meth:`Paper.reproduce` keeps
+them out of the tables and figures it returns: the table columns named in
+:attr:`Paper.timing_columns` move to :attr:`Reproduction.timings` (one row per cell), and a
+figures module's ``timing_figures(results)`` (if it has one) draws the time panels, which
+``figures(results)`` then leaves out. Everything else ``pfrepro run`` writes is the same
+bytes for the same runs and seeds, serially or spread over processes or a cluster.
 """
 from __future__ import annotations
 
@@ -26,7 +33,11 @@ import pandas as pd
 
 from .claims import ClaimsRegistry
 
-__all__ = ["Paper", "PAPERS", "Reproduction", "get_paper", "paper_keys", "resolve_seeds"]
+__all__ = ["Paper", "PAPERS", "Reproduction", "get_paper", "paper_keys", "resolve_seeds", "split_timings",
+           "TIMING_COLUMNS"]
+
+#: the columns of :attr:`Reproduction.timings`
+TIMING_COLUMNS = ("table", "row", "column", "value")
 
 
 @dataclass(frozen=True)
@@ -44,12 +55,17 @@ class Paper:
     citation : str
         Authors, year, short title (optional; default: the entry of
         :data:`pfrepro.published.PAPERS`).
+    timing_columns : tuple
+        The measured-time columns of the paper's tables, as pairs
+        ``(table label, (column, ...))``: :meth:`reproduce` moves them to
+        :attr:`Reproduction.timings`.
     """
 
     key: str
     aliases: tuple[str, ...]
     chapter: str
     citation: str = ""
+    timing_columns: tuple = ()
 
     def __post_init__(self):
         if not self.citation:
@@ -104,18 +120,28 @@ class Paper:
         return results, reg
 
     def reproduce(self, runs=None, seed=None, executor=None, steps=None) -> "Reproduction":
-        """Run the paper's experiments and return its tables, figures and claims (:meth:`run`)."""
+        """Run the paper's experiments and return its tables, figures and claims (:meth:`run`).
+
+        The measured times are set apart (module docstring): the tables lose their
+        :attr:`timing_columns`, which become :attr:`Reproduction.timings`, and the figures
+        module's ``timing_figures`` (if any) become :attr:`Reproduction.timing_figures`.
+        """
         results, reg = self.run(runs=runs, seeds=seed, executor=executor, steps=steps)
         F = self.figures_module
-        return Reproduction(self.key, tables=F.tables(results), figures=F.figures(results), claims=reg,
-                            settings=dict(results.settings))
+        tables, timings = split_timings(F.tables(results), dict(self.timing_columns))
+        timing_figures = F.timing_figures(results) if callable(getattr(F, "timing_figures", None)) else {}
+        return Reproduction(self.key, tables=tables, figures=F.figures(results), claims=reg,
+                            settings=dict(results.settings), timings=timings, timing_figures=timing_figures)
 
 
+_GPFF_TIMES = ("time / GPFF(100)", "batch time / GPFF(100)")
 #: every paper the command line knows; add a paper here (one entry)
 PAPERS: tuple[Paper, ...] = (
-    Paper("gpff_zhang2016", ("gpff", "zhang2016"), "book/20_gpff.md"),
+    Paper("gpff_zhang2016", ("gpff", "zhang2016"), "book/20_gpff.md",
+          timing_columns=(("Table 1", _GPFF_TIMES), ("Table 2", _GPFF_TIMES))),
     Paper("ekf_pf_li2012", ("li2012", "ekf_pf"), "book/30_ekf_pf.md"),
-    Paper("cmspf_ning2011", ("cmspf", "ning2011"), "book/40_cmspf.md"),
+    Paper("cmspf_ning2011", ("cmspf", "ning2011"), "book/40_cmspf.md",
+          timing_columns=(("Table 2", ("time ratio to PF, ours",)),)),
     Paper("dpf_hou2008", ("dpf", "hou2008"), "book/50_dpf.md"),
     Paper("immpfor_zhou2017", ("immpf", "immpfor", "zhou2017"), "book/60_immpf.md"),
 )
@@ -143,18 +169,68 @@ def get_paper(name: str) -> Paper:
 
 @dataclass
 class Reproduction:
-    """A paper's regenerated tables (DataFrames), figures (matplotlib Figures) and cell claims."""
+    """A paper's regenerated tables (DataFrames), figures (matplotlib Figures) and cell claims.
+
+    ``timings`` holds the measured times taken out of the tables (columns ``table, row,
+    column, value``, see :func:`split_timings`) and ``timing_figures`` the figures of measured
+    times: they differ between any two runs, the rest does not.
+    """
 
     paper: str
     tables: dict[str, pd.DataFrame]
     figures: dict
     claims: ClaimsRegistry
     settings: dict = field(default_factory=dict)
+    timings: pd.DataFrame = field(default_factory=lambda: pd.DataFrame(columns=list(TIMING_COLUMNS)))
+    timing_figures: dict = field(default_factory=dict)
 
     def verdict_counts(self) -> pd.Series:
         """How many claims got each verdict."""
         df = self.claims.to_frame()
         return df["verdict"].value_counts() if len(df) else pd.Series(dtype=int)
+
+
+def _row_label(key) -> str:
+    return " / ".join(str(k) for k in key) if isinstance(key, tuple) else str(key)
+
+
+def split_timings(tables: dict, timing_columns: dict) -> tuple[dict, pd.DataFrame]:
+    """Take the measured-time columns out of a paper's tables.
+
+    Parameters
+    ----------
+    tables : dict
+        Table label -> DataFrame (a figures module's ``tables(results)``).
+    timing_columns : dict
+        Table label -> the names of its columns that hold measured times.
+
+    Returns
+    -------
+    tables : dict
+        The same tables without those columns (new frames; the others untouched).
+    timings : pandas.DataFrame
+        One row per removed cell: ``table`` (label), ``row`` (the row's index label, levels
+        joined with " / "), ``column`` and ``value``; in table, row and column order.
+
+    Raises
+    ------
+    KeyError
+        If a label or a column named in ``timing_columns`` is not in ``tables`` (the
+        declaration has drifted from the figures module).
+    """
+    out, rows = dict(tables), []
+    for label, cols in timing_columns.items():
+        if label not in out:
+            raise KeyError(f"timing columns are declared for table {label!r}, which the paper does not have "
+                           f"(its tables: {list(out)})")
+        df = out[label]
+        missing = [c for c in cols if c not in df.columns]
+        if missing:
+            raise KeyError(f"{label}: no timing column(s) {missing}; its columns: {list(df.columns)}")
+        for key, row in df[list(cols)].iterrows():
+            rows.extend({"table": label, "row": _row_label(key), "column": c, "value": row[c]} for c in cols)
+        out[label] = df.drop(columns=list(cols))
+    return out, pd.DataFrame(rows, columns=list(TIMING_COLUMNS))
 
 
 def resolve_seeds(defaults: dict, seeds=None) -> dict:

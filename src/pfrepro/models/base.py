@@ -77,7 +77,7 @@ from ..rng import check_rng
 from ..validation import as_covariance, as_vector, check_positive_int
 
 __all__ = ["StateSpaceModel", "Simulation", "ModelContractError", "CAPABILITIES", "has_capability",
-           "missing_capabilities", "require_capabilities"]
+           "missing_capabilities", "require_capabilities", "batch_matmul", "draw_noise"]
 
 
 class ModelContractError(TypeError):
@@ -205,7 +205,7 @@ class StateSpaceModel:
     # -- derived ---------------------------------------------------------------------
     def sample_transition(self, x: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
         """Draw x_k ~ p(x_k | x_{k-1} = x) for every state in the batch ``x``."""
-        out = self.process_noise.sample(rng, x.shape[:-1])
+        out = draw_noise(self.process_noise, rng, x.shape[:-1])
         out += self.f(x, k)
         return out
 
@@ -222,13 +222,19 @@ class StateSpaceModel:
         """Draw from the filters' prior N(m0, P0); returns ``(*shape, dim_x)``."""
         shape = tuple(np.atleast_1d(shape))
         z = rng.standard_normal(shape + (self.dim_x,))
-        return self.m0 + z @ np.linalg.cholesky(self.P0).T
+        return self.m0 + batch_matmul(z, np.linalg.cholesky(self.P0))
 
     def simulate(self, T: int, runs: int = 1, rng: np.random.Generator | None = None) -> Simulation:
         """Simulate ``runs`` independent trajectories of length ``T``.
 
         All runs advance together (one vectorised draw per time step), so the
-        cost is T numpy calls regardless of ``runs``.
+        cost is T numpy calls regardless of ``runs``. The model's methods see each
+        run's state as a cloud of one, shape ``(runs, 1, dim_x)``: a product such as
+        ``x @ F.T`` is then one small product per run, whose last bits do not depend on
+        how many runs the batch holds (a 2-D ``(runs, dim_x) @ F.T`` rounds a lone run
+        differently), so a run's truth is the same serially and in a chunk of one run on
+        a worker. The draws are those of ``(runs, dim_x)``: run i's stream is read in the
+        same order.
         """
         T = check_positive_int(T, "T")
         runs = check_positive_int(runs, "runs")
@@ -237,8 +243,9 @@ class StateSpaceModel:
         y = np.empty((runs, T, self.dim_y))
         x[:, 0] = self.x0 if self.truth_init == "fixed" else self.sample_initial(rng, runs)
         for k in range(1, T + 1):
-            x[:, k] = self.sample_transition(x[:, k - 1], k, rng)
-            y[:, k - 1] = self.sample_measurement(x[:, k], rng)
+            nxt = self.sample_transition(x[:, k - 1, None], k, rng)
+            x[:, k] = nxt[:, 0]
+            y[:, k - 1] = self.sample_measurement(nxt, rng)[:, 0]
         return Simulation(x=x, y=y)
 
     def sample_measurement(self, x: np.ndarray, rng) -> np.ndarray:
@@ -247,7 +254,7 @@ class StateSpaceModel:
         The default is ``h(x) + v``; a model with non-additive measurement noise
         overrides it (and :meth:`log_likelihood`). :meth:`~pfrepro.models.StateSpaceModel.simulate` calls it.
         """
-        out = self.measurement_noise.sample(rng, x.shape[:-1])
+        out = draw_noise(self.measurement_noise, rng, x.shape[:-1])
         out += self.h(x)
         return out
 
@@ -342,3 +349,62 @@ def require_capabilities(model, capabilities, who: str) -> None:
         need_txt = needs[0] if len(needs) == 1 else ", ".join(needs[:-1]) + " and " + needs[-1]
         raise ModelContractError(f"{who} needs a model with {need_txt}; "
                                  f"{type(model).__name__} {'; it '.join(lacks)}")
+
+
+# -- arithmetic that does not depend on the batch -----------------------------------------------
+def batch_matmul(x, A) -> np.ndarray:
+    """``x @ A.T`` for states ``x`` of shape ``(..., n)``, each state's result independent of the batch.
+
+    A 2-D product ``(runs, n) @ (n, m)`` is one BLAS call whose rounding of a row depends on
+    the number of rows (a lone row takes a matrix-vector path): run i's numbers would then
+    differ in the last bits between a serial call and a chunk of one run on a worker
+    (``run_monte_carlo`` with an executor). For a 2-D ``x`` the product is therefore an
+    explicit sum over the small dimension ``n`` (``x[:, 0] A[:, 0] + x[:, 1] A[:, 1] + ...``,
+    elementwise, in that order). With three or more axes, ``x @ A.T`` is already one product
+    per leading index (a run's cloud) of a fixed shape, and is kept (one BLAS call per run is
+    much faster than the sum on large clouds); a single state (1-D) is ``x @ A.T``.
+
+    Parameters
+    ----------
+    x : ndarray
+        States, shape ``(..., n)``.
+    A : ndarray
+        Matrix of shape ``(m, n)``.
+
+    Returns
+    -------
+    ndarray
+        Shape ``x.shape[:-1] + (m,)``.
+    """
+    x = np.asarray(x)
+    A = np.asarray(A)
+    if x.ndim != 2:
+        return x @ A.T
+    if A.ndim != 2 or A.shape[1] != x.shape[1]:
+        raise ValueError(f"batch_matmul: x has shape {x.shape} and A shape {A.shape}; A must be (m, {x.shape[1]})")
+    out = x[:, :1] * A[:, 0]
+    for j in range(1, A.shape[1]):
+        out += x[:, j:j + 1] * A[:, j]
+    return out
+
+
+def draw_noise(noise, rng, shape) -> np.ndarray:
+    """``noise.sample(rng, shape)`` whose result for a run does not depend on the batch.
+
+    With one state per run (``shape`` ``(runs,)`` or ``(runs, 1, ...)``: a truth being
+    simulated, a Kalman-type filter's batch), a multivariate Gaussian's ``L z`` is a
+    :func:`batch_matmul` instead of the noise's one tall 2-D product (which rounds a lone
+    run differently); the standard normals drawn are the same. Particle clouds (more than
+    one state per run), scalar noise and mixtures (drawn run by run) use ``noise.sample``
+    unchanged.
+    """
+    if type(shape) is not tuple:
+        shape = tuple(np.atleast_1d(shape))
+    if (isinstance(noise, GaussianNoise) and noise.dim > 1 and not noise.is_zero and len(shape) >= 1
+            and int(np.prod(shape[1:], dtype=np.int64)) == 1):
+        z = rng.standard_normal(shape + (noise.dim,))
+        out = batch_matmul(z.reshape(shape[0], noise.dim), noise._chol)
+        if np.any(noise.mean):
+            out += noise.mean
+        return out.reshape(shape + (noise.dim,))
+    return noise.sample(rng, shape)

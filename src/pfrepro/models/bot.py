@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import as_finite_float, as_matrix
-from .base import StateSpaceModel
+from .base import StateSpaceModel, batch_matmul
 
 __all__ = ["BearingsOnly", "wrap_angle"]
 
@@ -61,7 +61,8 @@ class BearingsOnly(StateSpaceModel):
         return cls()
 
     def f(self, x, k):
-        return x @ self.F.T
+        # batch_matmul, not x @ F.T: a 2-D (runs, 4) product rounds a lone run differently
+        return batch_matmul(x, self.F)
 
     def jacobian_f(self, x, k):
         return np.broadcast_to(self.F, x.shape[:-1] + self.F.shape)

@@ -10,7 +10,7 @@ from scipy.linalg import expm
 
 from ..noise import GaussianMixtureNoise
 from ..validation import as_finite_float, as_matrix
-from .base import StateSpaceModel
+from .base import StateSpaceModel, batch_matmul
 
 __all__ = ["LinearGaussianModel", "CWPA", "van_loan_discretize"]
 
@@ -53,13 +53,14 @@ class LinearGaussianModel(StateSpaceModel):
         super().__init__(nx, self.H.shape[0], Q, R, x0, m0, P0, truth_init=truth_init)
 
     def f(self, x, k):
-        return x @ self.F.T
+        # batch_matmul, not x @ F.T: a 2-D (runs, n) product rounds a lone run differently
+        return batch_matmul(x, self.F)
 
     def jacobian_f(self, x, k):
         return np.broadcast_to(self.F, x.shape[:-1] + self.F.shape)
 
     def h(self, x):
-        return x @ self.H.T
+        return batch_matmul(x, self.H)
 
     def jacobian_h(self, x):
         return np.broadcast_to(self.H, x.shape[:-1] + self.H.shape)

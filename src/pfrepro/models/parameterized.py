@@ -21,7 +21,7 @@ import numpy as np
 
 from ..rng import check_rng
 from ..validation import as_finite_float, check_positive_int
-from .base import Simulation, StateSpaceModel, init_noise_and_prior
+from .base import Simulation, StateSpaceModel, batch_matmul, draw_noise, init_noise_and_prior
 
 __all__ = ["ParameterizedModel", "FixedParameterModel", "as_theta"]
 
@@ -123,7 +123,7 @@ class ParameterizedModel:
         """Draw x_k ~ p(x_k | x_{k-1} = x, θ); the runs axis of ``x`` comes first in every draw."""
         out = self.f(x, k, theta)
         if self.has_process_noise:
-            out = out + self.process_noise.sample(rng, out.shape[:-1])
+            out = out + draw_noise(self.process_noise, rng, out.shape[:-1])
         return out
 
     def log_likelihood(self, y, x):
@@ -136,7 +136,7 @@ class ParameterizedModel:
         """Draws from N(m0, P0) of the given ``shape`` (trailing axis dim_x)."""
         shape = tuple(np.atleast_1d(shape))
         z = rng.standard_normal(shape + (self.dim_x,))
-        return self.m0 + z @ np.linalg.cholesky(self.P0).T
+        return self.m0 + batch_matmul(z, np.linalg.cholesky(self.P0))
 
     def simulate(self, T: int, runs: int = 1, rng=None, theta=None) -> Simulation:
         """Simulate ``runs`` trajectories under ``theta`` (default ``theta_true``), all runs at once."""
@@ -150,7 +150,7 @@ class ParameterizedModel:
         x[:, 0] = self.x0 if self.truth_init == "fixed" else self.sample_initial(rng, runs)
         for k in range(1, T + 1):
             x[:, k] = self.sample_transition(x[:, k - 1], k, theta, rng)
-            y[:, k - 1] = self.h(x[:, k]) + self.measurement_noise.sample(rng, runs)
+            y[:, k - 1] = self.h(x[:, k]) + draw_noise(self.measurement_noise, rng, runs)
         return Simulation(x=x, y=y)
 
     def at(self, theta) -> "FixedParameterModel":

@@ -38,7 +38,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import StateSpaceModel
+from .base import StateSpaceModel, batch_matmul
 from .bot import wrap_angle
 
 __all__ = ["cv_axis", "ca_axis", "ct_axis", "block_diag_axes", "coupled_ct_matrix", "process_noise_Q",
@@ -182,9 +182,10 @@ class RadarTrackingModel(StateSpaceModel):
         B = self.noise_factor
         z = rng.standard_normal(x.shape[:-1] + (B.shape[1],))
         # stacked matmuls on the batch as it is: reshaping to one tall 2-D product sends it to a
-        # threaded BLAS call that is many times slower on a loaded machine
-        out = z @ B.T
-        out += x @ self.F.T
+        # threaded BLAS call that is many times slower on a loaded machine; a 2-D batch (one
+        # state per run) goes through batch_matmul, whose rows do not depend on the batch size
+        out = batch_matmul(z, B)
+        out += batch_matmul(x, self.F)
         return out
 
     def jacobian_f(self, x, k):
