@@ -36,7 +36,7 @@ try:  # package v2 model contract
     from ..models.base import require_capabilities
 except ImportError:  # pragma: no cover - before the contract existed
     require_capabilities = None
-from .base import Filter, FilterDivergenceError, FilterResult, gaussian_loglik
+from .base import Filter, FilterDivergenceError, FilterResult, check_divergence_policy, gaussian_loglik, mark_diverged
 from .kalman import symmetrize
 from .particle import normalize_log_weights
 
@@ -718,19 +718,24 @@ class IMMKalman(Filter):
         are used (their own m0/P0 are ignored: the IMM starts every mode at m0, P0).
     name : str
         A label, e.g. "IMM-EKF".
+    on_divergence : {"warn", "drop", "raise"}
+        A run whose estimates become non-finite: NaN from that step on and flagged, one
+        warning (default), silent, or an error (as :class:`~pfrepro.filters.GaussianFilter`).
 
     Notes
     -----
     Diagnostics: ``mode_probs`` (runs, T, r), ``model_estimates`` (runs, T, r, n),
-    ``log_model_likelihood`` (runs, T, r).
+    ``log_model_likelihood`` (runs, T, r); ``diverged``, ``diverged_at``, ``n_diverged``
+    (see ``on_divergence``).
     """
 
     needs_rng = False
 
     model_requirements = ()   # the mode filters check their own models
 
-    def __init__(self, system, mode_filters, name: str = "IMM", m0=None, P0=None):
+    def __init__(self, system, mode_filters, name: str = "IMM", m0=None, P0=None, on_divergence: str = "warn"):
         _init_on_system(self, system, m0, P0, ())
+        self.on_divergence = check_divergence_policy(on_divergence)
         self.mode_filters = list(mode_filters)
         if len(self.mode_filters) != system.r:
             raise ValueError(f"mode_filters must hold one filter per mode ({system.r}), got {len(self.mode_filters)}")
@@ -775,11 +780,10 @@ class IMMKalman(Filter):
                 d = x - est[:, None, :]
                 Ps[:, k - 1] = symmetrize(np.einsum("ar,armn->amn", mu, P) + np.einsum("ar,arm,arn->amn", mu, d, d))
                 xs[:, k - 1], xj[:, k - 1], probs[:, k - 1], loglam[:, k - 1] = est, x, mu, lam
-        bad = ~np.all(np.isfinite(xs.reshape(runs, -1)), axis=1)
-        if bad.any():
-            raise FilterDivergenceError(f"{self.name} produced non-finite estimates in {int(bad.sum())} of {runs} runs")
+        diag = mark_diverged(self.name, self.on_divergence, np.isfinite(xs).all(axis=-1),
+                             (xs, Ps, xj, probs, loglam))
         return FilterResult(xs, Ps, diagnostics={"mode_probs": probs, "model_estimates": xj,
-                                                 "log_model_likelihood": loglam})
+                                                 "log_model_likelihood": loglam, **diag})
 
     def __repr__(self) -> str:
         return f"IMMKalman({self.name}, r={self.system.r})"
