@@ -60,6 +60,20 @@ Models whose transition is not ``f(x) + w``
     needs nothing else); do not override ``f`` unless it is the transition mean
     a Gaussian filter may use.
 
+Output shapes (checked at the first call)
+    A model's own ``f``, ``h``, ``jacobian_f``, ``jacobian_h``, ``sample_transition``,
+    ``sample_measurement``, ``log_likelihood`` and ``residual_y`` are checked the first
+    time each is called with an input of a given number of axes (a batch of runs, a
+    particle cloud, sigma points): ``f`` and ``sample_transition`` return ``x.shape``; ``h``
+    and ``sample_measurement`` ``x.shape[:-1] + (dim_y,)``; ``jacobian_f``
+    ``x.shape[:-1] + (dim_x, dim_x)`` and ``jacobian_h`` ``x.shape[:-1] + (dim_y, dim_x)``
+    (or one matrix for every state); ``log_likelihood(y, x)`` ``x.shape[:-1]``; and
+    ``residual_y(y, y_pred)`` the broadcast shape of its inputs. A method returning one
+    value for the whole batch, or another shape, raises :class:`ModelContractError` naming
+    the method, the shape it returned and the shape expected, instead of being broadcast
+    silently into wrong numbers or failing later in a numpy error. Later calls with inputs
+    of the same number of axes are not checked again (the check costs nothing in a loop).
+
 Singular and zero process noise
     ``Q`` may be positive *semi*-definite (``Q = G Qc G^T`` of lower rank) or zero
     (deterministic dynamics, no draw at all). Simulation, the KF/EKF/UKF, the
@@ -68,6 +82,7 @@ Singular and zero process noise
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -139,6 +154,93 @@ def init_noise_and_prior(model, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, 
     model.truth_init = truth_init
 
 
+def _residual_shape(m, args, kwargs):
+    y = args[0] if args else kwargs.get("y")
+    yp = args[1] if len(args) > 1 else kwargs.get("y_pred")
+    try:
+        return np.broadcast_shapes(np.shape(y), np.shape(yp)), "the broadcast shape of y and y_pred"
+    except ValueError:
+        return None, ""
+
+
+def _batch(i, key):
+    def get(args, kwargs):
+        return args[i] if len(args) > i else kwargs.get(key)
+    return get
+
+
+#: the model methods whose output shape the contract checks: name -> (how to find the batch
+#: argument ``x`` among the call's arguments, expected shape and its rule from (model, x.shape))
+_SHAPE_RULES = {
+    "f": (_batch(0, "x"), lambda m, s: (s, "x.shape")),
+    "sample_transition": (_batch(0, "x"), lambda m, s: (s, "x.shape")),
+    "h": (_batch(0, "x"), lambda m, s: (s[:-1] + (m.dim_y,), "x.shape[:-1] + (dim_y,)")),
+    "sample_measurement": (_batch(0, "x"), lambda m, s: (s[:-1] + (m.dim_y,), "x.shape[:-1] + (dim_y,)")),
+    "jacobian_f": (_batch(0, "x"), lambda m, s: (s[:-1] + (m.dim_x, m.dim_x), "x.shape[:-1] + (dim_x, dim_x)")),
+    "jacobian_h": (_batch(0, "x"), lambda m, s: (s[:-1] + (m.dim_y, m.dim_x), "x.shape[:-1] + (dim_y, dim_x)")),
+    "log_likelihood": (_batch(1, "x"), lambda m, s: (s[:-1], "x.shape[:-1], one value per state")),
+}
+#: a Jacobian may also be one matrix shared by every state (a linear model's F or H)
+_SHARED_OK = {"jacobian_f", "jacobian_h"}
+
+
+def _expected_shape(model, method, args, kwargs):
+    """(expected output shape, rule text, the batch argument's shape) of ``method``'s call."""
+    if method == "residual_y":
+        shape, rule = _residual_shape(model, args, kwargs)
+        return shape, rule, None
+    get, rule = _SHAPE_RULES[method]
+    x = get(args, kwargs)
+    if x is None:
+        return None, "", None
+    s = np.shape(x)
+    if len(s) == 0:
+        return None, "", s
+    shape, text = rule(model, s)
+    return shape, text, s
+
+
+def _check_output(model, method, args, kwargs, out):
+    shape, rule, xs = _expected_shape(model, method, args, kwargs)
+    if shape is None:
+        return
+    got = np.shape(out)
+    if got == shape or (method in _SHARED_OK and got == shape[-2:]):
+        return
+    given = "" if xs is None else f" for x of shape {xs}"
+    hint = " (one value for the whole batch: vectorise over the leading axes)" if np.prod(got, dtype=int) < np.prod(
+        shape, dtype=int) and len(got) < len(shape) else ""
+    raise ModelContractError(
+        f"{type(model).__name__}.{method} returned shape {got}{given}; the model contract expects {shape} "
+        f"({rule}){hint}. See the model contract in pfrepro.models.base")
+
+
+def _contract_checked(method, fn):
+    """``fn`` with its output shape checked at the first call per number of input axes."""
+    if getattr(fn, "_contract_checked", False):
+        return fn
+
+    @functools.wraps(fn)
+    def checked(self, *args, **kwargs):
+        out = fn(self, *args, **kwargs)
+        if method == "residual_y":
+            key = (method, np.ndim(args[0] if args else kwargs.get("y")),
+                   np.ndim(args[1] if len(args) > 1 else kwargs.get("y_pred")))
+        else:
+            key = (method, np.ndim(_SHAPE_RULES[method][0](args, kwargs)))
+        seen = getattr(self, "__dict__", {}).get("_contract_seen")
+        if seen is None or key not in seen:
+            _check_output(self, method, args, kwargs, out)
+            try:
+                self.__dict__.setdefault("_contract_seen", set()).add(key)
+            except AttributeError:    # no instance dict (__slots__): check every call
+                pass
+        return out
+
+    checked._contract_checked = True
+    return checked
+
+
 class StateSpaceModel:
     """Additive-Gaussian-process-noise state-space model (see module docstring).
 
@@ -169,6 +271,15 @@ class StateSpaceModel:
 
     def __init__(self, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, truth_init="fixed"):
         init_noise_and_prior(self, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, truth_init)
+
+    def __init_subclass__(cls, **kwargs):
+        # the model contract's output-shape check (module docstring): every method a model
+        # class defines itself is wrapped once, at class creation
+        super().__init_subclass__(**kwargs)
+        for method in (*_SHAPE_RULES, "residual_y"):
+            fn = cls.__dict__.get(method)
+            if callable(fn) and not isinstance(fn, (staticmethod, classmethod)):
+                setattr(cls, method, _contract_checked(method, fn))
 
     # -- covariances a Gaussian filter is given ------------------------------------
     @property
