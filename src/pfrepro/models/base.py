@@ -92,7 +92,7 @@ from ..rng import check_rng
 from ..validation import as_covariance, as_vector, check_positive_int
 
 __all__ = ["StateSpaceModel", "Simulation", "ModelContractError", "CAPABILITIES", "has_capability",
-           "missing_capabilities", "require_capabilities"]
+           "missing_capabilities", "require_capabilities", "check_log_likelihood"]
 
 
 class ModelContractError(TypeError):
@@ -215,6 +215,37 @@ def _check_output(model, method, args, kwargs, out):
         f"({rule}){hint}. See the model contract in pfrepro.models.base")
 
 
+def check_log_likelihood(model, y, x, out):
+    """A log-likelihood is a number or -inf for every finite state: NaN where ``x`` and ``y`` are
+    finite (e.g. the log of a negative intensity, 0 * inf) raises ``ValueError`` naming the
+    model, the runs and a state, instead of becoming a zero weight in silence.
+
+    One pass over ``out`` (its sum is NaN only if an entry is NaN, or +inf meets -inf); the
+    entries are searched only then."""
+    out = np.asarray(out)
+    if out.dtype.kind != "f" or not np.isnan(out.sum()):
+        return
+    nan = np.isnan(out)
+    xa = np.asarray(x, dtype=float)
+    finite_x = np.isfinite(xa).all(axis=-1) if xa.ndim else np.isfinite(xa)
+    try:
+        nan &= np.broadcast_to(finite_x, nan.shape)
+    except ValueError:
+        pass
+    if not nan.any():
+        return                     # NaN only at non-finite states (a run already lost): not the model's fault
+    where = np.argwhere(nan)
+    first = tuple(int(i) for i in where[0])
+    runs = np.unique(where[:, 0]).tolist() if nan.ndim > 1 else []
+    state = xa[first] if xa.ndim > 1 and xa.shape[:-1] == nan.shape else None
+    raise ValueError(
+        f"{type(model).__name__}.log_likelihood returned NaN for {int(nan.sum())} finite state(s)"
+        + (f" in runs {runs[:10]}{' ...' if len(runs) > 10 else ''}" if runs else "")
+        + (f" (first at index {first}, x = {np.array2string(state, precision=6)})" if state is not None else "")
+        + "; a log-density must be a number or -inf (a zero density). A filter would have given those "
+          "states zero weight in silence: fix the model where it returns NaN")
+
+
 def _contract_checked(method, fn):
     """``fn`` with its output shape checked at the first call per number of input axes."""
     if getattr(fn, "_contract_checked", False):
@@ -223,6 +254,8 @@ def _contract_checked(method, fn):
     @functools.wraps(fn)
     def checked(self, *args, **kwargs):
         out = fn(self, *args, **kwargs)
+        if method == "log_likelihood":         # NaN is checked at every call (one pass)
+            check_log_likelihood(self, args[0] if args else kwargs.get("y"), _SHAPE_RULES[method][0](args, kwargs), out)
         if method == "residual_y":
             key = (method, np.ndim(args[0] if args else kwargs.get("y")),
                    np.ndim(args[1] if len(args) > 1 else kwargs.get("y_pred")))
@@ -327,7 +360,9 @@ class StateSpaceModel:
         """
         y = np.asarray(y, dtype=float)
         y = y.reshape(y.shape[:1] + (1,) * (x.ndim - 2) + y.shape[1:])
-        return self.measurement_noise.logpdf(self.residual_y(y, self.h(x)))
+        out = self.measurement_noise.logpdf(self.residual_y(y, self.h(x)))
+        check_log_likelihood(self, y, x, out)
+        return out
 
     def sample_initial(self, rng: np.random.Generator, shape) -> np.ndarray:
         """Draw from the filters' prior N(m0, P0); returns ``(*shape, dim_x)``."""
@@ -350,6 +385,10 @@ class StateSpaceModel:
         for k in range(1, T + 1):
             x[:, k] = self.sample_transition(x[:, k - 1], k, rng)
             y[:, k - 1] = self.sample_measurement(x[:, k], rng)
+            # a trajectory that leaves the numbers is an error here, at its step (a filter
+            # would refuse the NaN measurements later, far from the cause)
+            if not (np.isfinite(x[:, k]).all() and np.isfinite(y[:, k - 1]).all()):
+                _non_finite_simulation(self, x, y, k)
         return Simulation(x=x, y=y)
 
     def sample_measurement(self, x: np.ndarray, rng) -> np.ndarray:
@@ -369,6 +408,18 @@ class StateSpaceModel:
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(dim_x={self.dim_x}, dim_y={self.dim_y})"
+
+
+def _non_finite_simulation(model, x, y, k):
+    """Raise the error of :meth:`StateSpaceModel.simulate` for a non-finite state or measurement at step k."""
+    bad_x = ~np.isfinite(x[:, k]).all(axis=-1)
+    what, bad = ("state x_k", bad_x) if bad_x.any() else ("measurement y_k", ~np.isfinite(y[:, k - 1]).all(axis=-1))
+    r = int(np.flatnonzero(bad)[0])
+    raise FloatingPointError(
+        f"{type(model).__name__}.simulate: the {what} became non-finite at step k = {k} in "
+        f"{int(bad.sum())} of {x.shape[0]} runs (first run {r}: x_{k - 1} = "
+        f"{np.array2string(x[r, k - 1], precision=6)}, x_k = {np.array2string(x[r, k], precision=6)}); "
+        f"check f, the process noise and h there (an unstable model or a wrong formula)")
 
 
 def _is_matrix(model, name):
