@@ -106,3 +106,56 @@ def test_real_measurements_of_any_real_dtype_give_the_same_numbers():
     yi = np.round(y).astype(np.int32)
     np.testing.assert_array_equal(ExtendedKalmanFilter(UNGM()).filter(yi).x,
                                   ExtendedKalmanFilter(UNGM()).filter(yi.astype(float)).x)
+
+
+# -- item 8: clear errors at the boundary instead of raw numpy ones ----------------------------------
+def test_ten_billion_runs_are_refused_before_allocating():
+    """Before: simulate raised numpy's MemoryError, run_monte_carlo built per-run streams until the
+    memory ran out (an empty MemoryError). Now a TooLargeError (ValueError and MemoryError) naming runs."""
+    import time
+
+    from pfrepro.montecarlo import run_monte_carlo, truth_streams
+    from pfrepro.validation import TooLargeError
+
+    t0 = time.process_time()
+    for call in (lambda: UNGM().simulate(10, 10**10, np.random.default_rng(0)),
+                 lambda: run_monte_carlo(UNGM(), {"EKF": ExtendedKalmanFilter(UNGM())}, 10, 10**10, 1),
+                 lambda: truth_streams(1, 10**10)):
+        with pytest.raises(TooLargeError, match=r"runs = 10000000000 needs about .* GiB .* more than this machine's"):
+            call()
+    assert time.process_time() - t0 < 5
+    assert issubclass(TooLargeError, ValueError) and issubclass(TooLargeError, MemoryError)
+
+
+def test_raw_numpy_errors_became_clear_ones():
+    from pfrepro.export import filter_result_frame
+    from pfrepro.filters.imm import IMMKalman, IMMPFOR
+    from pfrepro.models import JumpMarkovSystem
+    from pfrepro.results import FilterResult
+    from pfrepro.rng import RunStreams
+
+    s = RunStreams.from_entropy(1, 2)
+    with pytest.raises(ValueError, match=r"RunStreams\.normal\(loc=0, scale=-1\): invalid parameter: scale < 0"):
+        s.normal(0, -1, size=(2, 3))
+    with pytest.raises(ValueError, match=r"RunStreams\.poisson\(lam=-2\.0\): invalid parameter"):
+        s.poisson(-2.0, size=(2, 3))
+    with pytest.raises(ValueError, match=r"RunStreams\.normal: parameters of shapes \[\(5,\), \(\)\] do not broadcast"):
+        s.normal(np.zeros(5), 1.0, size=(2, 3))
+    with pytest.raises(TypeError, match="name must be the filter's name .* got 5"):
+        filter_streams(1, 5, 2)
+    ms = [UNGM(alpha=0.5), UNGM(alpha=0.4)]
+    sysm = JumpMarkovSystem(ms, [[0.9, 0.1], [0.1, 0.9]])
+    with pytest.raises(TypeError, match="step coefficient d must be a positive number, got 'x'"):
+        IMMPFOR(sysm, 10, d="x")
+    with pytest.raises(TypeError, match=r"mode_filters\[0\] is a model \(UNGM\), not a filter: .*ExtendedKalmanFilter"):
+        IMMKalman(sysm, ms)
+    with pytest.raises(TypeError, match="mode_filters must be a list of 2 Kalman-family filters"):
+        IMMKalman(sysm, ExtendedKalmanFilter(ms[0]))
+    with pytest.raises(TypeError, match="IMMKalman needs a pfrepro.models.JumpMarkovSystem, got UNGM"):
+        IMMKalman(ms[0], [ExtendedKalmanFilter(m) for m in ms])
+    x = np.zeros((2, 3, 1))
+    for P in (np.ones((2, 3, 1)), np.ones((2, 3, 2, 2)), np.array([["a"]])):
+        with pytest.raises(ValueError, match=r"result\.P must be covariances of shape \(runs, T, dim_x, dim_x\) = "
+                                             r"\(2, 3, 1, 1\)"):
+            filter_result_frame(FilterResult(x, P))
+    assert len(filter_result_frame(FilterResult(x, np.ones((2, 3, 1, 1))))) == 6

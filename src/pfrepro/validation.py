@@ -182,6 +182,35 @@ def as_matrix(value, name: str, shape: tuple | None = None) -> np.ndarray:
     return arr
 
 
+class TooLargeError(ValueError, MemoryError):
+    """A request that would need more memory than the machine has, refused before allocating
+    (a ``ValueError`` naming the argument, and a ``MemoryError``)."""
+
+
+def physical_memory() -> int | None:
+    """This machine's physical memory in bytes (None where the OS does not say)."""
+    import os
+
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):  # pragma: no cover - not POSIX
+        return None
+
+
+def check_memory(nbytes: float, what: str, name: str = "runs", value=None) -> None:
+    """Refuse, before allocating, a request of ``nbytes`` beyond the machine's physical memory.
+
+    Raises :class:`TooLargeError` naming ``name`` (= ``value``) and the memory it would take,
+    instead of numpy's bare ``MemoryError`` (or an endless loop building per-run streams)."""
+    total = physical_memory()
+    if total is not None and nbytes > total:
+        shown = "" if value is None else f" = {value}"
+        raise TooLargeError(
+            f"{name}{shown} needs about {nbytes / 2**30:.3g} GiB for {what}, more than this machine's "
+            f"{total / 2**30:.3g} GiB of memory; use fewer {name} (runs can be split over calls: run i's "
+            f"numbers do not depend on how the runs are split)")
+
+
 def check_positive_int(value, name: str) -> int:
     """Return ``value`` as an ``int`` >= 1, else raise ``ValueError``."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):

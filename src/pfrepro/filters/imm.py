@@ -549,6 +549,8 @@ class IMMPFOR(IMMParticleFilter):
         if metric not in self.METRICS:
             raise ValueError(f"metric must be one of {self.METRICS}, got {metric!r}")
         self.metric = metric
+        if isinstance(d, (str, bytes, bool, np.bool_)) or not isinstance(d, (int, float, np.integer, np.floating)):
+            raise TypeError(f"step coefficient d must be a positive number, got {d!r}")
         d = float(d)
         if not (np.isfinite(d) and d > 0):
             raise ValueError(f"step coefficient d must be a positive number, got {d!r}")
@@ -736,12 +738,19 @@ class IMMKalman(Filter):
     def __init__(self, system, mode_filters, name: str = "IMM", m0=None, P0=None, on_divergence: str = "warn"):
         _init_on_system(self, system, m0, P0, ())
         self.on_divergence = check_divergence_policy(on_divergence)
+        if isinstance(mode_filters, (str, bytes)) or not np.iterable(mode_filters) or hasattr(mode_filters, "filter"):
+            raise TypeError(f"mode_filters must be a list of {system.r} Kalman-family filters, one per mode, "
+                            f"got {mode_filters!r}")
         self.mode_filters = list(mode_filters)
         if len(self.mode_filters) != system.r:
             raise ValueError(f"mode_filters must hold one filter per mode ({system.r}), got {len(self.mode_filters)}")
         for j, f in enumerate(self.mode_filters):
             if not (hasattr(f, "predict") and hasattr(f, "update")):
-                raise TypeError(f"mode filter {j} ({f!r}) has no predict/update")
+                if hasattr(f, "simulate") and hasattr(f, "dim_x"):
+                    raise TypeError(f"mode_filters[{j}] is a model ({type(f).__name__}), not a filter: give a "
+                                    f"Kalman-family filter built on it, e.g. ExtendedKalmanFilter(system.models[{j}])")
+                raise TypeError(f"mode filter {j} ({f!r}) has no predict/update: IMMKalman needs Kalman-family "
+                                f"mode filters (KalmanFilter, ExtendedKalmanFilter, UnscentedKalmanFilter)")
             _check_mode_filter_model(f, system, j)
         self.name = str(name)
 

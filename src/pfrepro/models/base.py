@@ -89,7 +89,7 @@ import numpy as np
 
 from ..noise import GaussianNoise
 from ..rng import check_rng
-from ..validation import as_covariance, as_vector, check_positive_int
+from ..validation import as_covariance, as_vector, check_memory, check_positive_int
 
 __all__ = ["StateSpaceModel", "Simulation", "ModelContractError", "CAPABILITIES", "has_capability",
            "missing_capabilities", "require_capabilities", "check_log_likelihood"]
@@ -378,6 +378,8 @@ class StateSpaceModel:
         """
         T = check_positive_int(T, "T")
         runs = check_positive_int(runs, "runs")
+        check_memory(8.0 * runs * ((T + 1) * self.dim_x + T * self.dim_y), f"{T} steps of simulated states and "
+                     "measurements", "runs", runs)
         check_rng(rng)
         x = np.empty((runs, T + 1, self.dim_x))
         y = np.empty((runs, T, self.dim_y))
