@@ -74,7 +74,7 @@ class ThetaGridReference(ParameterLearningFilter):
         The x grid; mass pushed outside is lost (reported, see below).
     lost_mass_tol : float
         Largest posterior-weighted fraction of one step's predictive mass that may leave the x
-        grid without a :class:`~pfrepro.filters.grid.GridMassWarning` (default 1e-6).
+        grid without a :class:`~pfrepro.filters.grid.GridMassWarning` (default 1e-4).
 
     Notes
     -----
