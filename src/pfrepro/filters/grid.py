@@ -78,12 +78,12 @@ class GridFilter(Filter):
         ``lost_mass_tol`` a :class:`GridMassWarning` names the runs.
     n_grid : int
         Number of grid nodes M (>= 3).
-    lost_mass_tol : float
-        Largest fraction of one step's predictive mass that may leave the grid without a
-        warning (default :data:`LOST_MASS_TOL`).
     m0, P0 : array_like, optional
         Override the model's prior N(m0, P0); validated like the model's (finite m0;
         P0 > 0, a scalar or a 1x1 matrix).
+    lost_mass_tol : float
+        Largest fraction of one step's predictive mass that may leave the grid without a
+        warning (default :data:`LOST_MASS_TOL`).
 
     Model methods
     -------------
