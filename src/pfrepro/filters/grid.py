@@ -83,7 +83,7 @@ class GridFilter(Filter):
         P0 > 0, a scalar or a 1x1 matrix).
     lost_mass_tol : float
         Largest fraction of one step's predictive mass that may leave the grid without a
-        warning (default :data:`LOST_MASS_TOL`).
+        warning (default 1e-4).
 
     Model methods
     -------------
