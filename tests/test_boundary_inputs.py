@@ -191,6 +191,30 @@ def unit_ball_volume(d):
     return u(d)
 
 
+def _ekf(**kw):
+    from pfrepro.filters import ExtendedKalmanFilter
+    return ExtendedKalmanFilter(UNG, **kw)
+
+
+def _ukf(**kw):
+    from pfrepro.filters import UnscentedKalmanFilter
+    return UnscentedKalmanFilter(UNG, **kw)
+
+
+def _grid(**kw):
+    from pfrepro.filters import GridFilter
+    return GridFilter(UNG, bounds=(-40.0, 40.0), n_grid=1601, **kw)
+
+
+def filter_streams(seed, name, runs):
+    from pfrepro.montecarlo import filter_streams as fs
+    return fs(seed, name, runs)
+
+
+bad_policy = st.one_of(st.text(max_size=6).filter(lambda t: t not in ("warn", "drop", "raise")), st.none(),
+                       st.integers(), st.lists(st.text(max_size=2), max_size=2))
+
+
 TABLE = [
     # (label, call with the bad value, parameter name the message must contain, bad values)
     ("check_positive_int", lambda v: check_positive_int(v, "n"), "n", bad_count),
@@ -227,6 +251,16 @@ TABLE = [
                st.floats(max_value=0.0, exclude_max=True, allow_infinity=False))),
     ("GPFF max_shift", lambda v: GaussianParticleFlowFilter(UNG, 10, max_shift=v), "max_shift",
      st.one_of(nonfinite, not_a_number, st.floats(max_value=0.0, allow_infinity=False))),
+    # issue 34: the Kalman family's divergence policy, the grid's mass tolerance, stream names, draws
+    ("ExtendedKalmanFilter on_divergence", lambda v: _ekf(on_divergence=v), "on_divergence", bad_policy),
+    ("UnscentedKalmanFilter on_divergence", lambda v: _ukf(on_divergence=v), "on_divergence", bad_policy),
+    ("GridFilter lost_mass_tol", lambda v: _grid(lost_mass_tol=v), "lost_mass_tol",
+     st.one_of(nonfinite, not_a_number, st.floats(min_value=1.0, exclude_min=True, allow_infinity=False),
+               st.floats(max_value=0.0, exclude_max=True, allow_infinity=False))),
+    ("filter_streams name", lambda v: filter_streams(0, v, 2), "name",
+     st.one_of(st.integers(), st.none(), st.floats(), st.binary(max_size=3))),
+    ("RunStreams.normal scale", lambda v: RunStreams.from_entropy(0, 2).normal(0.0, v, size=(2, 3)), "scale",
+     st.floats(max_value=0.0, exclude_max=True, allow_infinity=False)),
 ]
 
 

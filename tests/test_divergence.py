@@ -1,5 +1,6 @@
 """Issue 21, divergence: caught where it starts, the run marked and stopped, other runs untouched
 to the last bit, one warning with the count; every filter on an outlier behaves as documented."""
+import re
 import warnings
 
 import numpy as np
@@ -216,3 +217,97 @@ def test_gpff_raise_names_at_most_ten_runs():
     y = np.full((12, 2, 1), 1e200)
     with pytest.raises(FilterDivergenceError, match=r"step 1 in runs \[0, 1, 2, 3, 4, 5, 6, 7, 8, 9\] \("):
         GaussianParticleFlowFilter(UNGM.zhang2016(), 10, on_divergence="raise").filter(y, filter_streams(1, "g", 12))
+
+
+# -- the Kalman family: one behaviour for every filter (issue 34, item 4) -------------------------
+def _ungm_outlier(runs=3, T=10, bad_run=1, at=5):
+    from pfrepro.models import UNGM
+
+    m = UNGM.zhang2016()
+    y = m.simulate(T, runs, np.random.default_rng(0)).y
+    y_bad = y.copy()
+    y_bad[bad_run, at - 1] = 1e200
+    return m, y, y_bad
+
+
+def _kalman_family(m):
+    from pfrepro.filters import ExtendedKalmanFilter, UnscentedKalmanFilter
+    from pfrepro.filters.ekf_variants import PreviousEstimateJacobianEKF
+
+    return {"EKF": lambda **kw: ExtendedKalmanFilter(m, **kw),
+            "UKF": lambda **kw: UnscentedKalmanFilter(m, **kw),
+            "EKF (B at previous estimate)": lambda **kw: PreviousEstimateJacobianEKF(m, **kw)}
+
+
+@pytest.mark.parametrize("name", ["EKF", "UKF", "EKF (B at previous estimate)"])
+def test_kalman_filters_warn_once_mark_the_run_and_keep_the_others(name):
+    """Before: FilterDivergenceError for the whole batch (every run lost). Now as GPFF/DEKF:
+    one warning naming the filter and the run, NaN from the step on, the others bit-identical."""
+    m, y, y_bad = _ungm_outlier()
+    make = _kalman_family(m)[name]
+    ref = make().filter(y)
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        got = make().filter(y_bad)
+    msgs = [str(w.message) for w in rec]
+    assert [w.category for w in rec] == [FilterDivergenceWarning], msgs
+    assert msgs[0].startswith(f"{name}: 1 of 3 runs diverged") and "in runs [1]" in msgs[0]
+    d = got.diagnostics
+    assert d["diverged"].tolist() == [False, True, False] and d["n_diverged"] == 1
+    at = d["diverged_at"][1]
+    assert d["diverged_at"].tolist() == [0, at, 0] and at >= 5
+    assert np.all(np.isnan(got.x[1, at - 1:])) and np.all(np.isfinite(got.x[1, :at - 1]))
+    assert np.all(np.isnan(got.P[1, at - 1:])) and np.all(np.isnan(d["log_likelihood"][1, at - 1:]))
+    for r in (0, 2):
+        np.testing.assert_array_equal(got.x[r], ref.x[r])
+        np.testing.assert_array_equal(got.P[r], ref.P[r])
+    assert ref.diagnostics["n_diverged"] == 0 and not ref.diagnostics["diverged"].any()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        drop = make(on_divergence="drop").filter(y_bad)
+    np.testing.assert_array_equal(drop.x, got.x)
+    with pytest.raises(FilterDivergenceError, match=re.escape(name) + r": 1 of 3 runs diverged .* in runs \[1\]"):
+        make(on_divergence="raise").filter(y_bad)
+    with pytest.raises(ValueError, match="on_divergence"):
+        make(on_divergence="ignore")
+
+
+def test_one_diverging_ekf_run_loses_nothing_in_run_monte_carlo():
+    """Before: one EKF run's divergence raised out of run_monte_carlo and every filter's results
+    were lost. Now the call returns; the EKF's lost run is NaN and counted, the rest is kept."""
+    from pfrepro.filters import BootstrapParticleFilter, ExtendedKalmanFilter, UnscentedKalmanFilter
+    from pfrepro.models import Simulation
+    from pfrepro.montecarlo import run_monte_carlo
+
+    m, y, y_bad = _ungm_outlier(runs=4, T=12, bad_run=2)
+    sim = m.simulate(12, 4, np.random.default_rng(0))
+    filters = {"EKF": ExtendedKalmanFilter(m), "UKF": UnscentedKalmanFilter(m),
+               "PF": BootstrapParticleFilter(m, 50)}
+    clean = run_monte_carlo(m, filters, 12, 4, 3, sim=sim)
+    with pytest.warns(FilterDivergenceWarning, match=r"EKF: 1 of 4 runs diverged .* in runs \[2\]"):
+        mc = run_monte_carlo(m, filters, 12, 4, 3, sim=Simulation(sim.x, y_bad))
+    assert mc.n_diverged()["EKF"] == 1 and mc.results["EKF"].diagnostics["diverged"].tolist() == [0, 0, 1, 0]
+    np.testing.assert_array_equal(mc.results["EKF"].x[[0, 1, 3]], clean.results["EKF"].x[[0, 1, 3]])
+    assert set(mc.results) == set(filters) and np.all(np.isfinite(mc.results["PF"].x))
+
+
+def test_imm_kalman_marks_a_diverged_run_and_keeps_the_others():
+    from pfrepro.filters import ExtendedKalmanFilter
+    from pfrepro.filters.imm import IMMKalman
+    from pfrepro.models import UNGM, JumpMarkovSystem
+
+    ms = [UNGM(alpha=0.5), UNGM(alpha=0.4)]
+    sysm = JumpMarkovSystem(ms, [[0.9, 0.1], [0.1, 0.9]])
+    y = sysm.simulate(10, 3, np.random.default_rng(1)).y
+    y_bad = y.copy()
+    y_bad[0, 3] = 1e200
+    make = lambda **kw: IMMKalman(sysm, [ExtendedKalmanFilter(m) for m in ms], name="IMM-EKF", **kw)  # noqa: E731
+    ref = make().filter(y)
+    with pytest.warns(FilterDivergenceWarning, match=r"IMM-EKF: 1 of 3 runs diverged .* in runs \[0\]"):
+        got = make().filter(y_bad)
+    at = got.diagnostics["diverged_at"][0]
+    assert at >= 4 and got.diagnostics["diverged_at"].tolist() == [at, 0, 0]
+    assert np.all(np.isnan(got.x[0, at - 1:])) and np.all(np.isnan(got.diagnostics["mode_probs"][0, at - 1:]))
+    np.testing.assert_array_equal(got.x[1:], ref.x[1:])
+    with pytest.raises(FilterDivergenceError, match="IMM-EKF"):
+        make(on_divergence="raise").filter(y_bad)

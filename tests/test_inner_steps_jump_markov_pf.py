@@ -253,11 +253,12 @@ def test_resampling_threshold_is_strict():
 
 
 def test_collapse_is_recorded_and_warned_under_the_filters_name():
-    """Every likelihood NaN at step 2 of 2 (h returns NaN): the run collapses there -- uniform
-    weights, log increment -inf, ``collapsed[0, 1]`` -- and the warning names JMPF.
-    Checked against recording the collapse at the wrong step (k instead of k - 1)."""
+    """Every likelihood zero at step 2 of 2 (h returns inf, so log p(y | x) = -inf; a NaN
+    log-likelihood is a model error since the model contract checks it): the run collapses
+    there -- uniform weights, log increment -inf, ``collapsed[0, 1]`` -- and the warning names
+    JMPF. Checked against recording the collapse at the wrong step (k instead of k - 1)."""
     sysm = system()
-    sysm.models[0].h = lambda x: np.where(x[..., :1] > 100, np.nan, x[..., :1] ** 2 + x[..., 1:])
+    sysm.models[0].h = lambda x: np.where(x[..., :1] > 100, np.inf, x[..., :1] ** 2 + x[..., 1:])
     script = [("standard_normal", [np.zeros((2, 2))]), ("random", [[0.1, 0.1]]),
               ("random", [[0.1, 0.1]]), ("standard_normal", [np.zeros((2, 2))]), ("random", [[0.5]]),
               ("random", [[0.1, 0.1]]), ("standard_normal", [[[200.0, 0.0], [200.0, 0.0]]]), ("random", [[0.5]])]

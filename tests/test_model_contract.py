@@ -186,3 +186,78 @@ def test_documented_requirements_are_the_ones_checked():
     # ESPF evaluates N(x; f, Q): at least the generic needs (its own check is in espf.py)
     assert {"transition_sampler", "likelihood"} <= set(EvolutionSamplingParticleFilter.model_requirements) \
         or "transition_density" in EvolutionSamplingParticleFilter.model_requirements
+
+
+# -- output shapes, checked at the first call (issue 34, item 6) ----------------------------------
+class _Scalar(StateSpaceModel):
+    """UNGM-like scalar model; ``bad`` names the one method that returns a wrong shape."""
+
+    def __init__(self, bad=None):
+        super().__init__(1, 1, 1.0, 1.0, [0.1], [0.0], 5.0)
+        self.bad = bad
+
+    def f(self, x, k):
+        out = 0.5 * x + 25 * x / (1 + x**2) + 8 * np.cos(1.2 * k)
+        return np.atleast_1d(out.mean()) if self.bad == "f" else out    # one value for the whole cloud
+
+    def jacobian_f(self, x, k):
+        J = (0.5 + 25 * (1 - x**2) / (1 + x**2) ** 2)[..., None]
+        return J[..., 0] if self.bad == "jacobian_f" else J
+
+    def h(self, x):
+        return np.concatenate([x, x], axis=-1) / 20 if self.bad == "h" else x**2 / 20
+
+    def jacobian_h(self, x):
+        return (x / 10)[..., None]
+
+    def log_likelihood(self, y, x):
+        ll = super().log_likelihood(y, x)
+        return ll.sum(axis=-1) if self.bad == "log_likelihood" else ll
+
+
+def test_f_returning_one_value_for_the_whole_cloud_is_refused_at_the_first_call():
+    """Before: simulate and every filter ran silently on the broadcast value (a PF off by ~1)."""
+    # (simulate may hand the model (runs, dim_x) or (runs, 1, dim_x): either is one state per run)
+    with pytest.raises(ModelContractError, match=r"_Scalar\.f returned shape \(1,\) for x of shape \(3, (1, )?1\); "
+                                                 r"the model contract expects \(3, (1, )?1\) \(x\.shape\)"):
+        _Scalar("f").simulate(5, 3, np.random.default_rng(0))
+    y = _Scalar().simulate(5, 3, np.random.default_rng(0)).y
+    with pytest.raises(ModelContractError, match=r"_Scalar\.f returned shape \(1,\) for x of shape \(3, 50, 1\)"):
+        BootstrapParticleFilter(_Scalar("f"), 50).filter(y, filter_streams(1, "PF", 3))
+
+
+@pytest.mark.parametrize("bad, where, expect", [
+    ("h", "simulate", r"_Scalar\.h returned shape \(3, (1, )?2\) for x of shape \(3, (1, )?1\); the model contract "
+                      r"expects \(3, (1, )?1\)"),
+    ("jacobian_f", "EKF", r"_Scalar\.jacobian_f returned shape \(3, 1\) for x of shape \(3, 1\); .* "
+                          r"expects \(3, 1, 1\) \(x\.shape\[:-1\] \+ \(dim_x, dim_x\)\)"),
+    ("log_likelihood", "PF", r"_Scalar\.log_likelihood returned shape \(3,\) for x of shape \(3, 40, 1\); .* "
+                             r"expects \(3, 40\)"),
+])
+def test_wrong_shapes_name_the_method_and_the_expected_shape(bad, where, expect):
+    """Before: a numpy broadcast error, a misleading LinAlgError, or silently wrong numbers."""
+    y = _Scalar().simulate(5, 3, np.random.default_rng(0)).y
+    m = _Scalar(bad)
+    with pytest.raises(ModelContractError, match=expect):
+        if where == "simulate":
+            m.simulate(5, 3, np.random.default_rng(0))
+        elif where == "EKF":
+            ExtendedKalmanFilter(m).filter(y)
+        else:
+            BootstrapParticleFilter(m, 40).filter(y, filter_streams(1, "PF", 3))
+
+
+def test_good_models_pass_and_are_checked_once_per_kind_of_input():
+    m = _Scalar()
+    sim = m.simulate(4, 2, np.random.default_rng(0))
+    assert {key[0] for key in m._contract_seen} >= {"f", "h"}   # simulate's states checked
+    ExtendedKalmanFilter(m).filter(sim.y)
+    UnscentedKalmanFilter(m).filter(sim.y)                     # sigma points: 3 axes
+    BootstrapParticleFilter(m, 20).filter(sim.y, filter_streams(1, "PF", 2))
+    assert {("f", 2), ("f", 3), ("h", 3), ("jacobian_f", 2), ("log_likelihood", 3)} <= m._contract_seen
+    # a shared Jacobian (one matrix for every state) is allowed: the linear models return F
+    lin = LinearGaussianModel([[1.0, 0.1], [0.0, 1.0]], [[1.0, 0.0]], np.eye(2) * 0.01, 1.0, [0.0, 1.0])
+    ExtendedKalmanFilter(lin).filter(lin.simulate(5, 2, np.random.default_rng(1)).y)
+    # the wrapper keeps the method's name and source for the reader
+    import inspect
+    assert _Scalar.f.__name__ == "f" and "one value for the whole cloud" in inspect.getsource(_Scalar.f)

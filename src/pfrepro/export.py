@@ -65,7 +65,11 @@ def filter_result_frame(result, truth=None, component_names=None, filter_name=No
     data = {"run": run_idx.ravel(), "k": k_idx.ravel(), "component": np.asarray(comps, dtype=object)[c_idx.ravel()]
             if component_names is not None else c_idx.ravel(), "estimate": x.ravel()}
     if result.P is not None:
-        data["variance"] = np.diagonal(np.asarray(result.P, float), axis1=-2, axis2=-1).ravel()
+        P = np.asarray(result.P)
+        if P.dtype.kind not in "fiu" or P.shape != (runs, T, n, n):
+            raise ValueError(f"result.P must be covariances of shape (runs, T, dim_x, dim_x) = {(runs, T, n, n)} "
+                             f"(or None), got {P.dtype} of shape {P.shape}")
+        data["variance"] = np.diagonal(P.astype(float), axis1=-2, axis2=-1).ravel()
     if truth is not None:
         t = np.asarray(truth, dtype=float)
         if t.shape == (runs, T + 1, n):

@@ -53,9 +53,16 @@ def truth_rng(seed: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence([int(seed), 0]))
 
 
+def _name_key(name) -> int:
+    """The stream key of a filter name (its CRC-32); the name must be a string."""
+    if not isinstance(name, str):
+        raise TypeError(f"name must be the filter's name (a string), got {name!r}")
+    return zlib.crc32(name.encode())
+
+
 def filter_rng(seed: int, name: str) -> np.random.Generator:
     """Generator for the filter called ``name`` in experiment ``seed``."""
-    return np.random.default_rng(np.random.SeedSequence([int(seed), 1, zlib.crc32(name.encode())]))
+    return np.random.default_rng(np.random.SeedSequence([int(seed), 1, _name_key(name)]))
 
 
 def truth_streams(seed: int, runs: int, start: int = 0) -> RunStreams:
@@ -69,7 +76,7 @@ def truth_streams(seed: int, runs: int, start: int = 0) -> RunStreams:
 
 def filter_streams(seed: int, name: str, runs: int, start: int = 0) -> RunStreams:
     """Per-run streams of the filter called ``name`` (keyed by name: adding a filter changes no other)."""
-    return RunStreams.from_entropy([int(seed), 1, zlib.crc32(name.encode())], runs, start)
+    return RunStreams.from_entropy([int(seed), 1, _name_key(name)], runs, start)
 
 
 def _timed_call(filt, y, rng_seed: int) -> float:

@@ -63,9 +63,12 @@ class RunStreams:
         ``entropy`` is an int or a sequence of ints (e.g. ``[seed, 1, crc32(name)]``).
         Run i gets ``default_rng(SeedSequence(entropy, spawn_key=(i,)))``.
         """
-        from .validation import check_positive_int
+        from .validation import check_memory, check_positive_int
 
         runs = check_positive_int(runs, "runs")
+        # a generator and its seed sequence take about 2.4 kB (measured): refuse a count of runs
+        # that cannot fit before building the list (10**10 runs used to run until memory ran out)
+        check_memory(2400.0 * runs, "one random generator per run", "runs", runs)
         if isinstance(start, (bool, np.bool_)) or not isinstance(start, (int, np.integer)):
             raise TypeError(f"start must be an integer >= 0, got {start!r}")
         ent = np.atleast_1d(np.asarray(entropy, dtype=object))
@@ -135,11 +138,27 @@ class RunStreams:
         Array parameters broadcast against ``size``; run i gets slice ``[i]``.
         """
         size = self._size(size, method)
-        params = [p if np.ndim(p) == 0 else np.broadcast_to(p, size) for p in params]
+        try:
+            params = [p if np.ndim(p) == 0 else np.broadcast_to(p, size) for p in params]
+        except ValueError:
+            raise ValueError(f"RunStreams.{method}: parameters of shapes {[np.shape(p) for p in params]} do not "
+                             f"broadcast against size {size}") from None
         out = np.empty(size, dtype=dtype)
-        for i, g in enumerate(self._gens):
-            out[i] = getattr(g, method)(*[p if np.ndim(p) == 0 else p[i] for p in params], size=size[1:])
+        try:
+            for i, g in enumerate(self._gens):
+                out[i] = getattr(g, method)(*[p if np.ndim(p) == 0 else p[i] for p in params], size=size[1:])
+        except (ValueError, TypeError) as e:
+            # numpy's message names the parameter but not the call ("scale < 0"): say which draw
+            # and what it was given (the first run's values), as at any API boundary
+            names = self._PARAM_NAMES.get(method, ())
+            given = ", ".join(f"{n}={_short(p)}" for n, p in zip(names, params))
+            raise type(e)(f"RunStreams.{method}({given}): invalid parameter: {e} "
+                          f"(numpy.random.Generator.{method})") from None
         return out
+
+    #: the parameter names of the per-run draws, for error messages
+    _PARAM_NAMES = {"normal": ("loc", "scale"), "uniform": ("low", "high"), "beta": ("a", "b"),
+                    "gamma": ("shape", "scale"), "exponential": ("scale",), "poisson": ("lam",)}
 
     def standard_normal(self, size=None, dtype=np.float64):
         """``Generator.standard_normal`` per run, with the runs axis first.
@@ -359,6 +378,17 @@ class RunStreams:
         for i, g in enumerate(self._gens):
             out[i] = g.permuted(x[i], axis=axis - 1 if axis > 0 else axis)
         return out
+
+
+def _short(p) -> str:
+    """A parameter for an error message: a scalar as is, an array by shape and range."""
+    if np.ndim(p) == 0:
+        return repr(p.item() if hasattr(p, "item") else p)
+    a = np.asarray(p)
+    try:
+        return f"array{a.shape} in [{np.nanmin(a):.4g}, {np.nanmax(a):.4g}]"
+    except (TypeError, ValueError):
+        return f"array{a.shape} of {a.dtype}"
 
 
 def is_rng(rng) -> bool:

@@ -68,6 +68,40 @@ MEASUREMENT_SHAPES = ("(runs, T, dim_y) always; (T,) for one run of scalar measu
                       "(T, dim_y) for one run only when dim_y > 1")
 
 
+#: numpy dtype kinds that are real numbers (float, signed and unsigned integers)
+_REAL_KINDS = frozenset("fiu")
+_KIND_NAMES = {"b": "booleans", "c": "complex numbers", "M": "dates (datetime64)", "m": "time spans (timedelta64)",
+               "U": "text", "S": "bytes", "O": "objects", "V": "raw records"}
+
+
+def as_real_array(value, name: str) -> np.ndarray:
+    """``value`` as a float array, refusing values that are not real numbers with a ``TypeError``.
+
+    ``np.asarray(value, dtype=float)`` would read booleans as 0/1, drop the imaginary part of
+    complex numbers (with only a ``ComplexWarning``), turn dates into nanoseconds and parse
+    numeric strings; a measurement or setting is none of those."""
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as e:
+        raise TypeError(f"{name} must be an array of real numbers, got {type(value).__name__} ({e})") from None
+    kind = raw.dtype.kind
+    if kind == "O":
+        # lists of Python numbers mixed with None etc.: a float conversion decides, but a
+        # bool or complex entry is refused as above
+        flat = raw.ravel()
+        bad = [v for v in flat[:10_000] if isinstance(v, (bool, np.bool_, complex, np.complexfloating, str, bytes))]
+        if bad:
+            raise TypeError(f"{name} must hold real numbers, got {type(bad[0]).__name__} {bad[0]!r}")
+        try:
+            return raw.astype(float)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must hold real numbers, got entries such as {flat[0]!r}") from None
+    if kind not in _REAL_KINDS:
+        raise TypeError(f"{name} must hold real numbers, got {_KIND_NAMES.get(kind, raw.dtype.name)} "
+                        f"(dtype {raw.dtype})")
+    return raw.astype(float, copy=False)
+
+
 def as_measurements(y, dim_y: int, name: str = "y") -> np.ndarray:
     """Return measurements as a finite ``(runs, T, dim_y)`` float array.
 
@@ -79,9 +113,12 @@ def as_measurements(y, dim_y: int, name: str = "y") -> np.ndarray:
 
     A 2-D array with ``dim_y == 1`` is refused: ``(5, 1)`` could be five runs of
     one step or one run of five steps. Pass ``y[None]``/``y[..., None]`` to say
-    which. Empty input (``runs == 0`` or ``T == 0``) and NaN/inf are refused.
+    which. Empty input (``runs == 0`` or ``T == 0``) and NaN/inf are refused, and so are
+    values that are not real numbers (bool, complex, dates, text: ``TypeError``), which
+    a float conversion would otherwise read as 0/1, drop the imaginary part of, or count
+    in nanoseconds.
     """
-    arr = np.asarray(y, dtype=float)
+    arr = as_real_array(y, name)
     hint = f"accepted shapes: {MEASUREMENT_SHAPES}"
     if arr.ndim == 1:
         if dim_y != 1:
@@ -143,6 +180,35 @@ def as_matrix(value, name: str, shape: tuple | None = None) -> np.ndarray:
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} contains NaN or infinite entries:\n{arr}")
     return arr
+
+
+class TooLargeError(ValueError, MemoryError):
+    """A request that would need more memory than the machine has, refused before allocating
+    (a ``ValueError`` naming the argument, and a ``MemoryError``)."""
+
+
+def physical_memory() -> int | None:
+    """This machine's physical memory in bytes (None where the OS does not say)."""
+    import os
+
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):  # pragma: no cover - not POSIX
+        return None
+
+
+def check_memory(nbytes: float, what: str, name: str = "runs", value=None) -> None:
+    """Refuse, before allocating, a request of ``nbytes`` beyond the machine's physical memory.
+
+    Raises :class:`TooLargeError` naming ``name`` (= ``value``) and the memory it would take,
+    instead of numpy's bare ``MemoryError`` (or an endless loop building per-run streams)."""
+    total = physical_memory()
+    if total is not None and nbytes > total:
+        shown = "" if value is None else f" = {value}"
+        raise TooLargeError(
+            f"{name}{shown} needs about {nbytes / 2**30:.3g} GiB for {what}, more than this machine's "
+            f"{total / 2**30:.3g} GiB of memory; use fewer {name} (runs can be split over calls: run i's "
+            f"numbers do not depend on how the runs are split)")
 
 
 def check_positive_int(value, name: str) -> int:

@@ -13,7 +13,7 @@ from .ekf_variants import PreviousEstimateJacobianEKF
 from .espf import EvolutionSamplingParticleFilter
 from .gaussian_proposal import GaussianProposalParticleFilter
 from .gpff import GaussianParticleFlowFilter
-from .grid import GridFilter
+from .grid import GridFilter, GridMassWarning
 from .imm import IMMPFOR, IMMKalman, IMMParticleFilter
 from .jump_markov_pf import JumpMarkovParticleFilter
 from .kalman import ExtendedKalmanFilter, KalmanFilter, kalman_update
@@ -42,7 +42,7 @@ __all__ = [
     "stratified_resample", "systematic_resample", "residual_resample", "offspring_counts",
     "effective_sample_size", "RESAMPLING_SCHEMES",
     # grid (point-mass) filter
-    "GridFilter",
+    "GridFilter", "GridMassWarning",
     # the papers' filters
     "GaussianParticleFlowFilter", "CMSParticleFilter", "OracleCMSParticleFilter", "CMSStep",
     "EvolutionSamplingParticleFilter",

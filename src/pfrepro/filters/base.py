@@ -6,6 +6,8 @@ FilterResult`` keeps working.
 """
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from ..models.base import ModelContractError, require_capabilities
@@ -14,7 +16,7 @@ from ..rng import check_rng
 from ..validation import MEASUREMENT_SHAPES, as_covariance, as_measurements, as_vector
 
 __all__ = ["FilterResult", "Filter", "GaussianFilter", "FilterDivergenceError", "FilterDivergenceWarning",
-           "DIVERGENCE_POLICIES", "ModelContractError",
+           "DIVERGENCE_POLICIES", "ModelContractError", "check_divergence_policy", "mark_diverged",
            "gaussian_loglik", "MEASUREMENT_SHAPES"]
 
 
@@ -110,9 +112,23 @@ class GaussianFilter(Filter):
     (exact for the KF on a linear-Gaussian model), returned in
     ``diagnostics["log_likelihood"]`` (runs, T) and summed over k in
     ``diagnostics["log_evidence"]`` (runs,). An IMM uses them as mode likelihoods.
+
+    Divergence (``on_divergence``, as the GPFF and the dual EKF): a run whose estimate
+    becomes non-finite is judged on its own. "warn" (default): its estimates, covariances
+    and log-likelihoods are NaN from that step on, ``diagnostics["diverged"]`` (runs,) flags
+    it, ``diagnostics["diverged_at"]`` (runs,) holds the step (0 = never) and
+    ``diagnostics["n_diverged"]`` the count, and one ``FilterDivergenceWarning`` names the
+    filter and the runs; the other runs are computed exactly as without it. "drop": the
+    same, silent. "raise": ``FilterDivergenceError``.
     """
 
     _last_innovation = None
+    #: what to do with a diverging run (see the class docstring); a constructor argument
+    on_divergence = "warn"
+
+    def __init__(self, model, m0=None, P0=None, on_divergence: str = "warn"):
+        super().__init__(model, m0, P0)
+        self.on_divergence = check_divergence_policy(on_divergence)
 
     def predict(self, x, P, k):
         """Time update from step k - 1 to k: ``(x, P)`` of shapes (runs, n), (runs, n, n) -> predicted ``(x, P)``."""
@@ -137,18 +153,73 @@ class GaussianFilter(Filter):
                 x, P = self.update(x, P, y[:, k - 1])
                 xs[:, k - 1], Ps[:, k - 1] = x, P
                 loglik[:, k - 1] = gaussian_loglik(*self._last_innovation)
-        bad = ~np.all(np.isfinite(xs.reshape(runs, -1)), axis=1)
-        if bad.any():
-            raise FilterDivergenceError(
-                f"{self.name} produced non-finite estimates in runs {np.flatnonzero(bad)[:10].tolist()}"
-                f"{' ...' if bad.sum() > 10 else ''} ({bad.sum()} of {runs})")
-        return FilterResult(xs, Ps, diagnostics={"log_likelihood": loglik, "log_evidence": loglik.sum(axis=1)})
+        diag = mark_diverged(self.name, self.on_divergence, np.isfinite(xs).all(axis=-1), (xs, Ps, loglik))
+        return FilterResult(xs, Ps, diagnostics={"log_likelihood": loglik, "log_evidence": loglik.sum(axis=1),
+                                                 **diag})
+
+
+def check_divergence_policy(on_divergence) -> str:
+    """``on_divergence`` must be one of :data:`DIVERGENCE_POLICIES`."""
+    if not isinstance(on_divergence, str) or on_divergence not in DIVERGENCE_POLICIES:
+        raise ValueError(f"on_divergence must be one of {DIVERGENCE_POLICIES}, got {on_divergence!r}")
+    return on_divergence
+
+
+def mark_diverged(name: str, policy: str, finite, arrays, stacklevel: int = 3) -> dict:
+    """Judge divergence run by run and mark the diverged runs (the Kalman-family rule).
+
+    ``finite`` (runs, T) says where a run's estimate is finite; a run is diverged from its
+    first non-finite step on, and every array of ``arrays`` (runs axis first, time axis
+    second) is set to NaN there, in place, so no huge finite number before the NaN passes
+    on as an estimate of a lost run. ``policy`` "raise" raises
+    :class:`FilterDivergenceError`, "warn" gives one :class:`FilterDivergenceWarning`
+    naming ``name`` and the runs, "drop" is silent. Returns the diagnostics ``diverged``
+    (runs,) bool, ``diverged_at`` (runs,) (step, 0 = never) and ``n_diverged``.
+    """
+    finite = np.asarray(finite, dtype=bool)
+    runs = finite.shape[0]
+    bad = ~finite.all(axis=1)
+    diverged_at = np.where(bad, np.argmin(finite, axis=1) + 1, 0)
+    n_bad = int(bad.sum())
+    if n_bad:
+        idx = np.flatnonzero(bad)
+        msg = (f"{name}: {n_bad} of {runs} runs diverged (non-finite estimates, first at step "
+               f"{int(diverged_at[bad].min())}) in runs {idx[:10].tolist()}{' ...' if n_bad > 10 else ''}")
+        if policy == "raise":
+            raise FilterDivergenceError(msg)
+        for r in idx:
+            for a in arrays:
+                a[r, diverged_at[r] - 1:] = np.nan
+        if policy == "warn":
+            warnings.warn(FilterDivergenceWarning(
+                msg + "; their estimates are NaN from diagnostics['diverged_at'] on, the other runs are kept "
+                "(on_divergence='drop' silences this, 'raise' makes it an error)"), stacklevel=stacklevel)
+    return {"diverged": bad, "diverged_at": diverged_at, "n_diverged": n_bad}
 
 
 def gaussian_loglik(nu, S):
-    """log N(nu; 0, S) for batched innovations ``nu`` (runs, m) and covariances ``S`` (runs, m, m)."""
-    L = np.linalg.cholesky(S)
+    """log N(nu; 0, S) for batched innovations ``nu`` (runs, m) and covariances ``S`` (runs, m, m).
+
+    A covariance without a Cholesky factor (a diverged run) gives NaN in its own run only;
+    the batch is factorised at once first, so the other runs' numbers do not change."""
+    L = _cholesky_per_run(S)
     z = np.linalg.solve(L, nu[..., None])[..., 0]
     m = nu.shape[-1]
     return -0.5 * np.sum(z * z, axis=-1) - np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1) \
         - 0.5 * m * np.log(2.0 * np.pi)
+
+
+def _cholesky_per_run(S):
+    """``np.linalg.cholesky`` over a batch, NaN (not a ``LinAlgError`` for the whole batch) for
+    a matrix that is not positive definite; bit-identical to the batched call otherwise."""
+    try:
+        return np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        pass
+    out = np.empty(S.shape)
+    for idx in np.ndindex(*S.shape[:-2]):
+        try:
+            out[idx] = np.linalg.cholesky(S[idx])
+        except np.linalg.LinAlgError:
+            out[idx] = np.nan
+    return out

@@ -36,7 +36,7 @@ try:  # package v2 model contract
     from ..models.base import require_capabilities
 except ImportError:  # pragma: no cover - before the contract existed
     require_capabilities = None
-from .base import Filter, FilterDivergenceError, FilterResult, gaussian_loglik
+from .base import Filter, FilterDivergenceError, FilterResult, check_divergence_policy, gaussian_loglik, mark_diverged
 from .kalman import symmetrize
 from .particle import normalize_log_weights
 
@@ -549,6 +549,8 @@ class IMMPFOR(IMMParticleFilter):
         if metric not in self.METRICS:
             raise ValueError(f"metric must be one of {self.METRICS}, got {metric!r}")
         self.metric = metric
+        if isinstance(d, (str, bytes, bool, np.bool_)) or not isinstance(d, (int, float, np.integer, np.floating)):
+            raise TypeError(f"step coefficient d must be a positive number, got {d!r}")
         d = float(d)
         if not (np.isfinite(d) and d > 0):
             raise ValueError(f"step coefficient d must be a positive number, got {d!r}")
@@ -718,25 +720,37 @@ class IMMKalman(Filter):
         are used (their own m0/P0 are ignored: the IMM starts every mode at m0, P0).
     name : str
         A label, e.g. "IMM-EKF".
+    on_divergence : {"warn", "drop", "raise"}
+        A run whose estimates become non-finite: NaN from that step on and flagged, one
+        warning (default), silent, or an error (as :class:`~pfrepro.filters.GaussianFilter`).
 
     Notes
     -----
     Diagnostics: ``mode_probs`` (runs, T, r), ``model_estimates`` (runs, T, r, n),
-    ``log_model_likelihood`` (runs, T, r).
+    ``log_model_likelihood`` (runs, T, r); ``diverged``, ``diverged_at``, ``n_diverged``
+    (see ``on_divergence``).
     """
 
     needs_rng = False
 
     model_requirements = ()   # the mode filters check their own models
 
-    def __init__(self, system, mode_filters, name: str = "IMM", m0=None, P0=None):
+    def __init__(self, system, mode_filters, name: str = "IMM", m0=None, P0=None, on_divergence: str = "warn"):
         _init_on_system(self, system, m0, P0, ())
+        self.on_divergence = check_divergence_policy(on_divergence)
+        if isinstance(mode_filters, (str, bytes)) or not np.iterable(mode_filters) or hasattr(mode_filters, "filter"):
+            raise TypeError(f"mode_filters must be a list of {system.r} Kalman-family filters, one per mode, "
+                            f"got {mode_filters!r}")
         self.mode_filters = list(mode_filters)
         if len(self.mode_filters) != system.r:
             raise ValueError(f"mode_filters must hold one filter per mode ({system.r}), got {len(self.mode_filters)}")
         for j, f in enumerate(self.mode_filters):
             if not (hasattr(f, "predict") and hasattr(f, "update")):
-                raise TypeError(f"mode filter {j} ({f!r}) has no predict/update")
+                if hasattr(f, "simulate") and hasattr(f, "dim_x"):
+                    raise TypeError(f"mode_filters[{j}] is a model ({type(f).__name__}), not a filter: give a "
+                                    f"Kalman-family filter built on it, e.g. ExtendedKalmanFilter(system.models[{j}])")
+                raise TypeError(f"mode filter {j} ({f!r}) has no predict/update: IMMKalman needs Kalman-family "
+                                f"mode filters (KalmanFilter, ExtendedKalmanFilter, UnscentedKalmanFilter)")
             _check_mode_filter_model(f, system, j)
         self.name = str(name)
 
@@ -775,11 +789,10 @@ class IMMKalman(Filter):
                 d = x - est[:, None, :]
                 Ps[:, k - 1] = symmetrize(np.einsum("ar,armn->amn", mu, P) + np.einsum("ar,arm,arn->amn", mu, d, d))
                 xs[:, k - 1], xj[:, k - 1], probs[:, k - 1], loglam[:, k - 1] = est, x, mu, lam
-        bad = ~np.all(np.isfinite(xs.reshape(runs, -1)), axis=1)
-        if bad.any():
-            raise FilterDivergenceError(f"{self.name} produced non-finite estimates in {int(bad.sum())} of {runs} runs")
+        diag = mark_diverged(self.name, self.on_divergence, np.isfinite(xs).all(axis=-1),
+                             (xs, Ps, xj, probs, loglam))
         return FilterResult(xs, Ps, diagnostics={"mode_probs": probs, "model_estimates": xj,
-                                                 "log_model_likelihood": loglam})
+                                                 "log_model_likelihood": loglam, **diag})
 
     def __repr__(self) -> str:
         return f"IMMKalman({self.name}, r={self.system.r})"

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..flow import solve_per_run
 from .base import GaussianFilter
 
 __all__ = ["KalmanFilter", "ExtendedKalmanFilter", "kalman_update", "symmetrize"]
@@ -29,8 +30,9 @@ def kalman_update(x, P, innovation, H, R):
     Ht = np.swapaxes(H, -1, -2)
     PHt = P @ Ht
     S = symmetrize(H @ PHt + R)
-    # K = P H^T S^{-1}  <=>  K^T = S^{-1} H P  (S symmetric)
-    K = np.swapaxes(np.linalg.solve(S, np.swapaxes(PHt, -1, -2)), -1, -2)
+    # K = P H^T S^{-1}  <=>  K^T = S^{-1} H P  (S symmetric); a singular S (a diverged run)
+    # gives NaN in its own run instead of a LinAlgError for the whole batch
+    K = np.swapaxes(solve_per_run(S, np.swapaxes(PHt, -1, -2)), -1, -2)
     x_new = x + np.einsum("...ij,...j->...i", K, innovation)
     I_KH = np.eye(P.shape[-1]) - K @ H
     P_new = I_KH @ P @ np.swapaxes(I_KH, -1, -2) + K @ R @ np.swapaxes(K, -1, -2)
@@ -55,6 +57,9 @@ class KalmanFilter(GaussianFilter):
         Any model with matrices ``F`` and ``H`` (e.g. :class:`~pfrepro.models.CWPA`).
     m0, P0 : array_like, optional
         Override the model's initial distribution N(m0, P0).
+    on_divergence : {"warn", "drop", "raise"}
+        A run whose estimates become non-finite: NaN from that step on and flagged, one
+        warning (default), silent, or an error (see :class:`~pfrepro.filters.GaussianFilter`).
 
     Model methods
     -------------
@@ -101,6 +106,8 @@ class ExtendedKalmanFilter(GaussianFilter):
         A model with additive process and measurement noise.
     m0, P0 : array_like, optional
         Override the model's initial distribution N(m0, P0).
+    on_divergence : {"warn", "drop", "raise"}
+        As for :class:`KalmanFilter`.
 
     Model methods
     -------------

@@ -24,8 +24,9 @@ from scipy.interpolate import CubicSpline
 
 import warnings
 
-from ..validation import check_positive_int, check_quantile_levels
+from ..validation import check_positive_int, check_probability, check_quantile_levels
 from .base import Filter, FilterResult
+from .grid import LOST_MASS_TOL, GridMassWarning, compound_lost, grid_mass_message, lost_fraction
 from .particle import WeightCollapseWarning
 from .parameter_learning import ParameterLearningFilter
 
@@ -70,13 +71,31 @@ class ThetaGridReference(ParameterLearningFilter):
     n_theta : int
         Number of θ grid nodes on [r_l, r_u] (endpoints included).
     x_bounds, n_grid : tuple of float, int
-        The x grid; mass pushed outside is lost (reported).
+        The x grid; mass pushed outside is lost (reported, see below).
+    lost_mass_tol : float
+        Largest posterior-weighted fraction of one step's predictive mass that may leave the x
+        grid without a :class:`~pfrepro.filters.grid.GridMassWarning` (default 1e-4).
+
+    Notes
+    -----
+    Diagnostics, besides the θ posterior's ``theta``, ``theta_var``, ``theta_quantiles``
+    (runs, T, 3) and ``log_evidence`` (runs, T, N_θ): ``lost_mass`` (runs, N_θ) the fraction
+    of probability mass that left the x grid over the run given θ_j, 1 − Π_k (1 − lost_k,j),
+    in [0, 1]; ``lost_mass_steps`` (runs, T) the fraction of step k's predictive mass that
+    left the x grid, averaged over θ with the θ posterior entering the step (mass lost
+    under a θ the data have ruled out does not count). Above ``lost_mass_tol`` one
+    ``GridMassWarning`` names the runs: the x posterior then sticks to the grid's edge and
+    drags the θ posterior with it (with x_bounds (−3, 3) on the sec 5.1 model θ̂ ends near
+    0 for a true 0.5). ``theta_edge_mass`` (runs, T) is the θ posterior's mass on the two
+    end nodes of the θ grid: large where the posterior is cut by the prior range [r_l, r_u].
     """
 
     name = "exact θ posterior (grid)"
 
-    def __init__(self, model, n_theta: int = 101, x_bounds=(-40.0, 40.0), n_grid: int = 321, n_fine: int = 2001):
+    def __init__(self, model, n_theta: int = 101, x_bounds=(-40.0, 40.0), n_grid: int = 321, n_fine: int = 2001,
+                 lost_mass_tol: float = LOST_MASS_TOL):
         super().__init__(model)
+        self.lost_mass_tol = check_probability(lost_mass_tol, "lost_mass_tol")
         if model.dim_x != 1 or model.dim_y != 1:
             raise ValueError("ThetaGridReference is for scalar models (dim_x = dim_y = 1)")
         q = float(np.sqrt(model.Q[0, 0]))
@@ -130,7 +149,8 @@ class ThetaGridReference(ParameterLearningFilter):
         p = np.broadcast_to(p0 / p0.sum(), (runs, Nt, M)).copy()
         logev = np.zeros((runs, T, Nt))   # cumulative log p(y_1:k | θ_j)
         xmean_theta = np.empty((runs, T, Nt))
-        lost = np.zeros((runs, Nt))
+        lost = np.zeros((runs, T, Nt))
+        lost_w = np.zeros((runs, T))
         cum = np.zeros((runs, Nt))
         collapsed = np.zeros((runs, T), dtype=bool)
         for k in range(1, T + 1):
@@ -140,7 +160,10 @@ class ThetaGridReference(ParameterLearningFilter):
             spec *= self._kernel_f
             pred = sfft.irfft(spec, n=self._nfft, axis=-1)[..., self._half:self._half + M]
             np.maximum(pred, 0.0, out=pred)
-            lost += 1.0 - pred.sum(-1)
+            lost[:, k - 1] = lost_fraction(pred)
+            # weighted by the θ posterior entering the step (uniform at k = 1)
+            w_in = np.exp(cum - cum.max(axis=1, keepdims=True))
+            lost_w[:, k - 1] = (w_in * lost[:, k - 1]).sum(axis=1) / w_in.sum(axis=1)
             with np.errstate(over="ignore", invalid="ignore"):
                 ll = self.model.log_likelihood(y[:, k - 1], g[None, :, None])  # (runs, M)
             ll = np.where(np.isnan(ll), -np.inf, ll)
@@ -176,6 +199,12 @@ class ThetaGridReference(ParameterLearningFilter):
                 f"ThetaGridReference: the likelihood vanished at every grid node in {int(collapsed.sum())} of "
                 f"{collapsed.size} run-steps (an outlier measurement); those measurements were ignored "
                 f"(diagnostics['collapsed'])"), stacklevel=2)
+        over = lost_w > self.lost_mass_tol
+        if over.any():
+            bad = np.flatnonzero(over.any(axis=1))
+            warnings.warn(GridMassWarning(grid_mass_message(
+                "ThetaGridReference", float(lost_w.max()), bad, runs, int(np.argmax(over.any(axis=0))) + 1,
+                f"x_bounds ({g[0]:g}, {g[-1]:g})")), stacklevel=2)
         # posterior of θ at every k (uniform prior on the grid range)
         mean, var, qs = posterior_summary(self.theta, logev, (0.025, 0.5, 0.975), self.n_fine)
         lw = logev - logev.max(-1, keepdims=True)
@@ -184,7 +213,8 @@ class ThetaGridReference(ParameterLearningFilter):
         x_mean = np.einsum("rtj,rtj->rt", wpost, xmean_theta)[..., None]
         return FilterResult(x_mean, None, diagnostics={
             "theta": mean, "theta_var": var, "theta_quantiles": np.moveaxis(qs, 0, -1),  # (runs, T, 3)
-            "log_evidence": logev, "lost_mass": lost, "x_mean_given_theta": xmean_theta,
+            "log_evidence": logev, "lost_mass": compound_lost(lost, axis=1), "lost_mass_steps": lost_w,
+            "theta_edge_mass": wpost[..., 0] + wpost[..., -1], "x_mean_given_theta": xmean_theta,
             "collapsed": collapsed, "n_collapsed": int(collapsed.sum()),
         })
 

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..flow import solve_per_run
 from .base import GaussianFilter
 from .kalman import symmetrize
 from .sigma_points import ScaledSigmaPoints, unscented_transform
@@ -36,6 +37,9 @@ class UnscentedKalmanFilter(GaussianFilter):
         See above.
     m0, P0 : array_like, optional
         Override the model's initial distribution N(m0, P0).
+    on_divergence : {"warn", "drop", "raise"}
+        A run whose estimates become non-finite: NaN from that step on and flagged, one
+        warning (default), silent, or an error (see :class:`~pfrepro.filters.GaussianFilter`).
 
     Model methods
     -------------
@@ -55,27 +59,29 @@ class UnscentedKalmanFilter(GaussianFilter):
     name = "UKF"
     model_requirements = ("f", "additive_measurement")
 
-    def __init__(self, model, alpha=1.0, beta=2.0, kappa=0.0, redraw=True, m0=None, P0=None):
-        super().__init__(model, m0, P0)
+    def __init__(self, model, alpha=1.0, beta=2.0, kappa=0.0, redraw=True, m0=None, P0=None,
+                 on_divergence: str = "warn"):
+        super().__init__(model, m0, P0, on_divergence)
         self.points = ScaledSigmaPoints(model.dim_x, alpha, beta, kappa)
         self.redraw = bool(redraw)
         self._sigmas_f = None
 
     def predict(self, x, P, k):
-        sig = self.points.sigma_points(x, P)
+        # a P without a square root (a diverged run) gives NaN points in its own run only
+        sig = self.points.sigma_points(x, P, on_error="nan")
         sf = self.model.f(sig, k)
         self._sigmas_f = sf
         x, P, _ = unscented_transform(sf, self.points.Wm, self.points.Wc, self.model.Q)
         return x, symmetrize(P)
 
     def update(self, x, P, y):
-        sig = self.points.sigma_points(x, P) if self.redraw else self._sigmas_f
+        sig = self.points.sigma_points(x, P, on_error="nan") if self.redraw else self._sigmas_f
         sh = self.model.h(sig)
         y_hat, Pyy, dy = unscented_transform(sh, self.points.Wm, self.points.Wc, self.model.R,
                                              residual=self.model.residual_y)
         dx = sig - x[..., None, :]
         Pxy = np.einsum("i,...ij,...ik->...jk", self.points.Wc, dx, dy)
-        K = np.swapaxes(np.linalg.solve(Pyy, np.swapaxes(Pxy, -1, -2)), -1, -2)
+        K = np.swapaxes(solve_per_run(Pyy, np.swapaxes(Pxy, -1, -2)), -1, -2)
         innov = self.model.residual_y(y, y_hat)
         self._last_innovation = (innov, Pyy)
         x = x + np.einsum("...ij,...j->...i", K, innov)

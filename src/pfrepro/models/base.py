@@ -60,6 +60,20 @@ Models whose transition is not ``f(x) + w``
     needs nothing else); do not override ``f`` unless it is the transition mean
     a Gaussian filter may use.
 
+Output shapes (checked at the first call)
+    A model's own ``f``, ``h``, ``jacobian_f``, ``jacobian_h``, ``sample_transition``,
+    ``sample_measurement``, ``log_likelihood`` and ``residual_y`` are checked the first
+    time each is called with an input of a given number of axes (a batch of runs, a
+    particle cloud, sigma points): ``f`` and ``sample_transition`` return ``x.shape``; ``h``
+    and ``sample_measurement`` ``x.shape[:-1] + (dim_y,)``; ``jacobian_f``
+    ``x.shape[:-1] + (dim_x, dim_x)`` and ``jacobian_h`` ``x.shape[:-1] + (dim_y, dim_x)``
+    (or one matrix for every state); ``log_likelihood(y, x)`` ``x.shape[:-1]``; and
+    ``residual_y(y, y_pred)`` the broadcast shape of its inputs. A method returning one
+    value for the whole batch, or another shape, raises :class:`ModelContractError` naming
+    the method, the shape it returned and the shape expected, instead of being broadcast
+    silently into wrong numbers or failing later in a numpy error. Later calls with inputs
+    of the same number of axes are not checked again (the check costs nothing in a loop).
+
 Singular and zero process noise
     ``Q`` may be positive *semi*-definite (``Q = G Qc G^T`` of lower rank) or zero
     (deterministic dynamics, no draw at all). Simulation, the KF/EKF/UKF, the
@@ -68,16 +82,18 @@ Singular and zero process noise
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..noise import GaussianNoise
 from ..rng import check_rng
-from ..validation import as_covariance, as_vector, check_positive_int
+from ..validation import as_covariance, as_vector, check_memory, check_positive_int
 
 __all__ = ["StateSpaceModel", "Simulation", "ModelContractError", "CAPABILITIES", "has_capability",
-           "missing_capabilities", "require_capabilities", "batch_matmul", "draw_noise"]
+           "missing_capabilities", "require_capabilities", "batch_matmul", "draw_noise",
+           "check_log_likelihood"]
 
 
 class ModelContractError(TypeError):
@@ -139,6 +155,126 @@ def init_noise_and_prior(model, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, 
     model.truth_init = truth_init
 
 
+def _residual_shape(m, args, kwargs):
+    y = args[0] if args else kwargs.get("y")
+    yp = args[1] if len(args) > 1 else kwargs.get("y_pred")
+    try:
+        return np.broadcast_shapes(np.shape(y), np.shape(yp)), "the broadcast shape of y and y_pred"
+    except ValueError:
+        return None, ""
+
+
+def _batch(i, key):
+    def get(args, kwargs):
+        return args[i] if len(args) > i else kwargs.get(key)
+    return get
+
+
+#: the model methods whose output shape the contract checks: name -> (how to find the batch
+#: argument ``x`` among the call's arguments, expected shape and its rule from (model, x.shape))
+_SHAPE_RULES = {
+    "f": (_batch(0, "x"), lambda m, s: (s, "x.shape")),
+    "sample_transition": (_batch(0, "x"), lambda m, s: (s, "x.shape")),
+    "h": (_batch(0, "x"), lambda m, s: (s[:-1] + (m.dim_y,), "x.shape[:-1] + (dim_y,)")),
+    "sample_measurement": (_batch(0, "x"), lambda m, s: (s[:-1] + (m.dim_y,), "x.shape[:-1] + (dim_y,)")),
+    "jacobian_f": (_batch(0, "x"), lambda m, s: (s[:-1] + (m.dim_x, m.dim_x), "x.shape[:-1] + (dim_x, dim_x)")),
+    "jacobian_h": (_batch(0, "x"), lambda m, s: (s[:-1] + (m.dim_y, m.dim_x), "x.shape[:-1] + (dim_y, dim_x)")),
+    "log_likelihood": (_batch(1, "x"), lambda m, s: (s[:-1], "x.shape[:-1], one value per state")),
+}
+#: a Jacobian may also be one matrix shared by every state (a linear model's F or H)
+_SHARED_OK = {"jacobian_f", "jacobian_h"}
+
+
+def _expected_shape(model, method, args, kwargs):
+    """(expected output shape, rule text, the batch argument's shape) of ``method``'s call."""
+    if method == "residual_y":
+        shape, rule = _residual_shape(model, args, kwargs)
+        return shape, rule, None
+    get, rule = _SHAPE_RULES[method]
+    x = get(args, kwargs)
+    if x is None:
+        return None, "", None
+    s = np.shape(x)
+    if len(s) == 0:
+        return None, "", s
+    shape, text = rule(model, s)
+    return shape, text, s
+
+
+def _check_output(model, method, args, kwargs, out):
+    shape, rule, xs = _expected_shape(model, method, args, kwargs)
+    if shape is None:
+        return
+    got = np.shape(out)
+    if got == shape or (method in _SHARED_OK and got == shape[-2:]):
+        return
+    given = "" if xs is None else f" for x of shape {xs}"
+    hint = " (one value for the whole batch: vectorise over the leading axes)" if np.prod(got, dtype=int) < np.prod(
+        shape, dtype=int) and len(got) < len(shape) else ""
+    raise ModelContractError(
+        f"{type(model).__name__}.{method} returned shape {got}{given}; the model contract expects {shape} "
+        f"({rule}){hint}. See the model contract in pfrepro.models.base")
+
+
+def check_log_likelihood(model, y, x, out):
+    """A log-likelihood is a number or -inf for every finite state: NaN where ``x`` and ``y`` are
+    finite (e.g. the log of a negative intensity, 0 * inf) raises ``ValueError`` naming the
+    model, the runs and a state, instead of becoming a zero weight in silence.
+
+    One pass over ``out`` (its sum is NaN only if an entry is NaN, or +inf meets -inf); the
+    entries are searched only then."""
+    out = np.asarray(out)
+    if out.dtype.kind != "f" or not np.isnan(out.sum()):
+        return
+    nan = np.isnan(out)
+    xa = np.asarray(x, dtype=float)
+    finite_x = np.isfinite(xa).all(axis=-1) if xa.ndim else np.isfinite(xa)
+    try:
+        nan &= np.broadcast_to(finite_x, nan.shape)
+    except ValueError:
+        pass
+    if not nan.any():
+        return                     # NaN only at non-finite states (a run already lost): not the model's fault
+    where = np.argwhere(nan)
+    first = tuple(int(i) for i in where[0])
+    runs = np.unique(where[:, 0]).tolist() if nan.ndim > 1 else []
+    state = xa[first] if xa.ndim > 1 and xa.shape[:-1] == nan.shape else None
+    raise ValueError(
+        f"{type(model).__name__}.log_likelihood returned NaN for {int(nan.sum())} finite state(s)"
+        + (f" in runs {runs[:10]}{' ...' if len(runs) > 10 else ''}" if runs else "")
+        + (f" (first at index {first}, x = {np.array2string(state, precision=6)})" if state is not None else "")
+        + "; a log-density must be a number or -inf (a zero density). A filter would have given those "
+          "states zero weight in silence: fix the model where it returns NaN")
+
+
+def _contract_checked(method, fn):
+    """``fn`` with its output shape checked at the first call per number of input axes."""
+    if getattr(fn, "_contract_checked", False):
+        return fn
+
+    @functools.wraps(fn)
+    def checked(self, *args, **kwargs):
+        out = fn(self, *args, **kwargs)
+        if method == "log_likelihood":         # NaN is checked at every call (one pass)
+            check_log_likelihood(self, args[0] if args else kwargs.get("y"), _SHAPE_RULES[method][0](args, kwargs), out)
+        if method == "residual_y":
+            key = (method, np.ndim(args[0] if args else kwargs.get("y")),
+                   np.ndim(args[1] if len(args) > 1 else kwargs.get("y_pred")))
+        else:
+            key = (method, np.ndim(_SHAPE_RULES[method][0](args, kwargs)))
+        seen = getattr(self, "__dict__", {}).get("_contract_seen")
+        if seen is None or key not in seen:
+            _check_output(self, method, args, kwargs, out)
+            try:
+                self.__dict__.setdefault("_contract_seen", set()).add(key)
+            except AttributeError:    # no instance dict (__slots__): check every call
+                pass
+        return out
+
+    checked._contract_checked = True
+    return checked
+
+
 class StateSpaceModel:
     """Additive-Gaussian-process-noise state-space model (see module docstring).
 
@@ -169,6 +305,15 @@ class StateSpaceModel:
 
     def __init__(self, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, truth_init="fixed"):
         init_noise_and_prior(self, dim_x, dim_y, Q, measurement_noise, x0, m0, P0, truth_init)
+
+    def __init_subclass__(cls, **kwargs):
+        # the model contract's output-shape check (module docstring): every method a model
+        # class defines itself is wrapped once, at class creation
+        super().__init_subclass__(**kwargs)
+        for method in (*_SHAPE_RULES, "residual_y"):
+            fn = cls.__dict__.get(method)
+            if callable(fn) and not isinstance(fn, (staticmethod, classmethod)):
+                setattr(cls, method, _contract_checked(method, fn))
 
     # -- covariances a Gaussian filter is given ------------------------------------
     @property
@@ -216,7 +361,9 @@ class StateSpaceModel:
         """
         y = np.asarray(y, dtype=float)
         y = y.reshape(y.shape[:1] + (1,) * (x.ndim - 2) + y.shape[1:])
-        return self.measurement_noise.logpdf(self.residual_y(y, self.h(x)))
+        out = self.measurement_noise.logpdf(self.residual_y(y, self.h(x)))
+        check_log_likelihood(self, y, x, out)
+        return out
 
     def sample_initial(self, rng: np.random.Generator, shape) -> np.ndarray:
         """Draw from the filters' prior N(m0, P0); returns ``(*shape, dim_x)``."""
@@ -238,6 +385,8 @@ class StateSpaceModel:
         """
         T = check_positive_int(T, "T")
         runs = check_positive_int(runs, "runs")
+        check_memory(8.0 * runs * ((T + 1) * self.dim_x + T * self.dim_y), f"{T} steps of simulated states and "
+                     "measurements", "runs", runs)
         check_rng(rng)
         x = np.empty((runs, T + 1, self.dim_x))
         y = np.empty((runs, T, self.dim_y))
@@ -246,6 +395,10 @@ class StateSpaceModel:
             nxt = self.sample_transition(x[:, k - 1, None], k, rng)
             x[:, k] = nxt[:, 0]
             y[:, k - 1] = self.sample_measurement(nxt, rng)[:, 0]
+            # a trajectory that leaves the numbers is an error here, at its step (a filter
+            # would refuse the NaN measurements later, far from the cause)
+            if not (np.isfinite(x[:, k]).all() and np.isfinite(y[:, k - 1]).all()):
+                _non_finite_simulation(self, x, y, k)
         return Simulation(x=x, y=y)
 
     def sample_measurement(self, x: np.ndarray, rng) -> np.ndarray:
@@ -265,6 +418,18 @@ class StateSpaceModel:
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(dim_x={self.dim_x}, dim_y={self.dim_y})"
+
+
+def _non_finite_simulation(model, x, y, k):
+    """Raise the error of :meth:`StateSpaceModel.simulate` for a non-finite state or measurement at step k."""
+    bad_x = ~np.isfinite(x[:, k]).all(axis=-1)
+    what, bad = ("state x_k", bad_x) if bad_x.any() else ("measurement y_k", ~np.isfinite(y[:, k - 1]).all(axis=-1))
+    r = int(np.flatnonzero(bad)[0])
+    raise FloatingPointError(
+        f"{type(model).__name__}.simulate: the {what} became non-finite at step k = {k} in "
+        f"{int(bad.sum())} of {x.shape[0]} runs (first run {r}: x_{k - 1} = "
+        f"{np.array2string(x[r, k - 1], precision=6)}, x_k = {np.array2string(x[r, k], precision=6)}); "
+        f"check f, the process noise and h there (an unstable model or a wrong formula)")
 
 
 def _is_matrix(model, name):
