@@ -121,5 +121,5 @@ def test_run_all_seeds_travel_as_arguments():
 def test_run_all_runs_replaces_every_count():
     r = S.run_all(runs=1, keys=("ung_ning",), time_it=False)
     assert r.settings["runs"] == 1 and r.settings["runs_of"] == {"ung_ning": 1}
-    assert r.flow_ref is None and np.isnan(r.pcrb_x0_known)     # the bearings-only runs only with "bot"
+    assert r.ref_conv is None and np.isnan(r.pcrb_x0_known)     # the bearings-only runs only with "bot"
     assert dict(r) == r.benchmarks and len(r) == 1
