@@ -21,7 +21,9 @@ imports (numba, llvmlite, joblib), into this environment or a scratch copy of it
     pip install --no-deps particles==0.4 numba llvmlite joblib
 
 (checked with numba 0.68.1, llvmlite 0.50.0 and numpy 2.4.6; ``particles`` 0.4 reports itself as
-"0.3alpha"). A run of ``--runs 3`` is in ``benchmarks/results/check_smc2_particles.txt``.
+"0.3alpha"). One run of ``--runs 3`` (seed 1), as an example of the output: mean(estimate − exact)
+−0.0005 ± 0.0040 for ours and +0.0002 ± 0.0050 for ``particles``; ``particles`` took 360 s for the
+three runs on a loaded two-core machine.
 
 The script says so and exits cleanly (status 0) when ``particles`` does not import. Not part of the tests or
 the book build. Run from the repository root::
