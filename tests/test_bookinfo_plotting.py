@@ -204,7 +204,7 @@ def test_figure_modules_take_method_colours_from_the_palette():
 
 
 #: calls that return nothing (no cell output): the chapters' glue helpers
-GLUE_NAMES = {"g", "gl", "gmd", "gfig", "glue", "glue_value", "glue_md", "glue_figure"}
+GLUE_NAMES = {"g", "gl", "gmd", "gfig", "glue", "glue_value", "glue_md", "glue_figure", "show_figure"}
 
 
 def test_figure_cells_end_with_the_figure():
@@ -237,3 +237,109 @@ def test_breakable_text_offers_breaks_inside_tokens_only_in_text():
     assert b('<a href="a_b.html#x=y">t2_x</a> a_ b=') == '<a href="a_b.html#x=y">t2_<wbr>x</a> a_ b='
     html = bookinfo.labelled_table_html(pd.DataFrame({"id": ["t2_x_PF(500)"], "test": ["integrator=rk4: 0.5"]}))
     assert "t2_<wbr>x_<wbr>PF(" in html and 'integrator=<wbr>rk4: <span class="pf-num">0.5</span>' in html
+
+
+# ---- figures drawn for the laptop and for the phone ------------------------------------------
+
+def _three_panels(**share):
+    import numpy as np
+
+    from pfrepro.figures import new_figure
+
+    fig, axs = new_figure(1, 3, figsize=(10.2, 3.8), **share)
+    for i, ax in enumerate(axs):
+        ax.plot(np.arange(5), np.arange(5) * (i + 1), label=f"s{i}")
+        ax.set_title(f"panel {i}")
+        ax.legend()
+    return fig, axs
+
+
+def test_new_figure_outside_a_layout_is_plain_subplots():
+    import matplotlib.pyplot as plt
+
+    fig, axs = _three_panels()
+    try:
+        assert axs.shape == (3,)
+        assert tuple(fig.get_size_inches()) == pytest.approx((10.2, 3.8))
+        assert {round(ax.get_position().y0, 6) for ax in axs} == {round(axs[0].get_position().y0, 6)}
+    finally:
+        plt.close(fig)
+
+
+@pytest.mark.parametrize("layout, rows", [(plotting.DESKTOP, 2), (plotting.PHONE, 3)])
+def test_new_figure_reflows_panels_for_the_layout(layout, rows):
+    import matplotlib.pyplot as plt
+
+    with plotting.figure_layout(layout):
+        fig, axs = _three_panels(sharey=True)
+        try:
+            assert axs.shape == (3,)                       # the caller's shape is kept
+            assert fig.get_size_inches()[0] <= layout.width_in + 1e-9
+            assert len({round(ax.get_position().y0, 6) for ax in axs}) == rows
+            assert len({round(ax.get_position().x0, 6) for ax in axs}) == min(3, layout.max_cols)
+            assert axs[2].get_title() == "panel 2" and len(fig.axes) == 3  # the empty place is removed
+            assert axs[0].get_shared_y_axes().joined(axs[0], axs[2])
+            assert plt.rcParams["legend.fontsize"] == layout.min_pt
+        finally:
+            plt.close(fig)
+    assert plt.rcParams["legend.fontsize"] != plotting.PHONE.min_pt   # the style is left behind
+
+
+def test_row_and_column_sharing_refer_to_the_requested_grid():
+    import matplotlib.pyplot as plt
+
+    from pfrepro.figures import new_figure
+
+    with plotting.figure_layout(plotting.PHONE):
+        fig, axs = new_figure(2, 2, figsize=(8, 6), sharex="col")
+        try:
+            assert axs.shape == (2, 2)
+            assert axs[0, 0].get_shared_x_axes().joined(axs[0, 0], axs[1, 0])
+            assert not axs[0, 0].get_shared_x_axes().joined(axs[0, 0], axs[0, 1])
+        finally:
+            plt.close(fig)
+
+
+def test_responsive_figure_measures_its_text_and_makes_a_picture():
+    import base64
+    import re as _re
+
+    fig = plotting.responsive(lambda: _three_panels()[0], alt="three lines & a <test>")
+    assert fig.desktop_min_pt == pytest.approx(plotting.DESKTOP.min_pt)
+    assert fig.phone_min_pt == pytest.approx(plotting.PHONE.min_pt)
+    html = fig._repr_html_()
+    assert f'media="{plotting.PHONE_MEDIA}"' in html and 'alt="three lines &amp; a &lt;test&gt;"' in html
+    assert 'data-min-pt="10.50"' in html and 'data-phone-min-pt="12.00"' in html
+    srcs = _re.findall(r'(?:srcset|src)="data:image/png;base64,([^"]+)"', html)
+    assert [base64.b64decode(s) for s in srcs] == [fig.phone_png, fig.desktop_png]
+    # on screen: the laptop drawing in a 745 px column, the phone one in a 350 px column
+    for png, pt, col in ((fig.desktop_png, fig.desktop_min_pt, 745), (fig.phone_png, fig.phone_min_pt, 350)):
+        width_px = int.from_bytes(png[16:20], "big")      # the PNG header's width
+        assert pt * plotting.BOOK_DPI / 72 * min(1, col / width_px) >= 16
+
+
+def test_responsive_figure_reports_small_text_and_narrows_wide_drawings():
+    from pfrepro.figures import new_figure
+
+    def draw():
+        fig, ax = new_figure(figsize=(6, 3))
+        ax.plot([0, 1], [0, 1], label="outside")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1))
+        ax.annotate("small", (0.5, 0.5), fontsize=7)
+        return fig
+
+    fig = plotting.responsive(draw, alt="x")
+    assert fig.desktop_min_pt == 7 and fig.phone_min_pt == 7     # measured, not assumed
+    assert int.from_bytes(fig.phone_png[16:20], "big") <= plotting.PHONE.width_in * plotting.BOOK_DPI * 1.05
+
+
+def test_responsive_figure_refuses_bad_input():
+    import matplotlib.pyplot as plt
+
+    with pytest.raises(ValueError, match="alt"):
+        plotting.responsive(lambda: _three_panels()[0], alt=" ")
+    with pytest.raises(TypeError, match="function that draws"):
+        plotting.responsive(plt.figure(), alt="x")
+    with pytest.raises(TypeError, match="must return a matplotlib Figure"):
+        plotting.responsive(lambda: 3, alt="x")
+    plt.close("all")

@@ -4,7 +4,7 @@
  * answer to small figure text below its phone breakpoint). */
 document.addEventListener("DOMContentLoaded", () => {
   document.querySelectorAll("article.bd-article img").forEach((img) => {
-    if (img.closest("a")) return;
+    if (img.closest("a") || img.closest("div.pf-figure")) return;  // those have an Enlarge button
     const a = document.createElement("a");
     a.href = img.getAttribute("src");
     a.className = "pf-enlarge";

@@ -11,7 +11,8 @@ import matplotlib as mpl
 
 __all__ = ["BOOK_DPI", "BOOK_STYLE", "use_book_style", "log_ylim_from", "COLUMN_PX", "MIN_FONT_PT",
            "MIN_TEXT_PX", "max_figure_width", "rendered_text_px", "METHOD_COLORS", "REFERENCE_COLOR",
-           "method_color", "SERIES_COLORS"]
+           "method_color", "SERIES_COLORS", "Layout", "DESKTOP", "PHONE", "PHONE_MEDIA", "figure_layout",
+           "current_layout", "smallest_text_pt", "ResponsiveFigure", "responsive", "show_figure"]
 
 #: resolution of every figure in the book (the inline backend renders at ``figure.dpi``)
 BOOK_DPI = 150
@@ -146,3 +147,220 @@ def log_ylim_from(ax, *curves, pad: float = 2.0) -> tuple[float, float]:
     lo, hi = float(vals.min()) / pad, float(vals.max()) * pad
     ax.set_ylim(lo, hi)
     return lo, hi
+
+
+# ---- figures made for the width they are read at -------------------------------------------
+# A figure is read at two widths: in the text column of a laptop (about 745 CSS px) and of a
+# phone (about 350 CSS px). Text in a PNG shrinks with the image, so one drawing cannot have
+# body-sized text at both: every book figure is drawn twice, once per layout, and the page's
+# <picture> element lets the browser pick the drawing for its width.
+
+from contextlib import contextmanager  # noqa: E402
+from dataclasses import dataclass  # noqa: E402
+
+
+@dataclass(frozen=True)
+class Layout:
+    """How a figure is drawn for one reading width.
+
+    Attributes
+    ----------
+    name : str
+        ``"desktop"`` or ``"phone"``.
+    width_in : float
+        Widest figure (inches, at :data:`BOOK_DPI`) of this layout; :func:`responsive` narrows a
+        drawing that comes out wider (legends outside the axes, long labels).
+    max_cols : int
+        Most panels side by side; :func:`pfrepro.figures.new_figure` reflows a wider grid.
+    min_pt : float
+        Type size (points) of every text of the style; shown at ``width_in`` in the layout's
+        column, it is at least the body text's 16 CSS px.
+    """
+
+    name: str
+    width_in: float
+    max_cols: int
+    min_pt: float
+
+    def rc(self) -> dict:
+        """The rcParams of the layout: :data:`BOOK_STYLE` with every type size at ``min_pt``."""
+        rc = dict(BOOK_STYLE)
+        for key in ("font.size", "axes.titlesize", "axes.labelsize", "legend.fontsize",
+                    "legend.title_fontsize", "xtick.labelsize", "ytick.labelsize",
+                    "figure.titlesize", "figure.labelsize"):
+            rc[key] = self.min_pt
+        return rc
+
+
+#: the laptop layout: 745 CSS px of column show a 6.5 in (975 px) figure at 0.76, so 10.5 pt
+#: text (21.9 px in the PNG) is 16.7 CSS px on screen, the size of the body text
+DESKTOP = Layout("desktop", width_in=6.5, max_cols=2, min_pt=10.5)
+#: the phone layout: one panel per row; about 350 CSS px of column show a 3.0 in (450 px)
+#: figure at 0.78, so 12 pt text (25 px in the PNG) is 19 CSS px on screen
+PHONE = Layout("phone", width_in=3.0, max_cols=1, min_pt=12.0)
+#: the media query under which the browser shows the phone drawing
+PHONE_MEDIA = "(max-width: 720px)"
+
+_LAYOUTS: list[Layout] = []
+
+
+@contextmanager
+def figure_layout(layout: Layout):
+    """Draw the figures made inside the block for ``layout`` (its panels per row and type sizes)."""
+    if not isinstance(layout, Layout):
+        raise TypeError(f"figure_layout needs a Layout (DESKTOP or PHONE), got {type(layout).__name__}")
+    _LAYOUTS.append(layout)
+    try:
+        with mpl.rc_context(layout.rc()):
+            yield layout
+    finally:
+        _LAYOUTS.pop()
+
+
+def current_layout() -> Layout | None:
+    """The layout figures are being drawn for, or ``None`` outside :func:`figure_layout`
+    (the command line's PNGs: each figure at the size its code asks for)."""
+    return _LAYOUTS[-1] if _LAYOUTS else None
+
+
+def smallest_text_pt(fig) -> float:
+    """Smallest type size (points) among the visible, non-empty texts of a drawn figure
+    (tick labels, labels, titles, legends, annotations); ``inf`` for a figure without text."""
+    from matplotlib.text import Text
+
+    fig.canvas.draw()
+    sizes = []
+    for t in fig.findobj(Text):
+        if not t.get_visible() or not t.get_text().strip():
+            continue
+        ax = getattr(t, "axes", None)
+        if ax is not None and not ax.get_visible():
+            continue
+        sizes.append(float(t.get_fontsize()))
+    return min(sizes, default=float("inf"))
+
+
+def _tight_width_in(fig) -> float:
+    renderer = fig.canvas.get_renderer()
+    return fig.get_tightbbox(renderer).width  # inches
+
+
+def _fit_width(fig, width_in: float) -> None:
+    """Narrow a figure whose drawn extent (with legends and labels outside the axes) is wider than
+    ``width_in``: the axes give up the room, the type keeps its size."""
+    import warnings
+
+    for _ in range(3):
+        fig.canvas.draw()
+        wide = _tight_width_in(fig)
+        if wide <= width_in * 1.01:
+            return
+        w, h = fig.get_size_inches()
+        fig.set_size_inches(max(w * width_in / wide, 1.0), h)
+        if fig.get_layout_engine() is None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                fig.tight_layout()
+
+
+def _png(fig) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    # bbox_inches="tight", like the notebook's inline backend: what the reader sees
+    fig.savefig(buf, format="png", dpi=BOOK_DPI, bbox_inches="tight")
+    return buf.getvalue()
+
+
+class ResponsiveFigure:
+    """A figure drawn for the laptop and for the phone, shown as one ``<picture>``.
+
+    Made by :func:`responsive`. In a notebook or a book page it displays as HTML: a
+    ``<picture>`` whose ``<source>`` (the phone drawing) the browser uses under
+    :data:`PHONE_MEDIA`, the desktop drawing otherwise, both inline as PNG data, and an
+    "Enlarge" button (book/_static/pfrepro-figures.js opens the desktop drawing at full size).
+    The ``img`` carries ``data-dpi``, ``data-min-pt`` and ``data-phone-min-pt`` (the smallest
+    type actually drawn in each), from which the browser check computes the on-screen text size.
+
+    Attributes
+    ----------
+    desktop_png : bytes
+        The desktop drawing.
+    phone_png : bytes
+        The phone drawing.
+    desktop_min_pt : float
+        Smallest type size in the desktop drawing.
+    phone_min_pt : float
+        Smallest type size in the phone drawing.
+    alt : str
+        The text alternative of the figure.
+    """
+
+    def __init__(self, desktop_png: bytes, phone_png: bytes, desktop_min_pt: float,
+                 phone_min_pt: float, alt: str):
+        self.desktop_png = desktop_png
+        self.phone_png = phone_png
+        self.desktop_min_pt = desktop_min_pt
+        self.phone_min_pt = phone_min_pt
+        self.alt = alt
+
+    def _repr_html_(self) -> str:
+        import base64
+        import html
+
+        def uri(png):
+            return "data:image/png;base64," + base64.b64encode(png).decode("ascii")
+
+        return (
+            '<div class="pf-figure"><picture>'
+            f'<source media="{PHONE_MEDIA}" srcset="{uri(self.phone_png)}">'
+            f'<img class="pf-figure-img" src="{uri(self.desktop_png)}" alt="{html.escape(self.alt)}" '
+            f'data-dpi="{BOOK_DPI}" data-min-pt="{self.desktop_min_pt:.2f}" '
+            f'data-phone-min-pt="{self.phone_min_pt:.2f}">'
+            '</picture><button type="button" class="pf-enlarge">Enlarge</button></div>')
+
+    def _repr_png_(self) -> bytes:
+        return self.desktop_png
+
+    def __repr__(self) -> str:
+        return f"<ResponsiveFigure: {self.alt[:60]!r}>"
+
+
+def responsive(draw, *args, alt: str, **kwargs) -> ResponsiveFigure:
+    """Draw ``draw(*args, **kwargs)`` once for :data:`DESKTOP` and once for :data:`PHONE`.
+
+    ``draw`` returns a matplotlib figure made with :func:`pfrepro.figures.new_figure` (which
+    reflows its panels for the layout); each drawing is narrowed to its layout's width if its
+    legends or labels stick out, saved as PNG and closed. ``alt`` (required, non-empty) says
+    what the figure shows, for readers who cannot see it.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
+
+    if not callable(draw):
+        raise TypeError("responsive needs a function that draws the figure (called once per "
+                        f"layout), got {type(draw).__name__}")
+    if not isinstance(alt, str) or not alt.strip():
+        raise ValueError("responsive needs alt=: a sentence saying what the figure shows")
+    out = {}
+    for layout in (DESKTOP, PHONE):
+        with figure_layout(layout):
+            fig = draw(*args, **kwargs)
+            if not isinstance(fig, Figure):
+                raise TypeError(f"{getattr(draw, '__name__', 'draw')} must return a matplotlib "
+                                f"Figure, got {type(fig).__name__}")
+            try:
+                _fit_width(fig, layout.width_in)
+                out[layout.name] = (_png(fig), smallest_text_pt(fig))
+            finally:
+                plt.close(fig)
+    return ResponsiveFigure(out["desktop"][0], out["phone"][0], out["desktop"][1], out["phone"][1], alt)
+
+
+def show_figure(draw, *args, alt: str, **kwargs) -> None:
+    """Display :func:`responsive` ``(draw, *args, alt=alt, **kwargs)`` in the notebook (a
+    chapter's figure cell: its ``mystnb.figure`` metadata gives the caption). Returns nothing,
+    so the cell shows the figure once."""
+    from IPython.display import display
+
+    display(responsive(draw, *args, alt=alt, **kwargs))

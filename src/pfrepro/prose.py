@@ -194,13 +194,22 @@ def glue_all(values) -> None:
             glue_value(name, value)
 
 
-def glue_figure(name: str, fig) -> None:
-    """Glue a matplotlib figure under ``name`` (for ``{glue:figure}``) and close it."""
-    import matplotlib.pyplot as plt
+def glue_figure(name: str, draw, *args, alt: str, **kwargs) -> None:
+    """Glue a figure under ``name`` for ``{glue:figure}``, drawn for the laptop and the phone.
+
+    ``draw(*args, **kwargs)`` returns the matplotlib figure; it is called once per layout
+    (:func:`pfrepro.plotting.responsive`, which needs ``alt``, the figure's text alternative).
+    A figure already drawn cannot be reflowed for a phone, so a ``Figure`` is refused.
+    """
+    from matplotlib.figure import Figure
     from myst_nb import glue
 
-    glue(name, fig, display=False)
-    plt.close(fig)
+    from .plotting import responsive
+
+    if isinstance(draw, Figure):
+        raise TypeError(f"glue_figure({name!r}, ...) needs the function that draws the figure "
+                        "(it is drawn once for the laptop and once for the phone), not a drawn Figure")
+    glue(name, responsive(draw, *args, alt=alt, **kwargs), display=False)
 
 
 def plural(n: int, one: str, many: str | None = None) -> str:
