@@ -661,3 +661,17 @@ def test_the_power_plans_are_the_claims_own(synthetic):
         if c.cause == "too few runs":
             assert c.runs_needed == row["runs the plan needs"]
     assert V.LI_CLAIM in pt.index and "printed effect" in pt.loc[V.LI_CLAIM, "size resolved"]
+
+
+def test_the_frontier_figures_are_drawn_for_both_widths(synthetic):
+    """The figure contract: drawn once per layout, type at least the layout's size, width within the layout."""
+    from pfrepro.figures import synthesis as F
+    from pfrepro.plotting import DESKTOP, PHONE, responsive
+    R, _ = synthetic
+    for axis in ("count", "time"):
+        fig = responsive(F.frontier_figure, R, axis, alt="frontiers")
+        assert fig.desktop_min_pt >= DESKTOP.min_pt and fig.phone_min_pt >= PHONE.min_pt
+        html = fig._repr_html_()
+        assert html.count("data:image/png;base64,") == 2 and 'class="pf-enlarge"' in html
+    with pytest.raises(ValueError, match="axis"):
+        F.frontier_figure(R, "seconds")

@@ -36,13 +36,14 @@ STYLE = {
 
 
 def _log_ticks(axis, lo, hi):
-    """Readable plain-number ticks on a log axis: decades over a wide range, 1-2-5 over one to
+    """Readable plain-number ticks on a log axis: decades over a wide range, 1-3 over one to
     two decades, a few linear ticks inside one decade."""
     decades = np.log10(hi / lo)
     if decades > 2.2:
         axis.set_major_locator(LogLocator(base=10, subs=(1.0,)))
     elif decades > 0.9:
-        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
+        # 1-3-10: at the book's type sizes 1-2-5 labels run into each other on a narrow panel
+        axis.set_major_locator(LogLocator(base=10, subs=(1.0, 3.0)))
     else:
         axis.set_major_locator(MaxNLocator(4))
     axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
@@ -54,15 +55,24 @@ def frontier_figure(results: dict, axis: str = "count"):
 
     ``axis`` = "count" (model evaluations per step) or "time" (ms per step, single run). The
     baseline's efficient frontier (bootstrap PF, systematic; Liu-West on the θ benchmark) is joined by a line.
+    Drawn for the layout it is read in (:func:`pfrepro.plotting.responsive`): the panels reflow (two per row on
+    a laptop, one on a phone), the type keeps the layout's size, and the legend sits below the panels in as
+    many columns as the width holds.
     """
+    import textwrap
+
+    from ..plotting import current_layout
+
+    if axis not in ("count", "time"):
+        raise ValueError(f"axis must be 'count' or 'time', got {axis!r}")
     n = len(results)
-    ncol = 3
+    ncol = 2      # the laptop's panels per row: no empty row of places below the last panel
     nrow = int(np.ceil(n / ncol))
-    height = 2.45 * nrow + 1.1
-    fig, axes = new_figure(nrow, ncol, figsize=(7.5, height), squeeze=False)
+    fig, axes = new_figure(nrow, ncol, figsize=(6.5, 2.6 * nrow), squeeze=False)
     col = "evals/step" if axis == "count" else "ms/step"
     handles = {}
-    for ax, (key, r) in zip(axes.ravel(), results.items()):
+    flat = [ax for ax in axes.ravel() if ax is not None]
+    for ax, (key, r) in zip(flat, results.items()):
         fr = S.frontier(r)
         base = fr.loc[V.efficient_frontier(r, axis)]
         ax.plot(base[col], base["MSE / opt."], "-", color="black", lw=0.9, zorder=1)
@@ -77,18 +87,22 @@ def frontier_figure(results: dict, axis: str = "count"):
         _log_ticks(ax.xaxis, *ax.get_xlim())
         _log_ticks(ax.yaxis, *ax.get_ylim())
         ax.axhline(1.0, color="0.6", lw=0.7, ls=":")
-        ax.set_title(S.BENCH_NAME.get(key, key), fontsize=8.5)
-        ax.set_xlabel("model evaluations / step" if axis == "count" else "ms / step (one run)", fontsize=8)
-        ax.set_ylabel("MSE / reference", fontsize=8)
-        ax.tick_params(labelsize=8)
-    for ax in axes.ravel()[n:]:
-        ax.axis("off")
-    ncol_leg = 5
-    fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=ncol_leg, fontsize=8,
-               frameon=False, bbox_to_anchor=(0.5, 0.0))
-    # room below the panels for the legend's rows (about 0.17 in each) and the x labels
-    legend_rows = int(np.ceil(len(handles) / ncol_leg))
-    fig.tight_layout(rect=(0, min(0.45, (0.17 * legend_rows + 0.1) / height), 1, 1))
+        ax.set_title("\n".join(textwrap.wrap(S.BENCH_NAME.get(key, key), 26, break_on_hyphens=False)))
+        ax.set_xlabel("model evaluations / step" if axis == "count" else "ms / step (one run)")
+        ax.set_ylabel("MSE / reference")
+    for ax in flat[n:]:
+        ax.remove()       # an unused place: removed, so no blank panel sits above the legend
+    layout = current_layout()
+    ncol_leg = 5 if layout is None else (1 if layout.max_cols == 1 else 2)
+    fig.tight_layout()
+    # just below the lowest panel's labels (the saved drawing, bbox "tight", takes in what hangs below the figure
+    # and drops the blank left by a removed place), so no text overlaps a panel
+    fig.canvas.draw()
+    inv = fig.transFigure.inverted()
+    renderer = fig.canvas.get_renderer()
+    bottom = min(ax.get_tightbbox(renderer).transformed(inv).y0 for ax in flat[:n])
+    fig.legend(list(handles.values()), list(handles.keys()), loc="upper center", ncol=ncol_leg, frameon=False,
+               bbox_to_anchor=(0.5, bottom - 0.01))
     return fig
 
 
