@@ -212,7 +212,7 @@ def test_what_to_use_is_the_cheapest_shown_close_to_the_best():
     w = V.what_to_use({"ung_zhang": r})
     row = w.iloc[0]
     assert row["use"] == "cheap" and row["also shown close"] == "PF(100)"
-    assert float(row["upper bound of its error / another's"]) == pytest.approx(1.1, abs=0.01)
+    assert float(row["its error / any other's (upper bound)"]) == pytest.approx(1.1, abs=0.01)
     assert row["best by mean (MSE / reference)"].startswith("PF(100)")
 
 

@@ -535,7 +535,7 @@ def what_to_use(results: dict, margin: float = USE_MARGIN) -> pd.DataFrame:
                      "use": pick if pick is not None else "none shown close to the best",
                      "its MSE / reference": rel(pick) if pick is not None else "–",
                      "model evaluations per step": f"{cost[pick]:.0f}" if pick is not None else "–",
-                     "upper bound of its error / another's": (f"{t.loc[pick, 'worst upper bound']:.2f}"
+                     "its error / any other's (upper bound)": (f"{t.loc[pick, 'worst upper bound']:.2f}"
                                                                if pick is not None else "–"),
                      "best by mean (MSE / reference)": f"{best} ({dt.loc[best, 'MSE / opt.']:.3g})",
                      "also shown close": ", ".join(close) or "–"})
@@ -738,7 +738,7 @@ def _settings_prose(results) -> dict:
            "syn_centred_runs": len(results[BOT_READINGS["centred"]].err), "syn_bot_offset_sds": S.bot_offset_sds(),
            "syn_scheme_n": S.SCHEME_N, "syn_method_n": S.METHOD_N, "syn_zcrit": Z_CRIT,
            "syn_pcrb_runs": int(st.get("pcrb_runs", S.PCRB_RUNS)),
-           "syn_seeds": Md(", ".join(f"{S.BENCH_NAME[k]} {v}" if k in S.BENCH_NAME else f"the bound's truths {v}"
+           "syn_seeds": Md("; ".join(f"{S.BENCH_NAME[k]}: {v}" if k in S.BENCH_NAME else f"the bound's truths: {v}"
                                      for k, v in seeds.items() if k != "imm_zhou")
                            + f"; the manoeuvring target keeps the IMM chapter's seed, {seeds['imm_zhou']}"),
            "syn_pf_n": Md(", ".join(str(n) for n in PF_N["ung_zhang"])),
