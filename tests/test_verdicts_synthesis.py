@@ -675,3 +675,19 @@ def test_the_frontier_figures_are_drawn_for_both_widths(synthetic):
         assert html.count("data:image/png;base64,") == 2 and 'class="pf-enlarge"' in html
     with pytest.raises(ValueError, match="axis"):
         F.frontier_figure(R, "seconds")
+
+
+def test_no_internal_words_reach_the_reader(synthetic):
+    """Benchmark keys, None and dict reprs stay in code: the glued prose, the takeaway and the tables the chapter
+    shows name benchmarks in words (claim ids only in the claims table, which is not checked here)."""
+    from pfrepro.figures import synthesis as F
+    R, reg = synthetic
+    keys = re.compile(r"\b(ung_zhang|ung_li|ung_ning|theta_hou|bot_centred|imm_zhou|bot_pcrb)\b|\bbot\b|\bNone\b|\{'")
+    texts = [str(v) for v in V.prose(reg, R).values()] + [V.takeaway(reg, R)]
+    tables = [F.benchmarks_table(R), F.methods_table(R), F.ess_table(R), F.paper_table(R), F.today_table(R),
+              F.what_to_use_table(R), V.plan_table(R).drop(columns="claim id"), V.summary_table(R)]
+    tables += [F.ranking_compact(r) for r in R.values()]
+    for t in tables:
+        texts += [str(x) for x in t.index] + [str(c) for c in t.columns] + [str(x) for x in t.to_numpy().ravel()]
+    bad = sorted({s for s in texts if keys.search(s)})
+    assert not bad, bad[:5]

@@ -224,7 +224,7 @@ CHOICES = [
                "best achievable MSE; the papers advertise larger gains, e.g. IMMPFOR's printed -26 % in mean "
                "position RMSE, about -45 % in MSE); it separates a tie from too few runs and is the size "
                "the power plans resolve", "this chapter's design"),
-    FreeChoice("error", "MSE over time (eq 56); θ-MSE on theta_hou; position MSE on imm_zhou", FIXED,
+    FreeChoice("error", "MSE over time (eq 56); θ-MSE with θ unknown; position MSE on the manoeuvring target", FIXED,
                "the papers' own error measures, squared so that ratios to the reference are ratios of MSEs: "
                "Zhang 2016 eq 56 (l.335, used for the UNG model l.355 and BOT l.398); Hou 2008 sec 5.1 "
                "judges the θ estimate (Figs. 4-5, l.200); Zhou 2017 Table 1 position RMSE (l.203, l.209)",

@@ -133,7 +133,7 @@ def methods_table(results) -> pd.DataFrame:
     for the reader: papers as author and year, benchmarks by name."""
     mt = S.methods_table(results)
     mt["paper"] = [_short(p) if p != "(baseline)" else "baseline" for p in mt["paper"]]
-    mt["benchmarks"] = [", ".join(S.BENCH_NAME.get(k, k) for k in b.split(", ")) for b in mt["benchmarks"]]
+    mt["benchmarks"] = ["; ".join(S.BENCH_NAME.get(k, k) for k in b.split(", ")) for b in mt["benchmarks"]]
     mt.index.name = "method"
     return mt
 
