@@ -124,10 +124,11 @@ BOT_REF_N = 2000
 #: its name in the tables
 BOT_REF_NAME = "PF given x₀"
 BOT_REF_ESS = 0.5
-#: "x0 known": the reference PF's prior covariance (a point mass at x0 up to 1e-6 per component)
+#: the reference PF's prior covariance is this times the identity, a point mass at x0 up to 1e-6 per component
 BOT_REF_P0 = 1e-12
-#: convergence of the reference, shown: two independent replicates at each N on the first runs; their mean squared
-#: distance d2(N) has expectation 2 c / N under the 1/N law of a PF's Monte Carlo variance
+#: the particle numbers (and runs) at which the reference filter runs twice, with independent streams, to show its
+#: convergence; the mean squared distance d2(N) of the two has expectation 2 c / N under the 1/N law of a PF's
+#: Monte Carlo variance
 BOT_REF_CONV_N = (500, 2000, 8000)
 BOT_REF_CONV_RUNS = 10
 #: the reference counts as converged when its own Monte Carlo variance, d2(BOT_REF_N) / 2, is below this share of

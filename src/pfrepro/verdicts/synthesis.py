@@ -442,7 +442,7 @@ PROBLEM_CLASS = {"ung_zhang": "scalar, strongly nonlinear (UNGM, Q = R = 1)",
                  "imm_zhou": "manoeuvring target"}
 
 
-#: the equivalence margin of "what to use", stated before the runs: a method is recommended only when its mean
+#: the equivalence margin of the recommendation, stated before the runs. A method is recommended only when its mean
 #: error is shown to be within 25 % of every other method's on its benchmark (the upper end of the paired ratio's
 #: interval below 1 + USE_MARGIN); "not shown worse" is not enough, since a method with a wide standard error is
 #: never shown worse. A quarter: well inside the gaps between the families on these benchmarks (a factor of 2 and
