@@ -691,3 +691,13 @@ def test_no_internal_words_reach_the_reader(synthetic):
         texts += [str(x) for x in t.index] + [str(c) for c in t.columns] + [str(x) for x in t.to_numpy().ravel()]
     bad = sorted({s for s in texts if keys.search(s)})
     assert not bad, bad[:5]
+
+
+@pytest.mark.parametrize("offset, centred, words", [
+    ("better", "worse", "a finding about the offset start"),
+    ("better", "better", "holds with either start"),
+    ("worse", "better", "only with the centred start"),
+    ("undecided (too few runs)", "tie (within the margin)", "With neither start"),
+])
+def test_start_sentence_follows_the_two_words(offset, centred, words):
+    assert words in V.start_sentence(offset, centred)
