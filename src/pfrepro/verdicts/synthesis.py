@@ -755,7 +755,7 @@ def _settings_prose(results) -> dict:
            "syn_smc2_size": Md(f"{S.SMC2_SIZE[0]} θ-particles × {S.SMC2_SIZE[1]} state particles"),
            "syn_ref_tol": 100 * BOT_REF_TOL, "syn_ref_n": S.BOT_REF_N, "syn_ref_ess": S.BOT_REF_ESS,
            "syn_ref_ns": Md(", ".join(str(n) for n in S.BOT_REF_CONV_N)),
-           "syn_use_margin": 100 * USE_MARGIN}
+           "syn_use_margin": 100 * USE_MARGIN, "syn_use_bound": 1 + USE_MARGIN}
     return out
 
 
