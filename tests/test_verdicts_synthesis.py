@@ -701,3 +701,21 @@ def test_no_internal_words_reach_the_reader(synthetic):
 ])
 def test_start_sentence_follows_the_two_words(offset, centred, words):
     assert words in V.start_sentence(offset, centred)
+
+
+def test_the_claims_sentence_counts_every_verdict():
+    """The old sentence counted reproduced / not reproduced / inconclusive / not checkable only, so a qualitatively
+    reproduced claim (Li 2012's) vanished from it: 'Of 15 claims, 2 are reproduced, 10 not reproduced, 2 inconclusive'."""
+    class Reg:
+        def __init__(self, v):
+            self.v = v
+
+        def verdicts(self):
+            return {f"c{i}": x for i, x in enumerate(self.v)}
+    v = ["reproduced"] * 2 + ["qualitatively reproduced"] + ["not reproduced"] * 10 + ["inconclusive"] * 2
+    s = V._claims_prose(Reg(v))["syn_claims_sentence"]
+    assert s == ("Of 15 claims, 2 are reproduced, 1 is qualitatively reproduced, 10 are not reproduced and 2 are "
+                 "inconclusive.")
+    nums = [int(x) for x in re.findall(r"(\d+) (?:is|are)", s)]
+    assert sum(nums) == 15
+    assert "0 are qualitatively" in V._claims_prose(Reg(["reproduced"] * 3))["syn_claims_sentence"]

@@ -45,7 +45,7 @@ from ..experiments.synthesis import (ALPHA, BOT_CENTRED_EXCLUDED, BOT_REF_TOL, B
                                      BenchResult, _cost, _frontier_names)
 from ..experiments.synthesis import distance_table
 from ..metrics import mse
-from ..prose import Md, join_and, plural
+from ..prose import Md, join_and, plural, verdict_sentence
 from ..stats import holm, p_two_sided, plan_runs, ratio_of_means
 from .ekf_pf_li2012 import pf_beats_ekf
 
@@ -979,9 +979,8 @@ def _claims_prose(reg: ClaimsRegistry) -> dict:
     n = {v: sum(x == v for x in cl.values()) for v in ("reproduced", "not reproduced", "inconclusive", "not checkable")}
     out = {f"syn_n_{v.replace(' ', '_')}": k for v, k in n.items()}
     out["syn_n_claims"] = len(cl)
-    out["syn_claims_sentence"] = Md(
-        f"Of {plural(len(cl), 'claim')}, {n['reproduced']} {'is' if n['reproduced'] == 1 else 'are'} reproduced, "
-        f"{n['not reproduced']} not reproduced, {n['inconclusive']} inconclusive and {n['not checkable']} not checkable.")
+    # every verdict counted (the Li claim can be qualitatively reproduced), in number agreement
+    out["syn_claims_sentence"] = Md(verdict_sentence(list(cl.values())) + ".")
     return out
 
 
