@@ -121,5 +121,29 @@ def test_run_all_seeds_travel_as_arguments():
 def test_run_all_runs_replaces_every_count():
     r = S.run_all(runs=1, keys=("ung_ning",), time_it=False)
     assert r.settings["runs"] == 1 and r.settings["runs_of"] == {"ung_ning": 1}
-    assert r.flow_ref is None and np.isnan(r.pcrb_x0_known)     # the bearings-only runs only with "bot"
+    assert r.ref_conv is None and np.isnan(r.pcrb_x0_known)     # the bearings-only runs only with "bot"
     assert dict(r) == r.benchmarks and len(r) == 1
+
+
+def test_the_bearings_only_reference_is_a_pf_given_the_truths_start():
+    """The yardstick on bearings-only: a PF whose prior is the truth's start x0 (every run starts there), the same
+    filter and name on both starts, so the centred start shares the printed start's reference numbers."""
+    b, c = S.build("bot", pcrb_runs=2), S.build("bot_centred", pcrb_runs=2)
+    for bench in (b, c):
+        f = bench.reference.filt
+        assert isinstance(f, S.BootstrapParticleFilter) and f.n_particles == S.BOT_REF_N
+        np.testing.assert_array_equal(f.m0, bench.model.x0)
+        assert np.max(f.P0) <= 1e-12 and bench.model.truth_init == "fixed"
+        assert bench.reference.name == S.BOT_REF_NAME and bench.pcrb > 0
+    assert b.reference.bound is None and not b.reference.timed
+
+
+def test_reference_convergence_runs_independent_replicates_on_the_benchmarks_truths():
+    out = S.bot_reference_convergence(runs=2, Ns=(20, 40))
+    assert set(out["x"]) == {(20, 0), (20, 1), (40, 0), (40, 1)}
+    assert not np.array_equal(out["x"][(20, 0)], out["x"][(20, 1)])      # independent streams
+    bench = S.build("bot", pcrb_runs=2)
+    from pfrepro.montecarlo import run_monte_carlo
+    mc = run_monte_carlo(bench.model, {"PF(10)": S.BootstrapParticleFilter(bench.model, 10)}, 200, 2,
+                         S.SEEDS["bot"], progress=False)
+    np.testing.assert_array_equal(out["x_true"], mc.x_true)             # the benchmark's first truths

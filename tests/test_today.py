@@ -26,6 +26,11 @@ def test_against_today_on_the_chapters_truths_and_given_runs():
         TD.against_today("cmspf_ning2011", runs=3, y_check=mc.sim.y + 1.0)
     s = TD.sentence(out)
     assert out["best"] in s and "first 3 runs" in s
-    assert TD.styled(out).to_html()
+    html = TD.styled(out).to_html()
+    # headers in words: no abbreviation of the internal table's columns reaches the page
+    for h in ("model evaluations per step", "MSE (± SE)", "MSE / exact", "z of the difference",
+              "against the paper&#x27;s method"):
+        assert h in html.replace("'", "&#x27;"), h
+    assert "evals/step" not in html and ">z<" not in html
     with pytest.raises(ValueError, match="unknown paper"):
         TD.spec("nope")

@@ -190,14 +190,16 @@ def styled(out: dict):
     tab = out["table"].copy()
     unit = {"x": "MSE", "theta": "θ-MSE", "position": "position MSE (m²)"}[out["error"]]
     show = pd.DataFrame(index=tab.index)
-    show["evals/step"] = tab["evals/step"].map(lambda v: f"{v:.0f}")
-    show[unit] = [f"{m:.3g} ± {s:.2g}" if np.isfinite(m) else "diverged" for m, s in zip(tab["MSE"], tab["SE"])]
+    show.index.name = "method"
+    show["model evaluations per step"] = tab["evals/step"].map(lambda v: f"{v:.0f}")
+    show[f"{unit} (± SE)"] = [f"{m:.3g} ± {s:.2g}" if np.isfinite(m) else "diverged"
+                             for m, s in zip(tab["MSE"], tab["SE"])]
     if "MSE / exact" in tab.columns:
-        show["/ exact"] = tab["MSE / exact"].map(lambda v: f"{v:.3g}" if np.isfinite(v) else "–")
-    show["minus paper's method"] = [f"{d:+.3g} ± {s:.2g}" if np.isfinite(d) else "–"
-                                    for d, s in zip(tab["minus paper"], tab["± SE"])]
-    show["z"] = tab["z"].map(lambda v: f"{v:+.1f}" if np.isfinite(v) else "–")
-    show["vs the paper's method"] = tab["vs paper's (Holm)"]
+        show[f"{unit} / exact"] = tab["MSE / exact"].map(lambda v: f"{v:.3g}" if np.isfinite(v) else "–")
+    show["minus the paper's method (± SE)"] = [f"{d:+.3g} ± {s:.2g}" if np.isfinite(d) else "–"
+                                              for d, s in zip(tab["minus paper"], tab["± SE"])]
+    show["z of the difference"] = tab["z"].map(lambda v: f"{v:+.1f}" if np.isfinite(v) else "–")
+    show["against the paper's method"] = tab["vs paper's (Holm)"]
     return show.style.set_table_attributes('class="pf-text"').set_caption(
         f"{out['title']}: the paper's method (first row) and today's methods at the paper's N, on the first "
         f"{out['runs']} runs of this chapter's truths; model evaluations per step (pfrepro.cost), mean ± SE over "

@@ -27,7 +27,8 @@ Rankings (:func:`ranking`): within a benchmark every pair of methods is compared
 difference, two-sided z test), Holm over all pairs of that benchmark; a method's rank is 1 + the
 number of methods significantly better than it (so "not shown different" is symmetric and no chaining
 arises; it is not a tie within the margin, which the rankings do not test).
-What to use (:func:`what_to_use`): per benchmark, the cheapest method of rank 1. The takeaway
+What to use (:func:`what_to_use`): per benchmark, the cheapest method whose error is shown within
+:data:`USE_MARGIN` of every other method's (:func:`close_to_best`, an equivalence test), or none. The takeaway
 (:func:`takeaway`) and the chapter's numbers and phrases (:func:`prose`) are generated from these.
 """
 from __future__ import annotations
@@ -40,20 +41,21 @@ import pandas as pd
 from ..choices import over
 from ..claims import CAUSE_COUNT, CAUSE_RUNS, CAUSE_TIE, Z_CRIT, ClaimsRegistry, Judgement, judge, judge_ordering
 from ..experiments import synthesis as S
-from ..experiments.synthesis import (ALPHA, BOT_CENTRED_EXCLUDED, BOT_FLOW_REF_TOL, BOT_READINGS, MARGIN, PF_N,
+from ..experiments.synthesis import (ALPHA, BOT_CENTRED_EXCLUDED, BOT_REF_TOL, BOT_READINGS, MARGIN, PF_N,
                                      BenchResult, _cost, _frontier_names)
 from ..experiments.synthesis import distance_table
 from ..metrics import mse
-from ..prose import Md, join_and, plural
+from ..prose import Md, join_and, plural, verdict_sentence
 from ..stats import holm, p_two_sided, plan_runs, ratio_of_means
 from .ekf_pf_li2012 import pf_beats_ekf
 
 __all__ = ["efficient_frontier", "pf_at_cost", "equal_budget", "judge_equal_budget", "WORDS", "plan_table", "ranking",
            "verdict_table", "CLAIM_TEXT", "LI_CLAIM",
            "claim_rows", "record_claims", "MAIN_CLAIMS", "takeaway", "prose", "PAPER_METHODS", "overall",
-           "summary_table", "dpf_vs_liu_west", "bot_reference_tables", "PROBLEM_CLASS", "what_to_use",
+           "summary_table", "dpf_vs_liu_west", "reference_convergence", "PROBLEM_CLASS", "what_to_use",
+           "USE_MARGIN", "REF_SLOPE_MAX", "close_to_best", "recommend", "use_phrase", "use_sentence",
            "time_range_phrase", "below_line_sentence", "frontier_improves_phrase", "gaussian_phrase",
-           "time_agrees_phrase", "reference_sentence"]
+           "time_agrees_phrase", "reference_sentence", "bounds_sentence", "start_sentence"]
 
 
 # ------------------------------------------------------------------------------- equal budget
@@ -336,7 +338,7 @@ def record_claims(reg: ClaimsRegistry, results) -> ClaimsRegistry:
     centred = BOT_READINGS["centred"]
     for _, row in claim_rows(vt).iterrows():
         bench, method = row["benchmark"], row["method"]
-        text = f"{CLAIM_TEXT[row['paper']]} at equal model-evaluation count ({method}, {bench})"
+        text = f"{CLAIM_TEXT[row['paper']]} at equal model-evaluation count ({method}, {S.BENCH_NAME.get(bench, bench)})"
         e = equal_budget(results[bench], method, "count")
         kw = _claim_kwargs(e)
         note = _note(row, results)
@@ -371,46 +373,62 @@ MAIN_CLAIMS = (_cid("ung_zhang", "GPFF eq43 unif."), _cid("bot", "GPFF eq41 unif
                _cid("imm_zhou", f"IMMPFOR({S.IMM.SCENARIO['N']})"), LI_CLAIM)
 
 
-def bot_reference_tables(ref: dict, r: BenchResult, tol: float = BOT_FLOW_REF_TOL) -> dict:
-    """Is the largest-N PFPF-EDH of :func:`pfrepro.experiments.synthesis.bot_flow_reference` a reference, and how far is every BOT method from it?
+#: the distance between replicates must fall at least this steeply in log N for the reference to count as converged
+#: (the 1/N law gives -1; halfway leaves room for the Monte Carlo noise of a few runs, fixed before the runs)
+REF_SLOPE_MAX = -0.5
 
-    ``convergence``: per N, the mean MSE over the subset's runs (± SE), and d²(N) = the mean over runs of the
-    time- and component-averaged squared distance between the estimates at N and at N_max (the MSE's units).
-    With independent Monte Carlo errors of variance c/N, E d²(N) = c (1/N + 1/N_max), so the excess MSE of the
-    N_max estimate over the posterior mean's is c/N_max = d²(N_mid) N_mid / (N_mid + N_max) (N_mid: the next
-    largest N); ``law_ratio`` sets the observed d²(N_1)/d²(N_mid) beside the 1/N law's prediction.
-    ``converged``: that excess is below ``tol`` of the N_max MSE. ``methods``: every finite method of the
-    benchmark ``r`` on the same runs, MSE / MSE(PFPF-EDH(N_max)) (ratio of means, delta-method SE)."""
-    Ns = sorted(ref["x"])
-    xt = ref["x_true"]
-    nmax, nmid = Ns[-1], Ns[-2]
+
+def reference_convergence(conv: dict, r: BenchResult, tol: float = BOT_REF_TOL) -> dict:
+    """Has the bearings-only reference (:func:`pfrepro.experiments.synthesis.bot_reference_filter`) converged?
+
+    ``conv`` is :func:`pfrepro.experiments.synthesis.bot_reference_convergence`: two independent replicates of
+    the reference filter at each N on the first runs. Their mean squared distance d²(N) (time- and
+    component-averaged, the MSE's units) has expectation 2 v(N), v(N) the Monte Carlo variance of one estimate;
+    a particle filter's v(N) falls as c / N, so N d²(N) stays level and log d² falls with slope -1 in log N.
+    Returned: ``table`` (per N: d² mean and SE over the runs, N d², the MSE of the first replicate),
+    ``slope`` (least-squares slope of log d² on log N; the 1/N law: -1), ``share`` (v(N_ref) / MSE of the
+    reference on the benchmark ``r``'s runs, with v(N_ref) = d²(N_ref) / 2, or from the nearest N by the 1/N
+    law), ``converged`` (``share`` < ``tol`` and d² falling at least as fast as 1/sqrt(N):
+    slope < :data:`REF_SLOPE_MAX`), ``runs``, ``n_ref``."""
+    tol = float(tol)
+    if not 0 < tol < 1:
+        raise ValueError(f"tol must be in (0, 1), got {tol!r}")
+    xt = np.asarray(conv["x_true"], float)
+    Ns = sorted({N for N, _ in conv["x"]})
+    if len(Ns) < 2:
+        raise ValueError("conv needs the reference at two particle numbers at least")
     runs = xt.shape[0]
-    big = ref["x"][nmax]
     rows = []
     for N in Ns:
-        e = mse(xt, ref["x"][N])
-        d2 = np.mean((ref["x"][N] - big) ** 2, axis=(1, 2))
-        rows.append({"N": N, "MSE": float(e.mean()), "SE": float(e.std(ddof=1) / math.sqrt(runs)),
-                     "d² to N_max": float(d2.mean()), "d² SE": float(d2.std(ddof=1) / math.sqrt(runs))})
-    conv = pd.DataFrame(rows).set_index("N")
-    excess = conv.loc[nmid, "d² to N_max"] * nmid / (nmid + nmax)
-    mse_max = conv.loc[nmax, "MSE"]
-    pred = (1 / Ns[0] + 1 / nmax) / (1 / nmid + 1 / nmax)
-    obs = conv.loc[Ns[0], "d² to N_max"] / conv.loc[nmid, "d² to N_max"]
-    e_ref = mse(xt, big)
-    rows = []
-    for m in r.bench.methods:
-        v = r.err[m.name].to_numpy()[:runs]
-        if not np.all(np.isfinite(v)):
-            continue
-        ratio, se = ratio_of_means(v, e_ref)
-        rows.append({"method": m.name, "family": m.family, "MSE / ref.": ratio, "SE": se,
-                     "evals/step": float(r.counts.loc[m.name, "model evals / step"])})
-    meth = pd.DataFrame(rows).set_index("method").sort_values("MSE / ref.")
-    return {"convergence": conv, "excess": float(excess), "excess_share": float(excess / mse_max),
-            "converged": bool(excess / mse_max < tol), "law_ratio": (float(obs), float(pred)),
-            "n_max": nmax, "runs": runs, "methods": meth, "pcrb_over_ref": float(r.err[r.ref].iloc[0] / e_ref.mean())}
+        a, b = np.asarray(conv["x"][(N, 0)], float), np.asarray(conv["x"][(N, 1)], float)
+        d2 = np.mean((a - b) ** 2, axis=(1, 2))
+        e = mse(xt, a)
+        rows.append({"particles": N, "distance² between replicates": float(d2.mean()),
+                     "its standard error": float(d2.std(ddof=1) / math.sqrt(runs)) if runs > 1 else float("nan"),
+                     "particles × distance²": float(N * d2.mean()), "MSE against the truth": float(e.mean())})
+    table = pd.DataFrame(rows).set_index("particles")
+    d2 = table["distance² between replicates"].to_numpy()
+    slope = float(np.polyfit(np.log(Ns), np.log(d2), 1)[0])
+    n_ref = getattr(r.bench.reference.filt, "n_particles", Ns[-1])
+    near = min(Ns, key=lambda N: abs(math.log(N / n_ref)))
+    v_ref = table.loc[near, "distance² between replicates"] / 2 * near / n_ref
+    share = float(v_ref / r.err[r.ref].mean())
+    return {"table": table, "slope": slope, "share": share, "converged": bool(share < tol and slope < REF_SLOPE_MAX),
+            "runs": runs, "n_ref": int(n_ref), "tol": tol}
 
+
+def reference_sentence(rc: dict) -> Md:
+    """Whether the bearings-only reference has converged (:func:`reference_convergence`), in words."""
+    share = 100 * rc["share"]
+    falls = (f"the distance between two independent runs of the reference filter falls with slope "
+             f"{rc['slope']:.2f} in log N (the 1/N law of a particle filter's Monte Carlo variance: -1)")
+    if rc["converged"]:
+        return Md(f"It has converged: {falls}, and at N = {rc['n_ref']} its own Monte Carlo variance is "
+                  f"{share:.1f} % of its MSE (the rule, fixed before the runs: below {100 * rc['tol']:.0f} %)")
+    why = (f"its distance does not fall as N grows, slope not below {REF_SLOPE_MAX}" if rc["slope"] >= REF_SLOPE_MAX else
+           f"its own Monte Carlo variance is {share:.1f} % of its MSE, not below {100 * rc['tol']:.0f} %")
+    return Md(f"It has not converged by the rule fixed before the runs ({why}; {falls}): the ratios on "
+              f"bearings-only are to the best estimate computed, not to the least MSE")
 
 
 # ------------------------------------------------------------------------------ what to use (issue 22)
@@ -424,28 +442,127 @@ PROBLEM_CLASS = {"ung_zhang": "scalar, strongly nonlinear (UNGM, Q = R = 1)",
                  "imm_zhou": "manoeuvring target"}
 
 
-def what_to_use(results: dict, alpha: float = ALPHA) -> pd.DataFrame:
-    """Per benchmark, the method that reaches the best accuracy shown at the least cost: among the methods
-    of rank 1 of :func:`ranking` (none shown better, Holm over all pairs), the one with the fewest model
-    evaluations per step. With it: its MSE / reference, its count, the other rank-1 methods (none shown
-    different from it), the best paper's method and the best of today's methods with their ranks."""
+#: the equivalence margin of the recommendation, stated before the runs. A method is recommended only when its mean
+#: error is shown to be within 25 % of every other method's on its benchmark (the upper end of the paired ratio's
+#: interval below 1 + USE_MARGIN); "not shown worse" is not enough, since a method with a wide standard error is
+#: never shown worse. A quarter: well inside the gaps between the families on these benchmarks (a factor of 2 and
+#: more), wider than the spread among the PF's own resampling schemes.
+USE_MARGIN = 0.25
+
+
+def close_to_best(err: pd.DataFrame, margin: float = USE_MARGIN, z: float = Z_CRIT) -> pd.DataFrame:
+    """Which methods are shown to have an error close to the best of their benchmark (an equivalence test).
+
+    Method m is *shown close to the best* when, against every other method b, the paired ratio of mean errors
+    mean(e_m) / mean(e_b) (:func:`pfrepro.stats.ratio_of_means`, delta-method SE) has its upper bound
+    ratio + ``z`` SE below 1 + ``margin``: whichever method is truly best, m's error is shown within the margin of
+    it. Each comparison is at ``z``; m must pass all of them (an intersection-union test: no correction for the
+    number of comparisons is needed). Against a method with a higher mean the ratio is below 1 and binds only
+    when that method's error is very noisy. A method with non-finite errors (diverged runs) is not close.
+
+    Parameters
+    ----------
+    err : pandas.DataFrame
+        Per-run errors, one column per method, on common runs (at least 2).
+    margin : float
+        The equivalence margin (> 0), as a fraction of the best error.
+    z : float
+        Standard errors of the one-sided bound (> 0).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Per method, sorted by mean error: ``mean``, ``worst upper bound`` (the largest ratio + z SE over the
+        other methods), ``against`` (the method of that bound) and ``close`` (bool).
+    """
+    if not isinstance(err, pd.DataFrame):
+        raise TypeError(f"err must be a pandas DataFrame of per-run errors, got {type(err).__name__}")
+    margin, z = float(margin), float(z)
+    if not (margin > 0 and math.isfinite(margin)):
+        raise ValueError(f"margin must be a positive number, got {margin!r}")
+    if not (z > 0 and math.isfinite(z)):
+        raise ValueError(f"z must be a positive number, got {z!r}")
+    if len(err) < 2:
+        raise ValueError(f"err needs at least 2 runs, got {len(err)}")
+    ok = [c for c in err.columns if np.all(np.isfinite(err[c].to_numpy(float)))]
+    rows = {}
+    for m in err.columns:
+        if m not in ok:
+            rows[m] = {"mean": float("nan"), "worst upper bound": float("inf"), "against": "", "close": False}
+            continue
+        worst, against = -math.inf, ""
+        for b in ok:
+            if b == m:
+                continue
+            ratio, se = ratio_of_means(err[m].to_numpy(float), err[b].to_numpy(float))
+            if ratio + z * se > worst:
+                worst, against = ratio + z * se, b
+        if against == "":     # a single finite method: nothing to compare with
+            worst = 1.0
+        rows[m] = {"mean": float(err[m].mean()), "worst upper bound": float(worst), "against": against,
+                   "close": bool(worst < 1 + margin)}
+    return pd.DataFrame.from_dict(rows, orient="index").sort_values("mean", na_position="last")
+
+
+def recommend(err: pd.DataFrame, cost, margin: float = USE_MARGIN, z: float = Z_CRIT):
+    """The method to use: the cheapest of the methods :func:`close_to_best` shows close to the best (ties in
+    cost: the lower mean error), or None when none is shown close. ``cost``: a mapping method -> cost (model
+    evaluations per step). Returns ``(pick, table)`` with ``table`` from :func:`close_to_best`."""
+    table = close_to_best(err, margin, z)
+    missing = [m for m in err.columns if m not in cost]
+    if missing:
+        raise ValueError(f"cost has no entry for {missing}")
+    close = [m for m in table.index if table.loc[m, "close"]]
+    if not close:
+        return None, table
+    return min(close, key=lambda m: (float(cost[m]), table.loc[m, "mean"])), table
+
+
+def what_to_use(results: dict, margin: float = USE_MARGIN) -> pd.DataFrame:
+    """Per benchmark, the method to use (:func:`recommend`): the cheapest method whose error is shown within
+    ``margin`` of the best of its benchmark, or none. With it: its MSE relative to the reference, its upper bound
+    against the best, its count, the other methods shown close, and the best method by mean error."""
     rows = []
     for key, r in results.items():
-        rk = ranking(r, alpha=alpha)
-        fam = {m.name: m for m in r.bench.methods}
-        top = rk[rk["rank"] == 1]
-        pick = top["evals/step"].astype(float).idxmin()
-        def best(pred):
-            ok = np.array([pred(fam[n]) for n in rk.index], bool) & np.isfinite(rk["rank"].to_numpy(float))
-            return rk.index[ok][0] if ok.any() else None
-        bp, bt = best(lambda m: m.paper is not None), best(lambda m: m.today)
-        fmt = lambda n: "–" if n is None else f"{n} (rank {rk.loc[n, 'rank']:.0f}, {rk.loc[n, 'MSE / opt.']:.3g})"
-        rows.append({"problem": PROBLEM_CLASS.get(key, key), "benchmark": key, "use": pick,
-                     "MSE / ref.": f"{rk.loc[pick, 'MSE / opt.']:.3g} ± {rk.loc[pick, 'SE']:.2g}",
-                     "evals/step": f"{rk.loc[pick, 'evals/step']:.0f}",
-                     "also rank 1": ", ".join(n for n in top.index if n != pick) or "–",
-                     "best paper's method": fmt(bp), "best of today's": fmt(bt)})
+        names = [m.name for m in r.bench.methods]
+        cost = {n: float(r.counts.loc[n, "model evals / step"]) for n in names}
+        pick, t = recommend(r.err[names], cost, margin)
+        dt = distance_table(r)
+        rel = lambda n: f"{dt.loc[n, 'MSE / opt.']:.3g} ± {dt.loc[n, 'SE']:.2g}"    # noqa: E731
+        best = t.index[0]
+        close = [n for n in t.index if t.loc[n, "close"] and n != pick]
+        rows.append({"problem": PROBLEM_CLASS.get(key, key), "key": key,
+                     "use": pick if pick is not None else "none shown close to the best",
+                     "its MSE / reference": rel(pick) if pick is not None else "–",
+                     "model evaluations per step": f"{cost[pick]:.0f}" if pick is not None else "–",
+                     "its error / any other's (upper bound)": (f"{t.loc[pick, 'worst upper bound']:.2f}"
+                                                               if pick is not None else "–"),
+                     "best by mean (MSE / reference)": f"{best} ({dt.loc[best, 'MSE / opt.']:.3g})",
+                     "also shown close": ", ".join(close) or "–"})
     return pd.DataFrame(rows).set_index("problem")
+
+
+def use_phrase(use: dict) -> str:
+    """"A on the X and Y settings, B for Z": the recommendations of :func:`what_to_use`, each method named once.
+
+    ``use``: benchmark key -> the method to use, or None where none is shown close to the best. Benchmarks with
+    the same pick share one phrase (so a method is never listed twice, "RPF(100) and RPF(100)")."""
+    scalar: dict = {}
+    for k in _SCALAR:
+        if k in use:
+            scalar.setdefault(use[k], []).append(_SETTING[k])
+    parts = []
+    if scalar:
+        sub = [f"{'no method shown close to the best' if p is None else p} on the {join_and(st)} "
+               f"setting{'s' if len(st) > 1 else ''}" for p, st in scalar.items()]
+        parts.append(join_and(sub) + " of the scalar growth model")
+    others: dict = {}
+    for k in use:
+        if k not in _SCALAR:
+            others.setdefault(use[k], []).append(_PROBLEM_PHRASE.get(k, k))
+    for p, s in others.items():
+        parts.append(f"no method shown close to the best for {join_and(s)}" if p is None else f"{p} for {join_and(s)}")
+    return join_and(parts)
 
 
 # ------------------------------------------------------------------------ per method, over benchmarks
@@ -500,14 +617,17 @@ def plan_table(results) -> pd.DataFrame:
     printed effect for Li 2012) and the runs 80 % power at ``|z| > 2`` needs (:func:`pfrepro.stats.plan_runs`).
     The runs are fixed before any run (``pfrepro.experiments.synthesis.RUNS``); a claim left undecided
     reports the runs its plan needs (``runs_needed``), no run is added after an outcome. ``at these runs``:
-    the comparison's word (the Li claim's verdict) on the runs it has."""
+    the comparison's word (the Li claim's verdict) on the runs it has. ``claim id`` is the claim's id, ``claim``
+    its method and benchmark in words (what the chapter shows)."""
     vt = claim_rows(verdict_table(results))
     rows = []
     for _, row in vt.iterrows():
         if not np.isfinite(row["se count"]):
             continue
         sd = float(row["se count"]) * math.sqrt(int(row["runs"]))
-        rows.append({"claim": _cid(row["benchmark"], row["method"]), "runs": int(row["runs"]),
+        rows.append({"claim id": _cid(row["benchmark"], row["method"]),
+                     "claim": f"{row['method']} better than the baseline, {S.BENCH_NAME.get(row['benchmark'], row['benchmark'])}",
+                     "runs": int(row["runs"]),
                      "sd per run": sd, "size resolved": f"margin {row['margin']:g}",
                      "runs the plan needs": plan_runs(sd, float(row["margin"]), z=Z_CRIT),
                      "at these runs": row["by count"]})
@@ -516,7 +636,8 @@ def plan_table(results) -> pd.DataFrame:
         pf = f"PF({max(PF_N['ung_li'])})"
         kw = pf_beats_ekf(np.sqrt(r.err["EKF"].to_numpy()), np.sqrt(r.err[pf].to_numpy()), which=1)
         sd = kw["diff_se"] * math.sqrt(kw["runs"])
-        rows.append({"claim": LI_CLAIM, "runs": kw["runs"], "sd per run": sd,
+        rows.append({"claim id": LI_CLAIM, "claim": f"Li 2012: {pf} better than the EKF", "runs": kw["runs"],
+                     "sd per run": sd,
                      "size resolved": f"printed effect {kw['effect']:.4g}",
                      "runs the plan needs": plan_runs(sd, kw["effect"], z=Z_CRIT),
                      "at these runs": judge(diff=kw["diff"], diff_se=kw["diff_se"], effect=kw["effect"],
@@ -537,8 +658,8 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
 
     First, whether any paper's method was shown better than the plain baseline at the same number of
     model evaluations (the equal-budget claims of ``reg``: which, or how many were shown worse); then,
-    per problem class, what to use: the cheapest method no other is shown better than
-    (:func:`what_to_use`). Never typed: a change of result changes the sentence.
+    per problem class, what to use: the cheapest method whose error is shown within :data:`USE_MARGIN` of the
+    best (:func:`what_to_use`). Never typed: a change of result changes the sentence.
 
     Parameters
     ----------
@@ -554,7 +675,7 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
     """
     eq = [c for c in reg.claims if c.claim_id != LI_CLAIM]
     rows = {_cid(r["benchmark"], r["method"]): r for _, r in claim_rows(verdict_table(results)).iterrows()}
-    better = [f"{rows[c.claim_id]['method']} ({rows[c.claim_id]['benchmark']})" for c in eq
+    better = [f"{rows[c.claim_id]['method']} ({S.BENCH_NAME.get(rows[c.claim_id]['benchmark'], rows[c.claim_id]['benchmark'])})" for c in eq
               if c.verdict == "reproduced" and c.claim_id in rows]
     n, worse = len(eq), sum(c.verdict == "not reproduced" for c in eq)
     base = "the plain baseline (a bootstrap PF; Liu–West for a static parameter; the IMMPF for a manoeuvring target)"
@@ -583,19 +704,11 @@ def takeaway(reg: ClaimsRegistry, results) -> str:
     keys = [k for k in results if k != BOT_READINGS["centred"]]
     if not keys:
         return first + "."
-    use = dict(zip(keys, what_to_use({k: results[k] for k in keys})["use"]))
-    parts = []
-    groups: dict = {}
-    for k in _SCALAR:
-        if k in use:
-            groups.setdefault(use[k], []).append(_SETTING[k])
-    if len(groups) == 1:
-        parts.append(f"{next(iter(groups))} on the scalar growth model")
-    elif groups:
-        parts.append(join_and(f"{p} on the {join_and(s)} setting{'s' if len(s) > 1 else ''}" for p, s in groups.items())
-                     + " of the scalar growth model")
-    parts += [f"{use[k]} for {_PROBLEM_PHRASE.get(k, k)}" for k in keys if k not in _SCALAR]
-    return f"{first}. What to use, the cheapest method that no other is shown to beat: {join_and(parts)}."
+    w = what_to_use({k: results[k] for k in keys})
+    use = {k: (None if p not in fam else p) for k, p, fam in
+           zip(w["key"], w["use"], ({m.name for m in results[k].bench.methods} for k in w["key"]))}
+    return (f"{first}. What to use, the cheapest method whose error is shown within {100 * USE_MARGIN:.0f} % of "
+            f"the best method's: {use_phrase(use)}.")
 
 
 # --------------------------------------------------------------------------- the chapter's prose
@@ -625,7 +738,8 @@ def _settings_prose(results) -> dict:
            "syn_centred_runs": len(results[BOT_READINGS["centred"]].err), "syn_bot_offset_sds": S.bot_offset_sds(),
            "syn_scheme_n": S.SCHEME_N, "syn_method_n": S.METHOD_N, "syn_zcrit": Z_CRIT,
            "syn_pcrb_runs": int(st.get("pcrb_runs", S.PCRB_RUNS)),
-           "syn_seeds": Md(", ".join(f"{k} = {v}" for k, v in seeds.items() if k != "imm_zhou")
+           "syn_seeds": Md("; ".join(f"{S.BENCH_NAME[k]}: {v}" if k in S.BENCH_NAME else f"the bound's truths: {v}"
+                                     for k, v in seeds.items() if k != "imm_zhou")
                            + f"; the manoeuvring target keeps the IMM chapter's seed, {seeds['imm_zhou']}"),
            "syn_pf_n": Md(", ".join(str(n) for n in PF_N["ung_zhang"])),
            "syn_pf_n_bot": Md(", ".join(str(n) for n in PF_N["bot"])),
@@ -639,8 +753,9 @@ def _settings_prose(results) -> dict:
            "syn_today_n": S.TODAY_N, "syn_ledh_n": S.LEDH_N, "syn_jmpf_n": S.JMPF_N,
            # plain text: glued Markdown is CommonMark (no dollar math)
            "syn_smc2_size": Md(f"{S.SMC2_SIZE[0]} θ-particles × {S.SMC2_SIZE[1]} state particles"),
-           "syn_ref_tol": 100 * BOT_FLOW_REF_TOL,
-           "syn_ref_ns": Md(", ".join(str(n) for n in S.BOT_FLOW_REF_N))}
+           "syn_ref_tol": 100 * BOT_REF_TOL, "syn_ref_n": S.BOT_REF_N, "syn_ref_ess": S.BOT_REF_ESS,
+           "syn_ref_ns": Md(", ".join(str(n) for n in S.BOT_REF_CONV_N)),
+           "syn_use_margin": 100 * USE_MARGIN, "syn_use_bound": 1 + USE_MARGIN}
     return out
 
 
@@ -671,7 +786,9 @@ def _results_prose(results, vt: pd.DataFrame) -> dict:
         out[f"syn_lw{n}"] = ratio("theta_hou", f"Liu-West({n})")
     pcrb = S.bot_pcrb(results["bot"])
     pcrb_x0 = getattr(results, "pcrb_x0_known", float("nan"))
-    out.update(syn_pcrb=pcrb, syn_pcrb_x0=pcrb_x0, syn_pcrb_factor=pcrb / pcrb_x0)
+    ref_mse = float(results["bot"].err[results["bot"].ref].mean())
+    out.update(syn_pcrb=pcrb, syn_pcrb_x0=pcrb_x0, syn_bot_ref_mse=ref_mse,
+               syn_s_bounds=bounds_sentence(ref_mse, pcrb_x0, pcrb))
     for k, suf in (("bot", ""), ("bot_centred", "_c")):
         es = S.bot_ess1(results[k])
         out[f"syn_ess1_pf1000{suf}"] = es.loc["PF(1000)", "mean ESS at k=1"]
@@ -684,13 +801,11 @@ def _results_prose(results, vt: pd.DataFrame) -> dict:
     out["syn_bot_pf1000"] = ratio("bot", "PF(1000)")
     out["syn_bot_pfmax"] = ratio("bot", pfmax)
     out["syn_bot_pfmax_name"] = Md(pfmax)
-    # the large-N references not run (cost proportional to N, by the PF's count per step)
-    out["syn_bot_ref4000_factor"] = 4000 / PF_N["bot"][-1]
-    out["syn_bot_ref16000_factor"] = 16000 / PF_N["bot"][-1]
     for k, suf in (("bot", ""), ("bot_centred", "_c")):
         row = _row(vt, k, "GPFF eq41 unif.")
         out[f"syn_gpff_z{suf}"] = row["z count"]
         out[f"syn_gpff_word{suf}"] = Md(row["by count"])
+    out["syn_s_starts"] = start_sentence(str(out["syn_gpff_word"]), str(out["syn_gpff_word_c"]))
     out["syn_n_family"] = int(vt["d count"].notna().sum())
     out["syn_margin"] = MARGIN["ung_zhang"]
     # the DPF chapter's sec 5.1 size: Liu-West(n) against DPF(n+n), 2n likelihoods each
@@ -725,7 +840,7 @@ def _results_prose(results, vt: pd.DataFrame) -> dict:
     out["syn_s_bot_pf"] = frontier_improves_phrase(rb)
     out["syn_s_bot_gauss"] = gaussian_phrase(rb, best_pf["bot"])
     out["syn_s_time"] = time_agrees_phrase(vt)
-    out.update(_reference_prose(results, best_pf["bot"]))
+    out.update(_reference_prose(results))
     return out
 
 
@@ -733,6 +848,39 @@ def _significantly_better(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether the paired per-run difference a - b is positive by more than :data:`~pfrepro.claims.Z_CRIT` SE."""
     dd = np.asarray(a, float) - np.asarray(b, float)
     return bool(dd.mean() > Z_CRIT * dd.std(ddof=1) / np.sqrt(dd.size))
+
+
+def start_sentence(word_offset: str, word_centred: str) -> Md:
+    """What the two bearings-only starts say together about the GPFF against the PF at its count, from the two
+    words of the verdict table ("better", "worse", "undecided (...)", "tie (...)")."""
+    off, cen = word_offset.startswith("better"), word_centred.startswith("better")
+    if off and cen:
+        return Md("So the GPFF's gain over the PF on bearings-only holds with either start")
+    if off:
+        return Md("So what the GPFF gains over the PF on bearings-only is a finding about the offset start the paper "
+                  "chose, not about bearings-only tracking in general")
+    if cen:
+        return Md("So the GPFF gains over the PF on bearings-only only with the centred start, which the paper did "
+                  "not choose")
+    return Md("With neither start is the GPFF shown better than the PF at its count")
+
+
+def bounds_sentence(ref_mse: float, pcrb_x0: float, pcrb_prior: float) -> Md:
+    """The two posterior Cramér–Rao bounds of bearings-only beside the least MSE ``ref_mse`` (context): the bound
+    with x0 known bounds every estimator's MSE on these truths, so it should lie below; the bound with the
+    filters' prior information averages over starts drawn from that prior, which these truths do not."""
+    vals = (ref_mse, pcrb_x0, pcrb_prior)
+    if not all(isinstance(v, (int, float)) and math.isfinite(v) and v > 0 for v in vals):
+        raise ValueError(f"bounds_sentence needs three positive finite numbers, got {vals!r}")
+    x0 = (f"The posterior Cramér–Rao bound with x₀ known, {pcrb_x0:.3g}, lies below it, as a bound on "
+          f"these truths must" if pcrb_x0 <= ref_mse else
+          f"The posterior Cramér–Rao bound with x₀ known, {pcrb_x0:.3g}, lies above it, which a bound on "
+          f"these truths cannot: the reference or the bound is off by more than its Monte Carlo error")
+    prior = (f"the bound with the filters' prior information, {pcrb_prior:.3g}, lies "
+             + (f"{pcrb_prior / ref_mse:.1f} times above it, so it bounds nothing here (it averages over starts "
+                f"drawn from the prior, and these truths all start at x₀)" if pcrb_prior > ref_mse else
+                f"below it too, but it is a bound for truths whose start is drawn from the prior, not for these"))
+    return Md(f"{x0}; {prior}.")
 
 
 def time_range_phrase(factor: float) -> Md:
@@ -749,7 +897,7 @@ def below_line_sentence(vt: pd.DataFrame) -> Md:
     return Md("No proposed method lies below that line at its cost (none is better than the PF at "
               "equal count)." if better.empty else
               "Below that line at its cost (better than the PF at equal count): "
-              + ", ".join(f"{m} on {b}" for m, b in zip(better["method"], better["benchmark"])) + ".")
+              + ", ".join(f"{m} on the {S.BENCH_NAME.get(b, b)}" for m, b in zip(better["method"], better["benchmark"])) + ".")
 
 
 def frontier_improves_phrase(r: BenchResult) -> Md:
@@ -776,7 +924,7 @@ def time_agrees_phrase(vt: pd.DataFrame) -> Md:
     if same.all():
         return Md("gives the same answer as the count for every proposed method on the scalar benchmarks")
     return Md("differs from the count for " + ", ".join(
-        f"{m} on {b}" for m, b in zip(scalar.loc[~same, "method"], scalar.loc[~same, "benchmark"])))
+        f"{m} on the {S.BENCH_NAME.get(b, b)}" for m, b in zip(scalar.loc[~same, "method"], scalar.loc[~same, "benchmark"])))
 
 
 def _today_prose(results) -> dict:
@@ -815,35 +963,14 @@ def _today_prose(results) -> dict:
     return out
 
 
-def _reference_prose(results, best_pf_bot: str) -> dict:
-    """The PFPF-EDH reference on bearings-only (:func:`bot_reference_tables`): is it one, and how far
-    every method is from it."""
-    ref = getattr(results, "flow_ref", None)
-    if ref is None:
+def _reference_prose(results) -> dict:
+    """The bearings-only reference (:func:`reference_convergence`): has it converged, and the bounds beside it."""
+    conv = getattr(results, "ref_conv", None)
+    if conv is None:
         return {}
-    brt = bot_reference_tables(ref, results["bot"])
-    out = {"syn_ref_runs": int(brt["runs"]), "syn_ref_excess_pct": 100 * brt["excess_share"],
-           "syn_ref_law_obs": brt["law_ratio"][0], "syn_ref_law_pred": brt["law_ratio"][1],
-           "syn_ref_nmax": brt["n_max"], "syn_ref_pcrb_over": brt["pcrb_over_ref"]}
-    bm = brt["methods"]
-    out["syn_ref_verdict"] = reference_sentence(brt)
-    best = bm.index[0]
-    out["syn_ref_best"] = Md(f"{best} ({bm.loc[best, 'MSE / ref.']:.2f} ± {bm.loc[best, 'SE']:.2g})")
-    for name, key in (("EKF", "ekf"), ("UKF", "ukf"), ("GPFF eq41 unif.", "gpff"), (f"PFPF-EDH({S.TODAY_N})", "edh"),
-                      (best_pf_bot, "pf")):
-        out[f"syn_ref_{key}"] = bm.loc[name, "MSE / ref."] if name in bm.index else float("nan")
-    out["syn_ref_bestpf"] = Md(best_pf_bot)
-    return out
-
-
-def reference_sentence(brt: dict) -> Md:
-    """Whether the largest-N PFPF-EDH is taken as the bearings-only reference (:func:`bot_reference_tables`)."""
-    if brt["converged"]:
-        return Md(f"PFPF-EDH({brt['n_max']}) is taken as the reference on these runs: its excess over the posterior "
-                  f"mean is estimated at {100 * brt['excess_share']:.1f} % of its MSE")
-    return Md(f"PFPF-EDH({brt['n_max']}) has not converged by this rule (estimated excess "
-              f"{100 * brt['excess_share']:.0f} % of its MSE): the ratios below are to the best filter run, "
-              f"not to the optimum")
+    rc = reference_convergence(conv, results["bot"])
+    return {"syn_ref_runs": int(rc["runs"]), "syn_ref_share_pct": 100 * rc["share"], "syn_ref_slope": rc["slope"],
+            "syn_ref_verdict": reference_sentence(rc)}
 
 
 def _claims_prose(reg: ClaimsRegistry) -> dict:
@@ -852,16 +979,30 @@ def _claims_prose(reg: ClaimsRegistry) -> dict:
     n = {v: sum(x == v for x in cl.values()) for v in ("reproduced", "not reproduced", "inconclusive", "not checkable")}
     out = {f"syn_n_{v.replace(' ', '_')}": k for v, k in n.items()}
     out["syn_n_claims"] = len(cl)
-    out["syn_claims_sentence"] = Md(
-        f"Of {plural(len(cl), 'claim')}, {n['reproduced']} {'is' if n['reproduced'] == 1 else 'are'} reproduced, "
-        f"{n['not reproduced']} not reproduced, {n['inconclusive']} inconclusive and {n['not checkable']} not checkable.")
+    # every verdict counted (the Li claim can be qualitatively reproduced), in number agreement
+    out["syn_claims_sentence"] = Md(verdict_sentence(list(cl.values())) + ".")
     return out
 
 
+def use_sentence(w: pd.DataFrame) -> Md:
+    """The section's closing sentence from :func:`what_to_use`'s table: the pick per problem, each method once."""
+    use, context = {}, None
+    for k, p in zip(w["key"], w["use"]):
+        p = None if p.startswith("none ") else p
+        if k == BOT_READINGS["centred"]:
+            context = p
+        else:
+            use[k] = p
+    s = use_phrase(use)
+    if context is not None or BOT_READINGS["centred"] in set(w["key"]):
+        s += ("; with the bearings-only prior centred on the truth (context): "
+              + (context if context is not None else "no method shown close to the best"))
+    return Md(s[:1].upper() + s[1:] + ".")
+
+
 def _use_prose(results) -> dict:
-    """What to use, per benchmark (:func:`what_to_use`)."""
-    w = what_to_use(results)
-    return {f"syn_use_{k}": Md(u) for k, u in zip(w["benchmark"], w["use"])}
+    """What to use (:func:`what_to_use`), as one sentence."""
+    return {"syn_use_sentence": use_sentence(what_to_use(results))}
 
 
 def prose(reg: ClaimsRegistry, results) -> dict:
@@ -869,8 +1010,8 @@ def prose(reg: ClaimsRegistry, results) -> dict:
 
     Settings (run counts, seeds, particle numbers), the distances to the reference and the counts
     the sections quote, the equal-budget words of the verdict tables, the sentences whose content
-    depends on the results (so the prose cannot contradict the numbers), the PFPF-EDH reference on
-    bearings-only, what to use and the count of the claims' verdicts. Wall-time ratios are context
+    depends on the results (so the prose cannot contradict the numbers), the convergence of the
+    bearings-only reference, what to use and the count of the claims' verdicts. Wall-time ratios are context
     only (they move with the machine's load) and feed no claim.
 
     Parameters
