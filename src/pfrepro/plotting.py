@@ -35,7 +35,7 @@ BOOK_STYLE = {
 #: book's 757 px text column less the output's padding).
 COLUMN_PX = 741
 #: Smallest type size (points) of a figure drawn once, as the command line saves it; the book's
-#: figures are drawn per layout at :attr:`Layout.min_pt` (10.5 pt and 12 pt).
+#: figures are drawn per layout at ``Layout.min_pt`` (10.5 pt and 12 pt).
 MIN_FONT_PT = 8.0
 #: Smallest size (CSS px) that the text of a figure drawn once has at :data:`COLUMN_PX`.
 MIN_TEXT_PX = 8.0
@@ -193,13 +193,13 @@ class Layout:
         return rc
 
 
-#: the laptop layout: 745 CSS px of column show a 6.5 in (975 px) figure at 0.76, so 10.5 pt
+#: The laptop layout. 745 CSS px of column show a 6.5 in (975 px) figure at 0.76, so 10.5 pt
 #: text (21.9 px in the PNG) is 16.7 CSS px on screen, the size of the body text
 DESKTOP = Layout("desktop", width_in=6.5, max_cols=2, min_pt=10.5)
-#: the phone layout: one panel per row; about 350 CSS px of column show a 3.0 in (450 px)
+#: The phone layout, one panel per row; about 350 CSS px of column show a 3.0 in (450 px)
 #: figure at 0.78, so 12 pt text (25 px in the PNG) is 19 CSS px on screen
 PHONE = Layout("phone", width_in=3.0, max_cols=1, min_pt=12.0)
-#: the media query under which the browser shows the phone drawing
+#: The media query under which the browser shows the phone drawing
 PHONE_MEDIA = "(max-width: 720px)"
 
 _LAYOUTS: list[Layout] = []
@@ -207,7 +207,13 @@ _LAYOUTS: list[Layout] = []
 
 @contextmanager
 def figure_layout(layout: Layout):
-    """Draw the figures made inside the block for ``layout`` (its panels per row and type sizes)."""
+    """Draw the figures made inside the block for ``layout`` (its panels per row and type sizes).
+
+    Yields
+    ------
+    Layout
+        ``layout``, current until the block ends (:func:`current_layout`).
+    """
     if not isinstance(layout, Layout):
         raise TypeError(f"figure_layout needs a Layout (DESKTOP or PHONE), got {type(layout).__name__}")
     _LAYOUTS.append(layout)
