@@ -25,11 +25,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import check_positive_int, check_probability
-from .base import Filter, FilterResult
-from .particle import normalize_log_weights
-from .resampling import check_scheme, resampling_counts_function
+from .resampling import check_scheme
 from .small_linalg import inv_small
-from .smc_steps import particle_result, resample_runs
+from .smc_steps import ParticleLoop
 
 __all__ = ["GaussianProposalParticleFilter", "PROPOSALS"]
 
@@ -60,7 +58,7 @@ def _log_normal(x, mean, chol):
     return -0.5 * np.einsum("...i,...i->...", z, z) - logdet - 0.5 * n * np.log(2 * np.pi)
 
 
-class GaussianProposalParticleFilter(Filter):
+class GaussianProposalParticleFilter(ParticleLoop):
     """PF whose proposal is a local EKF or UKF update of each particle's transition.
 
     Parameters
@@ -87,8 +85,6 @@ class GaussianProposalParticleFilter(Filter):
     Diagnostics: ``ess`` (runs, T), ``resampled`` (runs, T), ``log_evidence`` (runs,),
     ``collapsed``, ``n_collapsed``.
     """
-
-    needs_rng = True
 
     def __init__(self, model, n_particles: int, proposal: str = "linearized", alpha: float = 1.0,
                  beta: float = 2.0, kappa: float = 0.0, resampling: str = "systematic",
@@ -146,37 +142,16 @@ class GaussianProposalParticleFilter(Filter):
         return (self.model.log_likelihood(y, x_new) + _log_normal(x_new, mu, self._LQ)
                 - _log_normal(x_new, mean, L))
 
-    def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
-        y = self._prepare(y, rng)
-        runs, T, _ = y.shape
-        N, n, model = self.n_particles, self.model.dim_x, self.model
-        counts_of = resampling_counts_function(self.resampling)
-        x = self.sample_prior(rng, (runs, N))
-        logw = np.full((runs, N), -np.log(N))
-        xs = np.empty((runs, T, n))
-        ess = np.empty((runs, T))
-        resampled = np.zeros((runs, T), dtype=bool)
-        log_inc = np.empty((runs, T))
-        collapsed = np.zeros((runs, T), dtype=bool)
-        with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-            for k in range(1, T + 1):
-                mu = model.f(x, k)
-                mean, L = self.local_update(mu, y[:, k - 1])
-                z = rng.standard_normal((runs, N, n))
-                x = mean + _mv(L, z)
-                # log N(x; mean, L L^T) from the draw z itself (no per-particle solve)
-                log_q = (-0.5 * np.einsum("...i,...i->...", z, z)
-                         - np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1) - 0.5 * n * np.log(2 * np.pi))
-                lw = self.model.log_likelihood(y[:, k - 1], x) + _log_normal(x, mu, self._LQ) - log_q
-                w, log_inc[:, k - 1], collapsed[:, k - 1] = normalize_log_weights(logw + lw)
-                xs[:, k - 1] = np.einsum("rn,rni->ri", w, x)
-                e = 1.0 / np.einsum("rn,rn->r", w, w)
-                ess[:, k - 1] = e
-                logw = np.log(w)
-                do = np.ones(runs, dtype=bool) if self.ess_threshold is None else e < self.ess_threshold * N
-                resampled[:, k - 1] = do
-                resample_runs(do, w, logw, rng, counts_of, x)
-        return particle_result(self.name, xs, log_inc, collapsed, ess=ess, resampled=resampled)
+    def _move(self, k, x, logw, yk, rng, state):
+        n = x.shape[-1]
+        mu = self.model.f(x, k)
+        mean, L = self.local_update(mu, yk)
+        z = rng.standard_normal(x.shape)
+        x = mean + _mv(L, z)
+        # log N(x; mean, L L^T) from the draw z itself (no per-particle solve)
+        log_q = (-0.5 * np.einsum("...i,...i->...", z, z)
+                 - np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1) - 0.5 * n * np.log(2 * np.pi))
+        return x, self.model.log_likelihood(yk, x) + _log_normal(x, mu, self._LQ) - log_q
 
     def __repr__(self) -> str:
         return (f"GaussianProposalParticleFilter(N={self.n_particles}, proposal={self.proposal!r}, "

@@ -34,11 +34,9 @@ import numpy as np
 
 from ..flow import lambda_schedule
 from ..validation import check_positive_int, check_probability
-from .base import Filter, FilterResult
-from .particle import normalize_log_weights
-from .resampling import check_scheme, resampling_counts_function
+from .resampling import check_scheme
 from .small_linalg import det_small, inv_small
-from .smc_steps import particle_result, resample_runs
+from .smc_steps import ParticleLoop, particle_result
 
 __all__ = ["ParticleFlowParticleFilter", "edh_coefficients", "FLOWS"]
 
@@ -73,7 +71,7 @@ def edh_coefficients(P, H, R, innov, eta_bar0, lam, R_inv=None):
     return A, b
 
 
-class ParticleFlowParticleFilter(Filter):
+class ParticleFlowParticleFilter(ParticleLoop):
     """Invertible particle flow particle filter, PFPF(EDH) or PFPF(LEDH) (Li & Coates 2017).
 
     Parameters
@@ -105,7 +103,6 @@ class ParticleFlowParticleFilter(Filter):
     """
 
     name = "PFPF"
-    needs_rng = True
     model_requirements = ("f", "jacobian_f", "h", "jacobian_h", "additive_measurement", "transition_density")
 
     def __init__(self, model, n_particles: int, flow: str = "edh", n_steps: int = 29, ratio: float = 1.2,
@@ -152,56 +149,48 @@ class ParticleFlowParticleFilter(Filter):
                 eta = eta + eps * (eta @ _T(A) + b[:, None, :])
         return eta, (log_det if ledh else np.broadcast_to(log_det[:, None], (runs, N)))
 
-    def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
-        y = self._prepare(y, rng)
-        runs, T, _ = y.shape
-        N, n, model = self.n_particles, self.model.dim_x, self.model
+    def _start(self, y, rng, runs, N):
+        x, state = super()._start(y, rng, runs, N)
+        n, T = self.model.dim_x, y.shape[1]
+        state["x_hat"] = np.broadcast_to(self.m0, (runs, n)).copy()      # the EKF run alongside (for P)
+        state["P"] = np.broadcast_to(self.P0, (runs, n, n)).copy()
+        state["diag"] = {"log_det": np.empty((runs, T))}
+        return x, state
+
+    def _move(self, k, x, logw, yk, rng, state):
+        model = self.model
+        x_hat, P = state["x_hat"], state["P"]
+        # EKF prediction at the previous estimate (Li & Coates, Alg. 1 lines 5-6)
+        F = model.jacobian_f(x_hat, k)
+        P_pred = F @ P @ _T(F) + self._Q
+        P_pred = 0.5 * (P_pred + _T(P_pred))
+        m_pred = model.f(x_hat, k)
+        mu = model.f(x, k)                               # transition means of the particles
+        eta0 = model.sample_transition(x, k, rng)
+        # linearisation points: EDH one per run (f of the estimate), LEDH one per particle
+        eta_bar = mu.copy() if self.flow == "ledh" else m_pred
+        eta1, log_det = self._flow(eta0, eta_bar, P_pred, yk)
+        lw = (model.log_likelihood(yk, eta1) + self._log_transition(eta1, mu)
+              - self._log_transition(eta0, mu) + log_det)
+        state["P_pred"], state["m_pred"], state["log_det"] = P_pred, m_pred, log_det
+        return eta1, lw
+
+    def _after_weight(self, k, w, x, x_hat, state):
+        model, n = self.model, self.model.dim_x
         R = np.asarray(model.R, float)
-        counts_of = resampling_counts_function(self.resampling)
-        x = self.sample_prior(rng, (runs, N))
-        logw = np.full((runs, N), -np.log(N))
-        m = np.broadcast_to(self.m0, (runs, n)).copy()          # the EKF run alongside (for P)
-        P = np.broadcast_to(self.P0, (runs, n, n)).copy()
-        x_hat = m.copy()
-        xs = np.empty((runs, T, n))
-        ess = np.empty((runs, T))
-        resampled = np.zeros((runs, T), dtype=bool)
-        log_inc = np.empty((runs, T))
-        log_dets = np.empty((runs, T))
-        collapsed = np.zeros((runs, T), dtype=bool)
-        with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-            for k in range(1, T + 1):
-                # EKF prediction at the previous estimate (Li & Coates, Alg. 1 lines 5-6)
-                F = model.jacobian_f(x_hat, k)
-                P_pred = F @ P @ _T(F) + self._Q
-                P_pred = 0.5 * (P_pred + _T(P_pred))
-                m_pred = model.f(x_hat, k)
-                mu = model.f(x, k)                               # transition means of the particles
-                eta0 = model.sample_transition(x, k, rng)
-                # linearisation points: EDH one per run (f of the estimate), LEDH one per particle
-                eta_bar = mu.copy() if self.flow == "ledh" else m_pred
-                eta1, log_det = self._flow(eta0, eta_bar, P_pred, y[:, k - 1])
-                lw = (model.log_likelihood(y[:, k - 1], eta1) + self._log_transition(eta1, mu)
-                      - self._log_transition(eta0, mu) + log_det)
-                w, log_inc[:, k - 1], collapsed[:, k - 1] = normalize_log_weights(logw + lw)
-                x = eta1
-                x_hat = np.einsum("rn,rni->ri", w, x)
-                xs[:, k - 1] = x_hat
-                log_dets[:, k - 1] = np.einsum("rn,rn->r", w, log_det)
-                e = 1.0 / np.einsum("rn,rn->r", w, w)
-                ess[:, k - 1] = e
-                # EKF update of P at the prediction (Alg. 1 line 17)
-                Hm = model.jacobian_h(m_pred)
-                S = Hm @ P_pred @ _T(Hm) + R
-                K = _T(np.linalg.solve(S, Hm @ P_pred))
-                IKH = np.eye(n) - K @ Hm
-                P = IKH @ P_pred @ _T(IKH) + K @ R @ _T(K)
-                P = 0.5 * (P + _T(P))
-                logw = np.log(w)
-                do = np.ones(runs, dtype=bool) if self.ess_threshold is None else e < self.ess_threshold * N
-                resampled[:, k - 1] = do
-                resample_runs(do, w, logw, rng, counts_of, x)
-        return particle_result(self.name, xs, log_inc, collapsed, ess=ess, resampled=resampled, log_det=log_dets,
+        P_pred, m_pred = state["P_pred"], state["m_pred"]
+        state["x_hat"] = x_hat
+        state["diag"]["log_det"][:, k - 1] = np.einsum("rn,rn->r", w, state["log_det"])
+        # EKF update of P at the prediction (Alg. 1 line 17)
+        Hm = model.jacobian_h(m_pred)
+        S = Hm @ P_pred @ _T(Hm) + R
+        K = _T(np.linalg.solve(S, Hm @ P_pred))
+        IKH = np.eye(n) - K @ Hm
+        P = IKH @ P_pred @ _T(IKH) + K @ R @ _T(K)
+        state["P"] = 0.5 * (P + _T(P))
+
+    def _result(self, xs, log_inc, collapsed, diag, state):
+        return particle_result(self.name, xs, log_inc, collapsed, **diag,
                                diverged=~np.isfinite(xs).all(axis=(1, 2)))
 
     def __repr__(self) -> str:
