@@ -127,7 +127,57 @@ class ParticleFlowParticleFilter(ParticleLoop):
         return -0.5 * np.einsum("...i,...i->...", z, z)
 
     def _flow(self, eta, eta_bar, P, y):
-        """Move ``eta`` (runs, N, n) from pseudo-time 0 to 1; returns (eta_1, log abs(det) per particle)."""
+        """Move ``eta`` (runs, N, n) from pseudo-time 0 to 1; returns (eta_1, log abs(det) per particle).
+
+        EDH: A(lambda) and b(lambda) are the same for every particle of a run, so the Euler steps
+        compose to one affine map eta_1 = M eta_0 + c per run (:meth:`edh_map`, on n x n matrices),
+        applied once; LEDH: each particle has its own A and b, moved step by step
+        (:meth:`_flow_steps`)."""
+        if self.flow == "ledh":
+            return self._flow_steps(eta, eta_bar, P, y)
+        runs, N, n = eta.shape
+        M, c, log_det = self.edh_map(eta_bar, P, y)
+        # one (N, n) @ (n, n) product per run (same shapes in any batch: batch-independent bits)
+        eta = eta @ _T(M)
+        eta += c[:, None, :]
+        return eta, np.broadcast_to(log_det[:, None], (runs, N))
+
+    def edh_map(self, eta_bar, P, y):
+        """The EDH flow of one time step as one affine map per run: ``(M, c, log_det)``.
+
+        The Euler step j moves a particle by eta -> J_j eta + eps_j b_j with J_j = I + eps_j A_j
+        (Li & Coates 2017, eq. 22: A_j, b_j at lambda_j, linearised at the flowed prediction
+        eta_bar, which moves with the same steps). Composed over the pseudo-time grid:
+        M = J_last ... J_1 (runs, n, n) and c (runs, n) the image of 0, so eta_1 = M eta_0 + c
+        for every particle; log_det = log abs(det M) = sum_j log abs(det J_j) (runs,).
+        ``eta_bar`` (runs, n) the linearisation point at pseudo-time 0, ``P`` (runs, n, n),
+        ``y`` (runs, m). The model's h and Jacobian see ``eta_bar`` as (runs, 1, n), one row
+        per run, so a run's arithmetic does not depend on the number of runs.
+        """
+        model, R = self.model, np.asarray(self.model.R, float)
+        runs, n = eta_bar.shape
+        eb = eta_bar[:, None, :]                                # (runs, 1, n)
+        eb0 = eb.copy()
+        Pb, yb = P[:, None], y[:, None]
+        I = np.eye(n)
+        M = np.broadcast_to(I, (runs, 1, n, n)).copy()
+        c = np.zeros((runs, 1, n))
+        log_det = np.zeros((runs, 1))
+        for lam0, lam1 in zip(self.grid[:-1], self.grid[1:]):
+            eps, lam = lam1 - lam0, lam1                        # Li & Coates evaluate at lambda_j
+            H = model.jacobian_h(eb)
+            innov = model.residual_y(yb, model.h(eb)) + np.einsum("...mn,...n->...m", H, eb)
+            A, b = edh_coefficients(Pb, H, R, innov, eb0, lam, self._R_inv)
+            J = I + eps * A
+            log_det += np.log(np.abs(det_small(J)))
+            eb = eb + eps * (np.einsum("...ij,...j->...i", A, eb) + b)
+            M = J @ M
+            c = np.einsum("...ij,...j->...i", J, c) + eps * b
+        return M[:, 0], c[:, 0], log_det[:, 0]
+
+    def _flow_steps(self, eta, eta_bar, P, y):
+        """The flow step by step: every particle through every Euler step (LEDH; for EDH the
+        reference :meth:`edh_map` is tested against)."""
         model, R = self.model, np.asarray(self.model.R, float)
         runs, N, n = eta.shape
         ledh = self.flow == "ledh"
@@ -145,7 +195,6 @@ class ParticleFlowParticleFilter(ParticleLoop):
             if ledh:
                 eta = eta + eps * (np.einsum("rnij,rnj->rni", A, eta) + b)
             else:
-                # one (N, n) @ (n, n) product per run (same shapes in any batch: batch-independent bits)
                 eta = eta + eps * (eta @ _T(A) + b[:, None, :])
         return eta, (log_det if ledh else np.broadcast_to(log_det[:, None], (runs, N)))
 
@@ -161,10 +210,13 @@ class ParticleFlowParticleFilter(ParticleLoop):
         model = self.model
         x_hat, P = state["x_hat"], state["P"]
         # EKF prediction at the previous estimate (Li & Coates, Alg. 1 lines 5-6)
-        F = model.jacobian_f(x_hat, k)
+        # the model sees the estimate as (runs, 1, n): one row per run, whatever the number of runs
+        # (a (runs, n) matrix product rounds differently with one row than with several)
+        xh = x_hat[:, None, :]
+        F = model.jacobian_f(xh, k)[:, 0]
         P_pred = F @ P @ _T(F) + self._Q
         P_pred = 0.5 * (P_pred + _T(P_pred))
-        m_pred = model.f(x_hat, k)
+        m_pred = model.f(xh, k)[:, 0]
         mu = model.f(x, k)                               # transition means of the particles
         eta0 = model.sample_transition(x, k, rng)
         # linearisation points: EDH one per run (f of the estimate), LEDH one per particle
@@ -182,7 +234,7 @@ class ParticleFlowParticleFilter(ParticleLoop):
         state["x_hat"] = x_hat
         state["diag"]["log_det"][:, k - 1] = np.einsum("rn,rn->r", w, state["log_det"])
         # EKF update of P at the prediction (Alg. 1 line 17)
-        Hm = model.jacobian_h(m_pred)
+        Hm = model.jacobian_h(m_pred[:, None, :])[:, 0]
         S = Hm @ P_pred @ _T(Hm) + R
         K = _T(np.linalg.solve(S, Hm @ P_pred))
         IKH = np.eye(n) - K @ Hm
