@@ -94,3 +94,33 @@ def test_edh_map_changes_the_flow_only_in_the_last_bits_of_a_filter_run():
     b = f.filter(y, filter_streams(3, "p", runs))
     np.testing.assert_allclose(a.x, b.x, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(a.diagnostics["log_det"], b.diagnostics["log_det"], rtol=0, atol=1e-9)
+
+
+# ------------------------------------------------------------------ closed forms over particles
+from pfrepro.filters.small_linalg import (cholesky_components, cholesky_small, inv_components,  # noqa: E402
+                                          mm_components)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 6, 7])
+def test_cholesky_small_is_lapacks_factor(n):
+    rng = np.random.default_rng(n)
+    B = rng.normal(size=(5, 7, n, n))
+    A = B @ np.swapaxes(B, -1, -2) + 0.1 * np.eye(n)
+    np.testing.assert_allclose(cholesky_small(A), np.linalg.cholesky(A), rtol=1e-12, atol=1e-13)
+    bad = A.copy()
+    bad[2, 3] = -np.eye(n)
+    with pytest.raises(np.linalg.LinAlgError):
+        cholesky_small(bad)
+
+
+def test_component_products_and_inverses_are_numpys():
+    rng = np.random.default_rng(0)
+    A, B = rng.normal(size=(4, 2, 3, 5)), rng.normal(size=(2, 3, 3, 5))
+    mv = lambda X: np.moveaxis(X, (0, 1), (-2, -1))            # noqa: E731  small axes last
+    np.testing.assert_allclose(mv(mm_components(A, B)), mv(A) @ mv(B), rtol=1e-13, atol=1e-14)
+    for m in (1, 2, 3):
+        S = rng.normal(size=(m, m, 3, 5)) + 3 * np.eye(m)[:, :, None, None]
+        np.testing.assert_allclose(mv(inv_components(S)), np.linalg.inv(mv(S)), rtol=1e-12, atol=1e-13)
+    C = rng.normal(size=(3, 3, 4))
+    P = mm_components(C, np.swapaxes(C, 0, 1)) + np.eye(3)[:, :, None]
+    np.testing.assert_allclose(mv(cholesky_components(P)), np.linalg.cholesky(mv(P)), rtol=1e-12, atol=1e-13)
