@@ -131,9 +131,9 @@ def _timed(filt, y, rng_seed, name):
     gc.disable()
     try:
         rng = filter_streams(rng_seed, name, runs)
-        t0 = time.perf_counter()
+        c0, t0 = time.process_time(), time.perf_counter()
         filt.filter(y, rng)
-        return time.perf_counter() - t0
+        return time.perf_counter() - t0, time.process_time() - c0
     finally:
         gc.enable()
 
@@ -153,12 +153,16 @@ def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
     # interleaved repeats: a drift of the machine's load hits every filter alike
     single = {n: [] for n in built}
     batched = {n: [] for n in built}
+    single_cpu = {n: [] for n in built}
+    batched_cpu = {n: [] for n in built}
     for n, (filt, y, _, _) in built.items():        # warm-up
         _timed(filt, y[:1], seed, n)
     for _ in range(repeats):
         for n, (filt, y, _, _) in built.items():
-            single[n].append(_timed(filt, y[:1], seed, n))
-            batched[n].append(_timed(filt, y, seed, n))
+            for store, cpu, yy in ((single, single_cpu, y[:1]), (batched, batched_cpu, y)):
+                wall, c = _timed(filt, yy, seed, n)
+                store[n].append(wall)
+                cpu[n].append(c)
     for n, (filt, y, fam, N) in built.items():
         counts = count_model_calls(filt, y[:1])
         per_step = counts["model_evaluations"] / T
@@ -167,6 +171,8 @@ def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
         b = float(np.median(batched[n])) / T / runs
         rows.append({"filter": n, "family": fam, "particles": P, "count per step": per_step,
                      "single s/step": s, "batched s/step/run": b,
+                     "single CPU s/step": float(np.median(single_cpu[n])) / T,
+                     "batched CPU s/step/run": float(np.median(batched_cpu[n])) / T / runs,
                      "single ns/particle-step": 1e9 * s / P if P else np.nan,
                      "batched ns/particle-step": 1e9 * b / P if P else np.nan,
                      "single ns/evaluation": 1e9 * s / per_step if per_step else np.nan,
@@ -186,6 +192,12 @@ def derive(df: pd.DataFrame) -> pd.DataFrame:
     df["time/count vs PF (single)"] = df["single ns/evaluation"] / base
     refb = df.loc[df.index.str.startswith("PF systematic"), "batched ns/evaluation"]
     df["time/count vs PF (batched)"] = df["batched ns/evaluation"] / float(refb.iloc[0]) if len(refb) else np.nan
+    if "batched CPU s/step/run" in df:
+        # the same ratio on CPU time: on a loaded machine (other processes on the cores) wall time
+        # counts the waits, CPU time only this process's work
+        cpu = 1e9 * df["batched CPU s/step/run"] / per_step
+        refc = cpu[df.index.str.startswith("PF systematic")]
+        df["time/count vs PF (batched, CPU)"] = cpu / float(refc.iloc[0]) if len(refc) else np.nan
     return df
 
 
@@ -300,8 +312,9 @@ def main(argv=None):
             {"machine": info, "T": T, "runs": runs, "repeats": repeats,
              "script": "benchmarks/bench_all.py"}, indent=1) + "\n", encoding="utf-8")
     print(info)
-    print(df[["count per step", "single ns/particle-step", "batched ns/particle-step",
-              "time/count vs PF (single)", "time/count vs PF (batched)"]].round(2).to_string())
+    cols = ["count per step", "single ns/particle-step", "batched ns/particle-step",
+            "time/count vs PF (single)", "time/count vs PF (batched)", "time/count vs PF (batched, CPU)"]
+    print(df[[c for c in cols if c in df]].round(2).to_string())
     return 0
 
 
