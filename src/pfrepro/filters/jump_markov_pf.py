@@ -82,12 +82,21 @@ class JumpMarkovParticleFilter(ParticleLoop):
         runs, N, n = x.shape
         mode = self._draw_modes(self._cum_Pi[state["mode"]], rng.random((runs, N)))
         z = rng.standard_normal((runs, N, n))
-        nxt = np.empty_like(x)
+        # the particles grouped by mode once (a stable sort keeps each mode's particles in their
+        # order: the rows each mode's f sees are those a boolean mask would select, so the numbers
+        # are the same), each mode's block moved, the blocks put back in one scatter
+        flat = mode.ravel().astype(np.int8 if len(sysm.models) < 128 else np.int64)
+        order = np.argsort(flat, kind="stable")          # a radix sort for 8-bit keys
+        bounds = np.searchsorted(flat[order], np.arange(len(sysm.models) + 1))
+        xo, zo = x.reshape(-1, n)[order], z.reshape(-1, n)[order]
+        moved = np.empty_like(xo)
         for j, m in enumerate(sysm.models):
-            sel = mode == j
-            if sel.any():
-                # einsum on the selected rows: row i's arithmetic does not depend on the batch
-                nxt[sel] = m.f(x[sel], k) + np.einsum("ij,pj->pi", self._roots[j], z[sel])
+            a, b = bounds[j], bounds[j + 1]
+            if b > a:
+                # einsum on the mode's rows: row i's arithmetic does not depend on the batch
+                moved[a:b] = m.f(xo[a:b], k) + np.einsum("ij,pj->pi", self._roots[j], zo[a:b])
+        nxt = np.empty_like(x)
+        nxt.reshape(-1, n)[order] = moved
         state["mode"], state["carried"] = mode, (mode,)
         return nxt, sysm.log_likelihood(yk, nxt)
 
