@@ -73,6 +73,9 @@ def configurations():
         add(f"PF {scheme} (UNGM)", "PF", "ung", 1000, lambda m, s=scheme: F.BootstrapParticleFilter(m, 1000, resampling=s))
     add("PF systematic (BOT)", "PF", "bot", 1000, lambda m: F.BootstrapParticleFilter(m, 1000))
     add("PF systematic (UNGM Ning)", "PF", "ung_ning", 200, lambda m: F.BootstrapParticleFilter(m, 200))
+    # the IMM scenario's reference: a bootstrap PF on its first mode model (CV, the same measurement
+    # model), N = 1500 as the IMM particle filters' 3 x 500 -- what an evaluation of this model costs
+    add("PF systematic (IMM, CV mode)", "PF", "imm", 1500, lambda s: F.BootstrapParticleFilter(s.models[0], 1500))
     # GPFF per field and integrator
     for field in ("eq41", "eq43"):
         for integ in ("euler", "midpoint", "rk4"):
@@ -296,6 +299,10 @@ def main(argv=None):
     ap.add_argument("--out", default=str(RESULTS / "bench_all"), help="path stem of the .md and .csv")
     ap.add_argument("--book", action="store_true",
                     help=f"also save the table and its machine line for the book ({BOOK_CSV.relative_to(ROOT)})")
+    ap.add_argument("--blas-threads", type=int, default=None,
+                    help="limit the BLAS thread pool (threadpoolctl) for the whole measurement; on a "
+                         "machine whose cores other processes use, a threaded BLAS call over (runs x N) "
+                         "rows waits for its threads and the wait is counted (default: BLAS's own)")
     ap.add_argument("--recount", action="store_true",
                     help="recompute the counts (and the columns derived from them) of the book's saved table, "
                          "keeping its measured times; no timing is run")
@@ -313,6 +320,11 @@ def main(argv=None):
     only = a.only.split(",")
     configs = [c for c in configurations() if any(o in c[0] for o in only) or c[0].startswith("PF systematic")]
     info = machine()
+    if a.blas_threads is not None:
+        import threadpoolctl
+
+        threadpoolctl.threadpool_limits(a.blas_threads, user_api="blas")
+        info += f", BLAS limited to {a.blas_threads} thread(s) for the measurement"
     df = annotate(measure(configs, T, runs, repeats))
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -328,7 +340,7 @@ def main(argv=None):
         BOOK_CSV.parent.mkdir(parents=True, exist_ok=True)
         df.to_csv(BOOK_CSV, float_format="%.6g")
         BOOK_CSV.with_suffix(".json").write_text(json.dumps(
-            {"machine": info, "T": T, "runs": runs, "repeats": repeats,
+            {"machine": info, "T": T, "runs": runs, "repeats": repeats, "blas_threads": a.blas_threads,
              "script": "benchmarks/bench_all.py"}, indent=1) + "\n", encoding="utf-8")
     print(info)
     cols = ["count per step", "single ns/particle-step", "batched ns/particle-step",

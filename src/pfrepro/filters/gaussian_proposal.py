@@ -129,7 +129,8 @@ class GaussianProposalParticleFilter(ParticleLoop):
         n = mu.shape[-1]
         yb = y[:, None, :]
         if self.proposal == "linearized":
-            Hc = np.moveaxis(model.jacobian_h(mu), (-2, -1), (0, 1))  # (m, n, runs, N)
+            # small axes first and contiguous (a moved-axis view hands its strides on to every result)
+            Hc = np.ascontiguousarray(np.moveaxis(model.jacobian_h(mu), (-2, -1), (0, 1)))   # (m, n, runs, N)
             y_hat = model.h(mu)
             Pxy = mm_components(Q, np.swapaxes(Hc, 0, 1))               # Q H^T (n, m, runs, N)
             S = mm_components(Hc, Pxy) + R
@@ -139,13 +140,13 @@ class GaussianProposalParticleFilter(ParticleLoop):
             sig = np.concatenate([mu[..., None, :], mu[..., None, :] + D, mu[..., None, :] - D], axis=-2)
             hs = model.h(sig)                                         # (runs, N, 2n+1, m)
             y_hat = np.einsum("s,...sm->...m", wm, hs)
-            dy = np.moveaxis(model.residual_y(hs, y_hat[..., None, :]), (-2, -1), (0, 1))   # (2n+1, m, runs, N)
+            dy = np.ascontiguousarray(np.moveaxis(model.residual_y(hs, y_hat[..., None, :]), (-2, -1), (0, 1)))
             S = mm_components((wc[:, None, None, None] * dy).swapaxes(0, 1), dy) + R
             # sigma point s deviates from mu by 0 (s = 0) or +-D[j] (s = 1 + j, 1 + n + j): the
             # cross covariance is sum_j wc_j D[j] (dy_+j - dy_-j), no (2n+1) x n deviations needed
             Pxy = mm_components((wc[1:n + 1, None] * D).T[:, :, None, None], dy[1:n + 1] - dy[n + 1:])
         K = mm_components(Pxy, inv_components(S))                    # (n, m, runs, N)
-        r = np.moveaxis(model.residual_y(yb, y_hat), -1, 0)          # (m, runs, N)
+        r = np.ascontiguousarray(np.moveaxis(model.residual_y(yb, y_hat), -1, 0))   # (m, runs, N)
         mean = np.moveaxis(mu, -1, 0) + mm_components(K, r[:, None])[:, 0]
         cov = Q - mm_components(mm_components(K, S), np.swapaxes(K, 0, 1))
         cov = 0.5 * (cov + np.swapaxes(cov, 0, 1))

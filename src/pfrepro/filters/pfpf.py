@@ -188,7 +188,7 @@ class ParticleFlowParticleFilter(ParticleLoop):
         m = model.dim_y
         Rc = np.asarray(model.R, float)[:, :, None, None]
         Rinv = self._R_inv[:, :, None, None]
-        Pc = np.moveaxis(P, (-2, -1), (0, 1))[:, :, :, None]            # (n, n, runs, 1)
+        Pc = np.ascontiguousarray(np.moveaxis(P, (-2, -1), (0, 1)))[:, :, :, None]   # (n, n, runs, 1)
         ec = np.ascontiguousarray(np.moveaxis(eta, -1, 0))              # (n, runs, N)
         bc = np.ascontiguousarray(np.moveaxis(eta_bar, -1, 0))
         b0 = bc.copy()
@@ -198,7 +198,9 @@ class ParticleFlowParticleFilter(ParticleLoop):
         for lam0, lam1 in zip(self.grid[:-1], self.grid[1:]):
             eps, lam = lam1 - lam0, lam1                        # Li & Coates evaluate at lambda_j
             eb = np.moveaxis(bc, 0, -1)
-            Hc = np.moveaxis(model.jacobian_h(eb), (-2, -1), (0, 1))   # (m, n, runs, N)
+            # small axes first and contiguous: a moved-axis view would hand its strides on to every
+            # result computed from it
+            Hc = np.ascontiguousarray(np.moveaxis(model.jacobian_h(eb), (-2, -1), (0, 1)))   # (m, n, runs, N)
             innov = np.moveaxis(model.residual_y(yb, model.h(eb)), -1, 0) + mm_components(Hc, bc[:, None])[:, 0]
             PHt = mm_components(Pc, np.swapaxes(Hc, 0, 1))              # (n, m, runs, N)
             HPHt = mm_components(Hc, PHt)                               # (m, m, runs, N)

@@ -41,12 +41,19 @@ def det_small(J):
     return np.linalg.det(J)
 
 
+def _stack_contiguous(a):
+    return a if a.ndim < 3 or a.strides[-1] in (0, a.itemsize) else np.ascontiguousarray(a)
+
+
 def mm_components(A, B):
     """Matrix product of stacks stored small axes first: ``A`` (p, q, ...) times ``B`` (q, r, ...)
     -> (p, r, ...), the sum over q written out in order (q vector operations over the stack).
 
     Each stacked matrix's entries are sums of the same terms in the same order whatever the
-    stack's size; a constant matrix broadcasts as (p, q, 1, ...)."""
+    stack's size; a constant matrix broadcasts as (p, q, 1, ...). An operand whose stack axis is
+    not contiguous (a moved-axis view) is copied once first: every product would inherit its
+    strides otherwise."""
+    A, B = _stack_contiguous(A), _stack_contiguous(B)
     out = A[:, 0, None] * B[None, 0]
     for k in range(1, A.shape[1]):
         out += A[:, k, None] * B[None, k]
