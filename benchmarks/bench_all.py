@@ -240,9 +240,11 @@ WHY = {
            "outside the model calls",
     "IMM": "per mode: mixing, the per-mode likelihood normalisation and (IMMPFOR) the replacement's "
            "nearest-neighbour distances and joint whitening, outside the model calls",
-    "today": "per-particle linear algebra: a Jacobian or sigma-point set and a d x d solve for every "
-             "particle (EKF/UKF proposal, LEDH), the flow's lambda steps (PFPF), the kernel draw "
-             "(RPF)",
+    "today": "per-particle work the count does not see: a Jacobian or sigma-point set, a gain and a "
+             "Cholesky factor for every particle (EKF/UKF proposal, written out over the small axes), "
+             "N per-particle flows of 29 pseudo-time steps (LEDH), the flow's 29 n x n steps per run "
+             "composed into one affine map (EDH: numpy's fixed cost per call at small runs), the kernel "
+             "draw (RPF), the mode draw and the sort of the particles by mode (JMPF)",
     "PF": "work outside the model calls: the resampling scheme's own (residual and multinomial draw "
           "and search uniforms), the bearings model's two arctan2 and angle wrap a particle (BOT), "
           "numpy's fixed cost per step at small N",
@@ -267,11 +269,34 @@ def recount(df: pd.DataFrame, T: int, seed: int = 2026) -> pd.DataFrame:
     return annotate(derive(out.drop(columns=["why"], errors="ignore")))
 
 
+#: Why an evaluation of the bearings-only or IMM model costs more than one of the UNGM (measured,
+#: profiled on the loaded 2-core machine of the table): what every filter on that model pays.
+MODEL_COST = ("an evaluation of this model costs more than one of the UNGM: a 4-D state whose transition "
+              "noise is drawn by one BLAS product over all runs x N rows (threaded: on a machine whose cores "
+              "other processes hold it waits for its threads, and the wait is CPU time too; with one BLAS "
+              "thread the bearings-only PF took 144 instead of 533 ns of CPU per particle-step), plus two "
+              "arctan2 and an angle wrap a particle (bearings-only); against the bootstrap PF on the same "
+              "model (the same-model column) the filter is within 2x of its count")
+
+
 def annotate(df: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
-    """Add the ``why`` column: :data:`WHY` of the family where either time/count ratio exceeds ``limit``."""
+    """Add the ``why`` column where a time/count ratio exceeds ``limit``: :data:`WHY` of the family,
+    and :data:`MODEL_COST` where the filter is within ``limit`` of the bootstrap PF on its own model
+    but not of the UNGM's."""
     out = df.copy()
     worst = out[["time/count vs PF (single)", "time/count vs PF (batched)"]].max(axis=1)
-    out["why"] = [WHY.get(f, "") if w > limit else "" for f, w in zip(out["family"], worst)]
+    same = out["time/count vs same-model PF (batched)"] if "time/count vs same-model PF (batched)" in out \
+        else pd.Series(np.nan, index=out.index)
+    whys = []
+    for name, fam, w, sm in zip(out.index, out["family"], worst, same):
+        if not w > limit:
+            whys.append("")
+        elif sm <= limit and out.loc[name, "model"] in ("bot", "imm"):
+            single = out.loc[name, "time/count vs PF (single)"]
+            whys.append(MODEL_COST + ("" if not single > limit or fam == "PF" else "; single runs: " + WHY.get(fam, "")))
+        else:
+            whys.append(WHY.get(fam, ""))
+    out["why"] = whys
     return out
 
 

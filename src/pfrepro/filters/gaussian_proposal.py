@@ -122,7 +122,7 @@ class GaussianProposalParticleFilter(ParticleLoop):
 
         The per-particle gains, inverse and Cholesky factor are written out over the small state
         and measurement axes, each term one vector operation over all particles
-        (:mod:`pfrepro.filters.small_linalg`): a stack of 10^5 tiny matrix products or LAPACK
+        (``pfrepro.filters.small_linalg``): a stack of 10^5 tiny matrix products or LAPACK
         calls costs far more than the same arithmetic as a few dozen vector operations, and each
         particle's numbers do not depend on the other particles or runs."""
         model, Q, R = self.model, self._Qc, self._Rc

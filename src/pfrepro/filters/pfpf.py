@@ -132,7 +132,7 @@ class ParticleFlowParticleFilter(ParticleLoop):
         EDH: A(lambda) and b(lambda) are the same for every particle of a run, so the Euler steps
         compose to one affine map eta_1 = M eta_0 + c per run (:meth:`edh_map`, on n x n matrices),
         applied once; LEDH: each particle has its own A and b, moved step by step
-        (:meth:`_flow_steps`)."""
+        (``_flow_steps``)."""
         if self.flow == "ledh":
             return self._ledh_flow(eta, eta_bar, P, y)
         runs, N, n = eta.shape
@@ -182,7 +182,7 @@ class ParticleFlowParticleFilter(ParticleLoop):
         (runs, N) stacks of tiny matrices cost far more as matrix products). The per-particle
         step determinant det(I + eps A), with A = -1/2 P H^T S^{-1} H of rank m, is the m x m
         det(I_m - eps/2 H P H^T S^{-1}) (the matrix determinant lemma). Returns what
-        :meth:`_flow_steps` does (the same flow, the same numbers up to rounding)."""
+        ``_flow_steps`` does (the same flow, the same numbers up to rounding)."""
         model = self.model
         runs, N, n = eta.shape
         m = model.dim_y
@@ -219,7 +219,7 @@ class ParticleFlowParticleFilter(ParticleLoop):
 
     def _flow_steps(self, eta, eta_bar, P, y):
         """The flow step by step with the stacked matrices of :func:`edh_coefficients`: the
-        reference :meth:`edh_map` (EDH) and :meth:`_ledh_flow` (LEDH) are tested against."""
+        reference :meth:`edh_map` (EDH) and ``_ledh_flow`` (LEDH) are tested against."""
         model, R = self.model, np.asarray(self.model.R, float)
         runs, N, n = eta.shape
         ledh = self.flow == "ledh"

@@ -63,19 +63,19 @@ class ParticleLoop(Filter):
     per-particle array and the result. A speed-up or a fix of any of those lands in every
     filter at once. The steps, in the order of one time step k:
 
-    * :meth:`_start` ``(y, rng, runs, N)``: the initial particles and the filter's own state
+    * ``_start`` ``(y, rng, runs, N)``: the initial particles and the filter's own state
       (a dict; default: a draw from N(m0, P0) and nothing else);
-    * :meth:`_move` ``(k, x, logw, yk, rng, state)``: propose the new particles and return
+    * ``_move`` ``(k, x, logw, yk, rng, state)``: propose the new particles and return
       ``(x, lw)`` with ``lw`` the log of their incremental (unnormalised) weights;
-    * :meth:`_combine` ``(logw, lw, state)``: the log-weights to normalise (default ``logw + lw``);
-    * :meth:`_increment` ``(log_sum, collapsed, state)``: the step's log-evidence increment and
+    * ``_combine`` ``(logw, lw, state)``: the log-weights to normalise (default ``logw + lw``);
+    * ``_increment`` ``(log_sum, collapsed, state)``: the step's log-evidence increment and
       collapse flag from the normaliser (default: as they are);
-    * :meth:`_after_weight` ``(k, w, x, x_hat, state)``: the filter's own per-step diagnostics;
-    * :meth:`_resample` ``(do, w, logw, rng, x, state)``: resample the runs in ``do`` (default:
-      :func:`resample_runs` on ``x`` and the arrays named in ``state["carried"]``).
+    * ``_after_weight`` ``(k, w, x, x_hat, state)``: the filter's own per-step diagnostics;
+    * ``_resample`` ``(do, w, logw, rng, x, state)``: resample the runs in ``do`` (default:
+      ``resample_runs`` on ``x`` and the arrays named in ``state["carried"]``).
 
     Subclasses set ``n_particles``, ``resampling`` and ``ess_threshold`` (None: resample every
-    step; :attr:`resamples_after_weighting` False: never at the end of a step, as the auxiliary
+    step; ``resamples_after_weighting`` False: never at the end of a step, as the auxiliary
     PF, whose resampling is in its first stage) and may add diagnostics to ``state["diag"]``
     (arrays ``(runs, T, ...)`` filled by their steps). Every draw has the runs axis first and
     every array operation here treats each run on its own, so a run's numbers do not depend on
