@@ -62,7 +62,7 @@ class AuxiliaryParticleFilter(ParticleLoop):
         self.n_particles = check_positive_int(n_particles, "n_particles")
         self.resampling = check_scheme(resampling)
 
-    #: the resampling is the first stage of the next step, never at the end of one
+    #: False, the resampling is the first stage of the next step and never at the end of one
     resamples_after_weighting = False
     ess_threshold = None
 

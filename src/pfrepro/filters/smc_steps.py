@@ -83,7 +83,7 @@ class ParticleLoop(Filter):
     """
 
     needs_rng = True
-    #: resample at the end of a step (where the ESS rule says so); False: never there
+    #: whether the loop resamples at the end of a step (by the ESS rule); the auxiliary PF does not
     resamples_after_weighting = True
 
     # -- the filter's steps (override) ---------------------------------------------------------
