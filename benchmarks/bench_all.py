@@ -73,6 +73,9 @@ def configurations():
         add(f"PF {scheme} (UNGM)", "PF", "ung", 1000, lambda m, s=scheme: F.BootstrapParticleFilter(m, 1000, resampling=s))
     add("PF systematic (BOT)", "PF", "bot", 1000, lambda m: F.BootstrapParticleFilter(m, 1000))
     add("PF systematic (UNGM Ning)", "PF", "ung_ning", 200, lambda m: F.BootstrapParticleFilter(m, 200))
+    # the IMM scenario's reference: a bootstrap PF on its first mode model (CV, the same measurement
+    # model), N = 1500 as the IMM particle filters' 3 x 500 -- what an evaluation of this model costs
+    add("PF systematic (IMM, CV mode)", "PF", "imm", 1500, lambda s: F.BootstrapParticleFilter(s.models[0], 1500))
     # GPFF per field and integrator
     for field in ("eq41", "eq43"):
         for integ in ("euler", "midpoint", "rk4"):
@@ -131,15 +134,15 @@ def _timed(filt, y, rng_seed, name):
     gc.disable()
     try:
         rng = filter_streams(rng_seed, name, runs)
-        t0 = time.perf_counter()
+        c0, t0 = time.process_time(), time.perf_counter()
         filt.filter(y, rng)
-        return time.perf_counter() - t0
+        return time.perf_counter() - t0, time.process_time() - c0
     finally:
         gc.enable()
 
 
 def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
-    built = {}
+    built, keys = {}, {}
     mk = models()
     sims = {}
     rows = []
@@ -150,23 +153,30 @@ def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
         m, sim = sims[key]
         filt = build(m)
         built[name] = (filt, sim.y, fam, N)
+        keys[name] = key
     # interleaved repeats: a drift of the machine's load hits every filter alike
     single = {n: [] for n in built}
     batched = {n: [] for n in built}
+    single_cpu = {n: [] for n in built}
+    batched_cpu = {n: [] for n in built}
     for n, (filt, y, _, _) in built.items():        # warm-up
         _timed(filt, y[:1], seed, n)
     for _ in range(repeats):
         for n, (filt, y, _, _) in built.items():
-            single[n].append(_timed(filt, y[:1], seed, n))
-            batched[n].append(_timed(filt, y, seed, n))
+            for store, cpu, yy in ((single, single_cpu, y[:1]), (batched, batched_cpu, y)):
+                wall, c = _timed(filt, yy, seed, n)
+                store[n].append(wall)
+                cpu[n].append(c)
     for n, (filt, y, fam, N) in built.items():
         counts = count_model_calls(filt, y[:1])
         per_step = counts["model_evaluations"] / T
         P = _particle_count(filt, N)
         s = float(np.median(single[n])) / T
         b = float(np.median(batched[n])) / T / runs
-        rows.append({"filter": n, "family": fam, "particles": P, "count per step": per_step,
+        rows.append({"filter": n, "family": fam, "model": keys[n], "particles": P, "count per step": per_step,
                      "single s/step": s, "batched s/step/run": b,
+                     "single CPU s/step": float(np.median(single_cpu[n])) / T,
+                     "batched CPU s/step/run": float(np.median(batched_cpu[n])) / T / runs,
                      "single ns/particle-step": 1e9 * s / P if P else np.nan,
                      "batched ns/particle-step": 1e9 * b / P if P else np.nan,
                      "single ns/evaluation": 1e9 * s / per_step if per_step else np.nan,
@@ -186,6 +196,30 @@ def derive(df: pd.DataFrame) -> pd.DataFrame:
     df["time/count vs PF (single)"] = df["single ns/evaluation"] / base
     refb = df.loc[df.index.str.startswith("PF systematic"), "batched ns/evaluation"]
     df["time/count vs PF (batched)"] = df["batched ns/evaluation"] / float(refb.iloc[0]) if len(refb) else np.nan
+    if "batched CPU s/step/run" in df:
+        # the same ratio on CPU time: on a loaded machine (other processes on the cores) wall time
+        # counts the waits, CPU time only this process's work
+        cpu = 1e9 * df["batched CPU s/step/run"] / per_step
+        refc = cpu[df.index.str.startswith("PF systematic")]
+        df["time/count vs PF (batched, CPU)"] = cpu / float(refc.iloc[0]) if len(refc) else np.nan
+    if "model" in df:
+        # the count counts model evaluations, and an evaluation of one model costs what it costs
+        # (the bearings-only h is two arctan2 and an angle wrap a particle, the UNGM's one cosine):
+        # the count predicts a filter's time relative to the bootstrap PF on the SAME model, where
+        # the table has one (else the first PF row, the UNGM's)
+        is_pf = df.index.str.startswith("PF systematic")
+        for col, src in (("time/count vs same-model PF (batched)", "batched ns/evaluation"),
+                         ("time/count vs same-model PF (batched, CPU)", None)):
+            if src is None:
+                if "batched CPU s/step/run" not in df:
+                    continue
+                val = 1e9 * df["batched CPU s/step/run"] / per_step
+            else:
+                val = df[src]
+            ref = {mkey: float(val[is_pf & (df["model"] == mkey)].iloc[0])
+                   for mkey in df.loc[is_pf, "model"].unique()}
+            base0 = float(val[is_pf].iloc[0]) if is_pf.any() else np.nan
+            df[col] = [v / ref.get(mkey, base0) for v, mkey in zip(val, df["model"])]
     return df
 
 
@@ -206,9 +240,11 @@ WHY = {
            "outside the model calls",
     "IMM": "per mode: mixing, the per-mode likelihood normalisation and (IMMPFOR) the replacement's "
            "nearest-neighbour distances and joint whitening, outside the model calls",
-    "today": "per-particle linear algebra: a Jacobian or sigma-point set and a d x d solve for every "
-             "particle (EKF/UKF proposal, LEDH), the flow's lambda steps (PFPF), the kernel draw "
-             "(RPF)",
+    "today": "per-particle work the count does not see: a Jacobian or sigma-point set, a gain and a "
+             "Cholesky factor for every particle (EKF/UKF proposal, written out over the small axes), "
+             "N per-particle flows of 29 pseudo-time steps (LEDH), the flow's 29 n x n steps per run "
+             "composed into one affine map (EDH: numpy's fixed cost per call at small runs), the kernel "
+             "draw (RPF), the mode draw and the sort of the particles by mode (JMPF)",
     "PF": "work outside the model calls: the resampling scheme's own (residual and multinomial draw "
           "and search uniforms), the bearings model's two arctan2 and angle wrap a particle (BOT), "
           "numpy's fixed cost per step at small N",
@@ -233,11 +269,34 @@ def recount(df: pd.DataFrame, T: int, seed: int = 2026) -> pd.DataFrame:
     return annotate(derive(out.drop(columns=["why"], errors="ignore")))
 
 
+#: Why an evaluation of the bearings-only or IMM model costs more than one of the UNGM (measured,
+#: profiled on the loaded 2-core machine of the table): what every filter on that model pays.
+MODEL_COST = ("an evaluation of this model costs more than one of the UNGM: a 4-D state whose transition "
+              "noise is drawn by one BLAS product over all runs x N rows (threaded: on a machine whose cores "
+              "other processes hold it waits for its threads, and the wait is CPU time too; with one BLAS "
+              "thread the bearings-only PF took 144 instead of 533 ns of CPU per particle-step), plus two "
+              "arctan2 and an angle wrap a particle (bearings-only); against the bootstrap PF on the same "
+              "model (the same-model column) the filter is within 2x of its count")
+
+
 def annotate(df: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
-    """Add the ``why`` column: :data:`WHY` of the family where either time/count ratio exceeds ``limit``."""
+    """Add the ``why`` column where a time/count ratio exceeds ``limit``: :data:`WHY` of the family,
+    and :data:`MODEL_COST` where the filter is within ``limit`` of the bootstrap PF on its own model
+    but not of the UNGM's."""
     out = df.copy()
     worst = out[["time/count vs PF (single)", "time/count vs PF (batched)"]].max(axis=1)
-    out["why"] = [WHY.get(f, "") if w > limit else "" for f, w in zip(out["family"], worst)]
+    same = out["time/count vs same-model PF (batched)"] if "time/count vs same-model PF (batched)" in out \
+        else pd.Series(np.nan, index=out.index)
+    whys = []
+    for name, fam, w, sm in zip(out.index, out["family"], worst, same):
+        if not w > limit:
+            whys.append("")
+        elif sm <= limit and out.loc[name, "model"] in ("bot", "imm"):
+            single = out.loc[name, "time/count vs PF (single)"]
+            whys.append(MODEL_COST + ("" if not single > limit or fam == "PF" else "; single runs: " + WHY.get(fam, "")))
+        else:
+            whys.append(WHY.get(fam, ""))
+    out["why"] = whys
     return out
 
 
@@ -265,6 +324,10 @@ def main(argv=None):
     ap.add_argument("--out", default=str(RESULTS / "bench_all"), help="path stem of the .md and .csv")
     ap.add_argument("--book", action="store_true",
                     help=f"also save the table and its machine line for the book ({BOOK_CSV.relative_to(ROOT)})")
+    ap.add_argument("--blas-threads", type=int, default=None,
+                    help="limit the BLAS thread pool (threadpoolctl) for the whole measurement; on a "
+                         "machine whose cores other processes use, a threaded BLAS call over (runs x N) "
+                         "rows waits for its threads and the wait is counted (default: BLAS's own)")
     ap.add_argument("--recount", action="store_true",
                     help="recompute the counts (and the columns derived from them) of the book's saved table, "
                          "keeping its measured times; no timing is run")
@@ -282,6 +345,11 @@ def main(argv=None):
     only = a.only.split(",")
     configs = [c for c in configurations() if any(o in c[0] for o in only) or c[0].startswith("PF systematic")]
     info = machine()
+    if a.blas_threads is not None:
+        import threadpoolctl
+
+        threadpoolctl.threadpool_limits(a.blas_threads, user_api="blas")
+        info += f", BLAS limited to {a.blas_threads} thread(s) for the measurement"
     df = annotate(measure(configs, T, runs, repeats))
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -297,11 +365,12 @@ def main(argv=None):
         BOOK_CSV.parent.mkdir(parents=True, exist_ok=True)
         df.to_csv(BOOK_CSV, float_format="%.6g")
         BOOK_CSV.with_suffix(".json").write_text(json.dumps(
-            {"machine": info, "T": T, "runs": runs, "repeats": repeats,
+            {"machine": info, "T": T, "runs": runs, "repeats": repeats, "blas_threads": a.blas_threads,
              "script": "benchmarks/bench_all.py"}, indent=1) + "\n", encoding="utf-8")
     print(info)
-    print(df[["count per step", "single ns/particle-step", "batched ns/particle-step",
-              "time/count vs PF (single)", "time/count vs PF (batched)"]].round(2).to_string())
+    cols = ["count per step", "single ns/particle-step", "batched ns/particle-step",
+            "time/count vs PF (single)", "time/count vs PF (batched)", "time/count vs PF (batched, CPU)"]
+    print(df[[c for c in cols if c in df]].round(2).to_string())
     return 0
 
 

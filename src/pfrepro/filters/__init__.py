@@ -27,6 +27,7 @@ from .resampling import (RESAMPLING_SCHEMES, effective_sample_size, multinomial_
                          systematic_resample)
 from .sigma_points import ScaledSigmaPoints, unscented_transform
 from .smc2 import SMC2
+from .smc_steps import ParticleLoop
 from .theta_grid import ThetaGridReference
 from .ukf import UnscentedKalmanFilter
 
@@ -50,7 +51,7 @@ __all__ = [
     "ParameterLearningFilter", "DualParticleFilter", "DualExtendedKalmanFilter", "LiuWestFilter", "ThetaGridReference",
     # interacting multiple models (IMM-PF chapter)
     "IMMKalman", "IMMParticleFilter", "IMMPFOR",
-    # today's methods
-    "AuxiliaryParticleFilter", "RegularizedParticleFilter", "GaussianProposalParticleFilter",
+    # today's methods (the loop they share first)
+    "ParticleLoop", "AuxiliaryParticleFilter", "RegularizedParticleFilter", "GaussianProposalParticleFilter",
     "ParticleFlowParticleFilter", "JumpMarkovParticleFilter", "SMC2",
 ]

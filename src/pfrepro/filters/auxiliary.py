@@ -21,15 +21,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import check_positive_int
-from .base import Filter, FilterResult
 from .particle import normalize_log_weights
-from .resampling import check_scheme, resampling_counts_function
-from .smc_steps import particle_result, repeat_rows
+from .resampling import check_scheme
+from .smc_steps import ParticleLoop, repeat_rows
 
 __all__ = ["AuxiliaryParticleFilter"]
 
 
-class AuxiliaryParticleFilter(Filter):
+class AuxiliaryParticleFilter(ParticleLoop):
     """Auxiliary particle filter with the point-prediction look-ahead of Pitt & Shephard (1999).
 
     Parameters
@@ -56,7 +55,6 @@ class AuxiliaryParticleFilter(Filter):
     """
 
     name = "APF"
-    needs_rng = True
     model_requirements = ("f", "transition_sampler", "likelihood")
 
     def __init__(self, model, n_particles: int, resampling: str = "systematic", m0=None, P0=None):
@@ -64,41 +62,38 @@ class AuxiliaryParticleFilter(Filter):
         self.n_particles = check_positive_int(n_particles, "n_particles")
         self.resampling = check_scheme(resampling)
 
-    def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
-        y = self._prepare(y, rng)
-        runs, T, _ = y.shape
-        N, n, model = self.n_particles, self.model.dim_x, self.model
-        counts_of = resampling_counts_function(self.resampling)
-        x = self.sample_prior(rng, (runs, N))
-        logw = np.full((runs, N), -np.log(N))
-        xs = np.empty((runs, T, n))
-        ess = np.empty((runs, T))
-        ess1 = np.empty((runs, T))
-        log_inc = np.empty((runs, T))
-        collapsed = np.zeros((runs, T), dtype=bool)
-        with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-            for k in range(1, T + 1):
-                mu = model.f(x, k)
-                ll_mu = model.log_likelihood(y[:, k - 1], mu)                  # log p(y_k | mu^i)
-                lam, log_a, coll1 = normalize_log_weights(logw + ll_mu)        # first stage
-                if coll1.any():
-                    # no look-ahead point explains y_k (every p(y_k | mu^i) = 0; flagged): those runs take
-                    # a bootstrap step instead -- ancestors from w_{k-1}, second-stage weight p(y_k | x),
-                    # evidence (1/N) sum p(y_k | x) -- where p(y|x) / p(y|mu) would be x / 0
-                    lam, ll_mu, log_a = lam.copy(), ll_mu.copy(), log_a.copy()
-                    lam[coll1], ll_mu[coll1], log_a[coll1] = np.exp(logw[coll1]), 0.0, 0.0
-                ess1[:, k - 1] = 1.0 / np.einsum("rn,rn->r", lam, lam)
-                x, ll_mu = repeat_rows(counts_of(lam, rng), x, ll_mu)
-                x = model.sample_transition(x, k, rng)
-                second = model.log_likelihood(y[:, k - 1], x) - ll_mu          # second stage
-                second = np.where(np.isnan(second), -np.inf, second)
-                w, log_b, coll2 = normalize_log_weights(second)
-                collapsed[:, k - 1] = coll1 | coll2
-                log_inc[:, k - 1] = log_a + log_b - np.log(N)
-                xs[:, k - 1] = np.einsum("rn,rni->ri", w, x)
-                ess[:, k - 1] = 1.0 / np.einsum("rn,rn->r", w, w)
-                logw = np.log(w)
-        return particle_result(self.name, xs, log_inc, collapsed, ess=ess, first_stage_ess=ess1)
+    #: False, the resampling is the first stage of the next step and never at the end of one
+    resamples_after_weighting = False
+    ess_threshold = None
+
+    def _start(self, y, rng, runs, N):
+        x, state = super()._start(y, rng, runs, N)
+        state["diag"] = {"first_stage_ess": np.empty((runs, y.shape[1]))}
+        return x, state
+
+    def _move(self, k, x, logw, yk, rng, state):
+        model = self.model
+        mu = model.f(x, k)
+        ll_mu = model.log_likelihood(yk, mu)                                   # log p(y_k | mu^i)
+        lam, log_a, coll1 = normalize_log_weights(logw + ll_mu)                # first stage
+        if coll1.any():
+            # no look-ahead point explains y_k (every p(y_k | mu^i) = 0; flagged): those runs take
+            # a bootstrap step instead -- ancestors from w_{k-1}, second-stage weight p(y_k | x),
+            # evidence (1/N) sum p(y_k | x) -- where p(y|x) / p(y|mu) would be x / 0
+            lam, ll_mu, log_a = lam.copy(), ll_mu.copy(), log_a.copy()
+            lam[coll1], ll_mu[coll1], log_a[coll1] = np.exp(logw[coll1]), 0.0, 0.0
+        state["diag"]["first_stage_ess"][:, k - 1] = 1.0 / np.einsum("rn,rn->r", lam, lam)
+        x, ll_mu = repeat_rows(self._counts_of(lam, rng), x, ll_mu)
+        x = model.sample_transition(x, k, rng)
+        second = model.log_likelihood(yk, x) - ll_mu                           # second stage
+        state["log_a"], state["coll1"] = log_a, coll1
+        return x, np.where(np.isnan(second), -np.inf, second)
+
+    def _combine(self, logw, lw, state):
+        return lw            # the ancestors were drawn by the first-stage weights: uniform now
+
+    def _increment(self, log_sum, collapsed, state):
+        return state["log_a"] + log_sum - np.log(self.n_particles), state["coll1"] | collapsed
 
     def __repr__(self) -> str:
         return f"AuxiliaryParticleFilter(N={self.n_particles}, resampling={self.resampling!r})"

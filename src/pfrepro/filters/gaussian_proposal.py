@@ -25,11 +25,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import check_positive_int, check_probability
-from .base import Filter, FilterResult
-from .particle import normalize_log_weights
-from .resampling import check_scheme, resampling_counts_function
-from .small_linalg import inv_small
-from .smc_steps import particle_result, resample_runs
+from .resampling import check_scheme
+from .small_linalg import cholesky_components, inv_components, mm_components
+from .smc_steps import ParticleLoop
 
 __all__ = ["GaussianProposalParticleFilter", "PROPOSALS"]
 
@@ -60,7 +58,7 @@ def _log_normal(x, mean, chol):
     return -0.5 * np.einsum("...i,...i->...", z, z) - logdet - 0.5 * n * np.log(2 * np.pi)
 
 
-class GaussianProposalParticleFilter(Filter):
+class GaussianProposalParticleFilter(ParticleLoop):
     """PF whose proposal is a local EKF or UKF update of each particle's transition.
 
     Parameters
@@ -88,8 +86,6 @@ class GaussianProposalParticleFilter(Filter):
     ``collapsed``, ``n_collapsed``.
     """
 
-    needs_rng = True
-
     def __init__(self, model, n_particles: int, proposal: str = "linearized", alpha: float = 1.0,
                  beta: float = 2.0, kappa: float = 0.0, resampling: str = "systematic",
                  ess_threshold: float | None = None, m0=None, P0=None):
@@ -106,6 +102,7 @@ class GaussianProposalParticleFilter(Filter):
         self._Q = np.asarray(model.Q, float)
         self._LQ = np.linalg.cholesky(self._Q)
         self._R = np.asarray(model.R, float)
+        self._Qc, self._Rc = self._Q[:, :, None, None], self._R[:, :, None, None]   # small axes first
         n = model.dim_x
         lam = alpha ** 2 * (n + kappa) - n
         if n + lam <= 0:
@@ -115,68 +112,64 @@ class GaussianProposalParticleFilter(Filter):
 
     def local_update(self, mu, y):
         """Proposal mean, lower factor of its covariance, for transition means ``mu`` (runs, N, n)
-        and measurements ``y`` (runs, m)."""
-        model, Q, R = self.model, self._Q, self._R
+        and measurements ``y`` (runs, m); see :meth:`local_update_components`."""
+        mean, L = self.local_update_components(mu, y)
+        return np.moveaxis(mean, 0, -1), np.moveaxis(L, (0, 1), (-2, -1))
+
+    def local_update_components(self, mu, y):
+        """:meth:`local_update` with the results stored small axes first: mean (n, runs, N) and
+        the lower factor (n, n, runs, N).
+
+        The per-particle gains, inverse and Cholesky factor are written out over the small state
+        and measurement axes, each term one vector operation over all particles
+        (``pfrepro.filters.small_linalg``): a stack of 10^5 tiny matrix products or LAPACK
+        calls costs far more than the same arithmetic as a few dozen vector operations, and each
+        particle's numbers do not depend on the other particles or runs."""
+        model, Q, R = self.model, self._Qc, self._Rc
+        n = mu.shape[-1]
         yb = y[:, None, :]
         if self.proposal == "linearized":
-            H = model.jacobian_h(mu)                                  # (runs, N, m, n)
+            # small axes first and contiguous (a moved-axis view hands its strides on to every result)
+            Hc = np.ascontiguousarray(np.moveaxis(model.jacobian_h(mu), (-2, -1), (0, 1)))   # (m, n, runs, N)
             y_hat = model.h(mu)
-            QHt = Q @ _T(H)
-            S = H @ QHt + R
-            Pxy = QHt
+            Pxy = mm_components(Q, np.swapaxes(Hc, 0, 1))               # Q H^T (n, m, runs, N)
+            S = mm_components(Hc, Pxy) + R
         else:
             lam, wm, wc = self._ut
-            n = mu.shape[-1]
             D = np.sqrt(n + lam) * self._LQ.T                         # rows: scaled columns of L_Q
             sig = np.concatenate([mu[..., None, :], mu[..., None, :] + D, mu[..., None, :] - D], axis=-2)
             hs = model.h(sig)                                         # (runs, N, 2n+1, m)
             y_hat = np.einsum("s,...sm->...m", wm, hs)
-            dy = model.residual_y(hs, y_hat[..., None, :])
-            dx = sig - mu[..., None, :]
-            S = np.einsum("s,...si,...sj->...ij", wc, dy, dy) + R
-            Pxy = np.einsum("s,...si,...sj->...ij", wc, dx, dy)
-        K = Pxy @ inv_small(S)                                        # (runs, N, n, m)
-        mean = mu + _mv(K, model.residual_y(yb, y_hat))
-        cov = Q - K @ S @ _T(K)
-        cov = 0.5 * (cov + _T(cov))
-        return mean, np.linalg.cholesky(cov)
+            dy = np.ascontiguousarray(np.moveaxis(model.residual_y(hs, y_hat[..., None, :]), (-2, -1), (0, 1)))
+            S = mm_components((wc[:, None, None, None] * dy).swapaxes(0, 1), dy) + R
+            # sigma point s deviates from mu by 0 (s = 0) or +-D[j] (s = 1 + j, 1 + n + j): the
+            # cross covariance is sum_j wc_j D[j] (dy_+j - dy_-j), no (2n+1) x n deviations needed
+            Pxy = mm_components((wc[1:n + 1, None] * D).T[:, :, None, None], dy[1:n + 1] - dy[n + 1:])
+        K = mm_components(Pxy, inv_components(S))                    # (n, m, runs, N)
+        r = np.ascontiguousarray(np.moveaxis(model.residual_y(yb, y_hat), -1, 0))   # (m, runs, N)
+        mean = np.moveaxis(mu, -1, 0) + mm_components(K, r[:, None])[:, 0]
+        cov = Q - mm_components(mm_components(K, S), np.swapaxes(K, 0, 1))
+        cov = 0.5 * (cov + np.swapaxes(cov, 0, 1))
+        return mean, cholesky_components(cov)
 
     def log_weight_increment(self, x_new, mu, mean, L, y):
         """log [p(y | x_new) N(x_new; mu, Q) / N(x_new; mean, L L^T)] per particle."""
         return (self.model.log_likelihood(y, x_new) + _log_normal(x_new, mu, self._LQ)
                 - _log_normal(x_new, mean, L))
 
-    def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
-        y = self._prepare(y, rng)
-        runs, T, _ = y.shape
-        N, n, model = self.n_particles, self.model.dim_x, self.model
-        counts_of = resampling_counts_function(self.resampling)
-        x = self.sample_prior(rng, (runs, N))
-        logw = np.full((runs, N), -np.log(N))
-        xs = np.empty((runs, T, n))
-        ess = np.empty((runs, T))
-        resampled = np.zeros((runs, T), dtype=bool)
-        log_inc = np.empty((runs, T))
-        collapsed = np.zeros((runs, T), dtype=bool)
-        with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-            for k in range(1, T + 1):
-                mu = model.f(x, k)
-                mean, L = self.local_update(mu, y[:, k - 1])
-                z = rng.standard_normal((runs, N, n))
-                x = mean + _mv(L, z)
-                # log N(x; mean, L L^T) from the draw z itself (no per-particle solve)
-                log_q = (-0.5 * np.einsum("...i,...i->...", z, z)
-                         - np.log(np.diagonal(L, axis1=-2, axis2=-1)).sum(axis=-1) - 0.5 * n * np.log(2 * np.pi))
-                lw = self.model.log_likelihood(y[:, k - 1], x) + _log_normal(x, mu, self._LQ) - log_q
-                w, log_inc[:, k - 1], collapsed[:, k - 1] = normalize_log_weights(logw + lw)
-                xs[:, k - 1] = np.einsum("rn,rni->ri", w, x)
-                e = 1.0 / np.einsum("rn,rn->r", w, w)
-                ess[:, k - 1] = e
-                logw = np.log(w)
-                do = np.ones(runs, dtype=bool) if self.ess_threshold is None else e < self.ess_threshold * N
-                resampled[:, k - 1] = do
-                resample_runs(do, w, logw, rng, counts_of, x)
-        return particle_result(self.name, xs, log_inc, collapsed, ess=ess, resampled=resampled)
+    def _move(self, k, x, logw, yk, rng, state):
+        n = x.shape[-1]
+        mu = self.model.f(x, k)
+        mean, L = self.local_update_components(mu, yk)               # (n, runs, N), (n, n, runs, N)
+        z = rng.standard_normal(x.shape)
+        zc = np.moveaxis(z, -1, 0)
+        x = np.moveaxis(mean + mm_components(L, zc[:, None])[:, 0], 0, -1)
+        # log N(x; mean, L L^T) from the draw z itself (no per-particle solve)
+        log_q = -0.5 * np.einsum("...i,...i->...", z, z)
+        for i in range(n):
+            log_q -= np.log(L[i, i])
+        log_q -= 0.5 * n * np.log(2 * np.pi)
+        return x, self.model.log_likelihood(yk, x) + _log_normal(x, mu, self._LQ) - log_q
 
     def __repr__(self) -> str:
         return (f"GaussianProposalParticleFilter(N={self.n_particles}, proposal={self.proposal!r}, "

@@ -20,15 +20,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..validation import check_positive_int, check_probability
-from .base import Filter, FilterResult
-from .particle import normalize_log_weights
-from .resampling import check_scheme, resampling_counts_function
-from .smc_steps import particle_result, resample_runs
+from .resampling import check_scheme
+from .smc_steps import ParticleLoop
 
 __all__ = ["JumpMarkovParticleFilter"]
 
 
-class JumpMarkovParticleFilter(Filter):
+class JumpMarkovParticleFilter(ParticleLoop):
     """Bootstrap particle filter on the joint (state, mode) of a jump-Markov system.
 
     Parameters
@@ -52,7 +50,6 @@ class JumpMarkovParticleFilter(Filter):
     """
 
     name = "JMPF"
-    needs_rng = True
     model_requirements = ()
 
     def __init__(self, system, n_particles: int, resampling: str = "systematic",
@@ -73,43 +70,40 @@ class JumpMarkovParticleFilter(Filter):
         """Inverse-CDF mode draws: the first j with u < cum[..., j] (cum (..., r), u (...))."""
         return np.minimum((u[..., None] >= cum).sum(axis=-1), cum.shape[-1] - 1)
 
-    def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
-        y = self._prepare(y, rng)
-        runs, T, _ = y.shape
-        # self.model (the system): a cost count's proxy sees the mode models' and the likelihood's calls
-        sysm, N, n, r = self.model, self.n_particles, self.system.dim_x, self.system.r
-        counts_of = resampling_counts_function(self.resampling)
+    def _start(self, y, rng, runs, N):
         x = self.sample_prior(rng, (runs, N))
         mode = self._draw_modes(self._cum_init, rng.random((runs, N)))
-        logw = np.full((runs, N), -np.log(N))
-        xs = np.empty((runs, T, n))
-        probs = np.empty((runs, T, r))
-        ess = np.empty((runs, T))
-        resampled = np.zeros((runs, T), dtype=bool)
-        log_inc = np.empty((runs, T))
-        collapsed = np.zeros((runs, T), dtype=bool)
-        with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-            for k in range(1, T + 1):
-                mode = self._draw_modes(self._cum_Pi[mode], rng.random((runs, N)))
-                z = rng.standard_normal((runs, N, n))
-                nxt = np.empty_like(x)
-                for j, m in enumerate(sysm.models):
-                    sel = mode == j
-                    if sel.any():
-                        # einsum on the selected rows: row i's arithmetic does not depend on the batch
-                        nxt[sel] = m.f(x[sel], k) + np.einsum("ij,pj->pi", self._roots[j], z[sel])
-                x = nxt
-                w, log_inc[:, k - 1], collapsed[:, k - 1] = normalize_log_weights(
-                    logw + sysm.log_likelihood(y[:, k - 1], x))
-                xs[:, k - 1] = np.einsum("rn,rni->ri", w, x)
-                probs[:, k - 1] = np.stack([np.where(mode == j, w, 0.0).sum(axis=1) for j in range(r)], axis=-1)
-                e = 1.0 / np.einsum("rn,rn->r", w, w)
-                ess[:, k - 1] = e
-                logw = np.log(w)
-                do = np.ones(runs, dtype=bool) if self.ess_threshold is None else e < self.ess_threshold * N
-                resampled[:, k - 1] = do
-                resample_runs(do, w, logw, rng, counts_of, x, mode)
-        return particle_result(self.name, xs, log_inc, collapsed, mode_probs=probs, ess=ess, resampled=resampled)
+        return x, {"mode": mode, "carried": (mode,),
+                   "diag": {"mode_probs": np.empty((runs, y.shape[1], self.system.r))}}
+
+    def _move(self, k, x, logw, yk, rng, state):
+        # self.model (the system): a cost count's proxy sees the mode models' and the likelihood's calls
+        sysm = self.model
+        runs, N, n = x.shape
+        mode = self._draw_modes(self._cum_Pi[state["mode"]], rng.random((runs, N)))
+        z = rng.standard_normal((runs, N, n))
+        # the particles grouped by mode once (a stable sort keeps each mode's particles in their
+        # order: the rows each mode's f sees are those a boolean mask would select, so the numbers
+        # are the same), each mode's block moved, the blocks put back in one scatter
+        flat = mode.ravel().astype(np.int8 if len(sysm.models) < 128 else np.int64)
+        order = np.argsort(flat, kind="stable")          # a radix sort for 8-bit keys
+        bounds = np.searchsorted(flat[order], np.arange(len(sysm.models) + 1))
+        xo, zo = x.reshape(-1, n)[order], z.reshape(-1, n)[order]
+        moved = np.empty_like(xo)
+        for j, m in enumerate(sysm.models):
+            a, b = bounds[j], bounds[j + 1]
+            if b > a:
+                # einsum on the mode's rows: row i's arithmetic does not depend on the batch
+                moved[a:b] = m.f(xo[a:b], k) + np.einsum("ij,pj->pi", self._roots[j], zo[a:b])
+        nxt = np.empty_like(x)
+        nxt.reshape(-1, n)[order] = moved
+        state["mode"], state["carried"] = mode, (mode,)
+        return nxt, sysm.log_likelihood(yk, nxt)
+
+    def _after_weight(self, k, w, x, x_hat, state):
+        mode = state["mode"]
+        state["diag"]["mode_probs"][:, k - 1] = np.stack(
+            [np.where(mode == j, w, 0.0).sum(axis=1) for j in range(self.system.r)], axis=-1)
 
     def __repr__(self) -> str:
         return (f"JumpMarkovParticleFilter(N={self.n_particles}, r={self.system.r}, "

@@ -34,11 +34,9 @@ import numpy as np
 
 from ..flow import lambda_schedule
 from ..validation import check_positive_int, check_probability
-from .base import Filter, FilterResult
-from .particle import normalize_log_weights
-from .resampling import check_scheme, resampling_counts_function
-from .small_linalg import det_small, inv_small
-from .smc_steps import particle_result, resample_runs
+from .resampling import check_scheme
+from .small_linalg import det_small, inv_components, inv_small, mm_components
+from .smc_steps import ParticleLoop, particle_result
 
 __all__ = ["ParticleFlowParticleFilter", "edh_coefficients", "FLOWS"]
 
@@ -73,7 +71,7 @@ def edh_coefficients(P, H, R, innov, eta_bar0, lam, R_inv=None):
     return A, b
 
 
-class ParticleFlowParticleFilter(Filter):
+class ParticleFlowParticleFilter(ParticleLoop):
     """Invertible particle flow particle filter, PFPF(EDH) or PFPF(LEDH) (Li & Coates 2017).
 
     Parameters
@@ -105,7 +103,6 @@ class ParticleFlowParticleFilter(Filter):
     """
 
     name = "PFPF"
-    needs_rng = True
     model_requirements = ("f", "jacobian_f", "h", "jacobian_h", "additive_measurement", "transition_density")
 
     def __init__(self, model, n_particles: int, flow: str = "edh", n_steps: int = 29, ratio: float = 1.2,
@@ -130,7 +127,99 @@ class ParticleFlowParticleFilter(Filter):
         return -0.5 * np.einsum("...i,...i->...", z, z)
 
     def _flow(self, eta, eta_bar, P, y):
-        """Move ``eta`` (runs, N, n) from pseudo-time 0 to 1; returns (eta_1, log abs(det) per particle)."""
+        """Move ``eta`` (runs, N, n) from pseudo-time 0 to 1; returns (eta_1, log abs(det) per particle).
+
+        EDH: A(lambda) and b(lambda) are the same for every particle of a run, so the Euler steps
+        compose to one affine map eta_1 = M eta_0 + c per run (:meth:`edh_map`, on n x n matrices),
+        applied once; LEDH: each particle has its own A and b, moved step by step
+        (``_flow_steps``)."""
+        if self.flow == "ledh":
+            return self._ledh_flow(eta, eta_bar, P, y)
+        runs, N, n = eta.shape
+        M, c, log_det = self.edh_map(eta_bar, P, y)
+        # one (N, n) @ (n, n) product per run (same shapes in any batch: batch-independent bits)
+        eta = eta @ _T(M)
+        eta += c[:, None, :]
+        return eta, np.broadcast_to(log_det[:, None], (runs, N))
+
+    def edh_map(self, eta_bar, P, y):
+        """The EDH flow of one time step as one affine map per run: ``(M, c, log_det)``.
+
+        The Euler step j moves a particle by eta -> J_j eta + eps_j b_j with J_j = I + eps_j A_j
+        (Li & Coates 2017, eq. 22: A_j, b_j at lambda_j, linearised at the flowed prediction
+        eta_bar, which moves with the same steps). Composed over the pseudo-time grid:
+        M = J_last ... J_1 (runs, n, n) and c (runs, n) the image of 0, so eta_1 = M eta_0 + c
+        for every particle; log_det = log abs(det M) = sum_j log abs(det J_j) (runs,).
+        ``eta_bar`` (runs, n) the linearisation point at pseudo-time 0, ``P`` (runs, n, n),
+        ``y`` (runs, m). The model's h and Jacobian see ``eta_bar`` as (runs, 1, n), one row
+        per run, so a run's arithmetic does not depend on the number of runs.
+        """
+        model, R = self.model, np.asarray(self.model.R, float)
+        runs, n = eta_bar.shape
+        eb = eta_bar[:, None, :]                                # (runs, 1, n)
+        eb0 = eb.copy()
+        Pb, yb = P[:, None], y[:, None]
+        I = np.eye(n)
+        M = np.broadcast_to(I, (runs, 1, n, n)).copy()
+        c = np.zeros((runs, 1, n))
+        log_det = np.zeros((runs, 1))
+        for lam0, lam1 in zip(self.grid[:-1], self.grid[1:]):
+            eps, lam = lam1 - lam0, lam1                        # Li & Coates evaluate at lambda_j
+            H = model.jacobian_h(eb)
+            innov = model.residual_y(yb, model.h(eb)) + np.einsum("...mn,...n->...m", H, eb)
+            A, b = edh_coefficients(Pb, H, R, innov, eb0, lam, self._R_inv)
+            J = I + eps * A
+            log_det += np.log(np.abs(det_small(J)))
+            eb = eb + eps * (np.einsum("...ij,...j->...i", A, eb) + b)
+            M = J @ M
+            c = np.einsum("...ij,...j->...i", J, c) + eps * b
+        return M[:, 0], c[:, 0], log_det[:, 0]
+
+    def _ledh_flow(self, eta, eta_bar, P, y):
+        """LEDH: every particle through every Euler step with its own A and b (Li & Coates 2017,
+        Algorithm 2), written out over the small state and measurement axes (particles' arrays
+        stored small axes first, one vector operation per term over all particles: the
+        (runs, N) stacks of tiny matrices cost far more as matrix products). The per-particle
+        step determinant det(I + eps A), with A = -1/2 P H^T S^{-1} H of rank m, is the m x m
+        det(I_m - eps/2 H P H^T S^{-1}) (the matrix determinant lemma). Returns what
+        ``_flow_steps`` does (the same flow, the same numbers up to rounding)."""
+        model = self.model
+        runs, N, n = eta.shape
+        m = model.dim_y
+        Rc = np.asarray(model.R, float)[:, :, None, None]
+        Rinv = self._R_inv[:, :, None, None]
+        Pc = np.ascontiguousarray(np.moveaxis(P, (-2, -1), (0, 1)))[:, :, :, None]   # (n, n, runs, 1)
+        ec = np.ascontiguousarray(np.moveaxis(eta, -1, 0))              # (n, runs, N)
+        bc = np.ascontiguousarray(np.moveaxis(eta_bar, -1, 0))
+        b0 = bc.copy()
+        Im = np.eye(m)[:, :, None, None]
+        log_det = np.zeros((runs, N))
+        yb = y[:, None]
+        for lam0, lam1 in zip(self.grid[:-1], self.grid[1:]):
+            eps, lam = lam1 - lam0, lam1                        # Li & Coates evaluate at lambda_j
+            eb = np.moveaxis(bc, 0, -1)
+            # small axes first and contiguous: a moved-axis view would hand its strides on to every
+            # result computed from it
+            Hc = np.ascontiguousarray(np.moveaxis(model.jacobian_h(eb), (-2, -1), (0, 1)))   # (m, n, runs, N)
+            innov = np.moveaxis(model.residual_y(yb, model.h(eb)), -1, 0) + mm_components(Hc, bc[:, None])[:, 0]
+            PHt = mm_components(Pc, np.swapaxes(Hc, 0, 1))              # (n, m, runs, N)
+            HPHt = mm_components(Hc, PHt)                               # (m, m, runs, N)
+            Sinv = inv_components(lam * HPHt + Rc)
+            G = mm_components(PHt, Sinv)                                # P H^T S^-1
+            A = -0.5 * mm_components(G, Hc)                             # (n, n, runs, N)
+            g = mm_components(PHt, mm_components(Rinv, innov[:, None]))[:, 0]
+            Ag = mm_components(A, g[:, None])[:, 0]
+            inner = g + lam * Ag + mm_components(A, b0[:, None])[:, 0]
+            b = inner + 2.0 * lam * mm_components(A, inner[:, None])[:, 0]
+            small = Im - (0.5 * eps) * mm_components(HPHt, Sinv)       # det(I + eps A), m x m
+            log_det += np.log(np.abs(small[0, 0] if m == 1 else det_small(np.moveaxis(small, (0, 1), (-2, -1)))))
+            bc = bc + eps * (mm_components(A, bc[:, None])[:, 0] + b)
+            ec = ec + eps * (mm_components(A, ec[:, None])[:, 0] + b)
+        return np.moveaxis(ec, 0, -1), log_det
+
+    def _flow_steps(self, eta, eta_bar, P, y):
+        """The flow step by step with the stacked matrices of :func:`edh_coefficients`: the
+        reference :meth:`edh_map` (EDH) and ``_ledh_flow`` (LEDH) are tested against."""
         model, R = self.model, np.asarray(self.model.R, float)
         runs, N, n = eta.shape
         ledh = self.flow == "ledh"
@@ -148,60 +237,54 @@ class ParticleFlowParticleFilter(Filter):
             if ledh:
                 eta = eta + eps * (np.einsum("rnij,rnj->rni", A, eta) + b)
             else:
-                # one (N, n) @ (n, n) product per run (same shapes in any batch: batch-independent bits)
                 eta = eta + eps * (eta @ _T(A) + b[:, None, :])
         return eta, (log_det if ledh else np.broadcast_to(log_det[:, None], (runs, N)))
 
-    def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
-        y = self._prepare(y, rng)
-        runs, T, _ = y.shape
-        N, n, model = self.n_particles, self.model.dim_x, self.model
+    def _start(self, y, rng, runs, N):
+        x, state = super()._start(y, rng, runs, N)
+        n, T = self.model.dim_x, y.shape[1]
+        state["x_hat"] = np.broadcast_to(self.m0, (runs, n)).copy()      # the EKF run alongside (for P)
+        state["P"] = np.broadcast_to(self.P0, (runs, n, n)).copy()
+        state["diag"] = {"log_det": np.empty((runs, T))}
+        return x, state
+
+    def _move(self, k, x, logw, yk, rng, state):
+        model = self.model
+        x_hat, P = state["x_hat"], state["P"]
+        # EKF prediction at the previous estimate (Li & Coates, Alg. 1 lines 5-6)
+        # the model sees the estimate as (runs, 1, n): one row per run, whatever the number of runs
+        # (a (runs, n) matrix product rounds differently with one row than with several)
+        xh = x_hat[:, None, :]
+        F = model.jacobian_f(xh, k)[:, 0]
+        P_pred = F @ P @ _T(F) + self._Q
+        P_pred = 0.5 * (P_pred + _T(P_pred))
+        m_pred = model.f(xh, k)[:, 0]
+        mu = model.f(x, k)                               # transition means of the particles
+        eta0 = model.sample_transition(x, k, rng)
+        # linearisation points: EDH one per run (f of the estimate), LEDH one per particle
+        eta_bar = mu.copy() if self.flow == "ledh" else m_pred
+        eta1, log_det = self._flow(eta0, eta_bar, P_pred, yk)
+        lw = (model.log_likelihood(yk, eta1) + self._log_transition(eta1, mu)
+              - self._log_transition(eta0, mu) + log_det)
+        state["P_pred"], state["m_pred"], state["log_det"] = P_pred, m_pred, log_det
+        return eta1, lw
+
+    def _after_weight(self, k, w, x, x_hat, state):
+        model, n = self.model, self.model.dim_x
         R = np.asarray(model.R, float)
-        counts_of = resampling_counts_function(self.resampling)
-        x = self.sample_prior(rng, (runs, N))
-        logw = np.full((runs, N), -np.log(N))
-        m = np.broadcast_to(self.m0, (runs, n)).copy()          # the EKF run alongside (for P)
-        P = np.broadcast_to(self.P0, (runs, n, n)).copy()
-        x_hat = m.copy()
-        xs = np.empty((runs, T, n))
-        ess = np.empty((runs, T))
-        resampled = np.zeros((runs, T), dtype=bool)
-        log_inc = np.empty((runs, T))
-        log_dets = np.empty((runs, T))
-        collapsed = np.zeros((runs, T), dtype=bool)
-        with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-            for k in range(1, T + 1):
-                # EKF prediction at the previous estimate (Li & Coates, Alg. 1 lines 5-6)
-                F = model.jacobian_f(x_hat, k)
-                P_pred = F @ P @ _T(F) + self._Q
-                P_pred = 0.5 * (P_pred + _T(P_pred))
-                m_pred = model.f(x_hat, k)
-                mu = model.f(x, k)                               # transition means of the particles
-                eta0 = model.sample_transition(x, k, rng)
-                # linearisation points: EDH one per run (f of the estimate), LEDH one per particle
-                eta_bar = mu.copy() if self.flow == "ledh" else m_pred
-                eta1, log_det = self._flow(eta0, eta_bar, P_pred, y[:, k - 1])
-                lw = (model.log_likelihood(y[:, k - 1], eta1) + self._log_transition(eta1, mu)
-                      - self._log_transition(eta0, mu) + log_det)
-                w, log_inc[:, k - 1], collapsed[:, k - 1] = normalize_log_weights(logw + lw)
-                x = eta1
-                x_hat = np.einsum("rn,rni->ri", w, x)
-                xs[:, k - 1] = x_hat
-                log_dets[:, k - 1] = np.einsum("rn,rn->r", w, log_det)
-                e = 1.0 / np.einsum("rn,rn->r", w, w)
-                ess[:, k - 1] = e
-                # EKF update of P at the prediction (Alg. 1 line 17)
-                Hm = model.jacobian_h(m_pred)
-                S = Hm @ P_pred @ _T(Hm) + R
-                K = _T(np.linalg.solve(S, Hm @ P_pred))
-                IKH = np.eye(n) - K @ Hm
-                P = IKH @ P_pred @ _T(IKH) + K @ R @ _T(K)
-                P = 0.5 * (P + _T(P))
-                logw = np.log(w)
-                do = np.ones(runs, dtype=bool) if self.ess_threshold is None else e < self.ess_threshold * N
-                resampled[:, k - 1] = do
-                resample_runs(do, w, logw, rng, counts_of, x)
-        return particle_result(self.name, xs, log_inc, collapsed, ess=ess, resampled=resampled, log_det=log_dets,
+        P_pred, m_pred = state["P_pred"], state["m_pred"]
+        state["x_hat"] = x_hat
+        state["diag"]["log_det"][:, k - 1] = np.einsum("rn,rn->r", w, state["log_det"])
+        # EKF update of P at the prediction (Alg. 1 line 17)
+        Hm = model.jacobian_h(m_pred[:, None, :])[:, 0]
+        S = Hm @ P_pred @ _T(Hm) + R
+        K = _T(np.linalg.solve(S, Hm @ P_pred))
+        IKH = np.eye(n) - K @ Hm
+        P = IKH @ P_pred @ _T(IKH) + K @ R @ _T(K)
+        state["P"] = 0.5 * (P + _T(P))
+
+    def _result(self, xs, log_inc, collapsed, diag, state):
+        return particle_result(self.name, xs, log_inc, collapsed, **diag,
                                diverged=~np.isfinite(xs).all(axis=(1, 2)))
 
     def __repr__(self) -> str:

@@ -22,10 +22,8 @@ import numpy as np
 
 from ..rng import take_runs
 from ..validation import as_finite_float, check_positive_int, check_probability
-from .base import Filter, FilterResult
-from .particle import normalize_log_weights
-from .resampling import check_scheme, resampling_counts_function
-from .smc_steps import particle_result, resample_runs
+from .resampling import check_scheme
+from .smc_steps import ParticleLoop, resample_runs
 
 __all__ = ["RegularizedParticleFilter", "optimal_bandwidth"]
 
@@ -53,7 +51,7 @@ def _weighted_cholesky(w, x):
     return np.linalg.cholesky(S)
 
 
-class RegularizedParticleFilter(Filter):
+class RegularizedParticleFilter(ParticleLoop):
     """Post-regularised particle filter with a Gaussian kernel (Musso, Oudjane & Le Gland 2001).
 
     Parameters
@@ -79,7 +77,6 @@ class RegularizedParticleFilter(Filter):
     """
 
     name = "RPF"
-    needs_rng = True
 
     def __init__(self, model, n_particles: int, resampling: str = "systematic",
                  ess_threshold: float | None = None, bandwidth_scale: float = 1.0, m0=None, P0=None):
@@ -90,35 +87,20 @@ class RegularizedParticleFilter(Filter):
         self.bandwidth_scale = as_finite_float(bandwidth_scale, "bandwidth_scale", nonnegative=True)
         self.bandwidth = self.bandwidth_scale * optimal_bandwidth(self.n_particles, model.dim_x)
 
-    def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
-        y = self._prepare(y, rng)
-        runs, T, _ = y.shape
-        N, n, model = self.n_particles, self.model.dim_x, self.model
-        counts_of = resampling_counts_function(self.resampling)
-        x = self.sample_prior(rng, (runs, N))
-        logw = np.full((runs, N), -np.log(N))
-        xs = np.empty((runs, T, n))
-        ess = np.empty((runs, T))
-        resampled = np.zeros((runs, T), dtype=bool)
-        log_inc = np.empty((runs, T))
-        collapsed = np.zeros((runs, T), dtype=bool)
-        with np.errstate(over="ignore", under="ignore", divide="ignore", invalid="ignore"):
-            for k in range(1, T + 1):
-                x = model.sample_transition(x, k, rng)
-                w, log_inc[:, k - 1], collapsed[:, k - 1] = normalize_log_weights(
-                    logw + model.log_likelihood(y[:, k - 1], x))
-                xs[:, k - 1] = np.einsum("rn,rni->ri", w, x)
-                e = 1.0 / np.einsum("rn,rn->r", w, w)
-                ess[:, k - 1] = e
-                do = np.ones(runs, dtype=bool) if self.ess_threshold is None else e < self.ess_threshold * N
-                resampled[:, k - 1] = do
-                logw = np.log(w)
-                if do.any():
-                    L = _weighted_cholesky(w[do], x[do])                # of the cloud before resampling
-                    sel = resample_runs(do, w, logw, rng, counts_of, x)
-                    eps = (rng if do.all() else take_runs(rng, sel)).standard_normal((len(sel), N, n))
-                    x[sel] += self.bandwidth * (eps @ np.swapaxes(L, -1, -2))  # per-run (N, n) @ (n, n)
-        return particle_result(self.name, xs, log_inc, collapsed, ess=ess, resampled=resampled)
+    def _move(self, k, x, logw, yk, rng, state):
+        x = self.model.sample_transition(x, k, rng)
+        return x, self.model.log_likelihood(yk, x)
+
+    def _resample(self, do, w, logw, rng, x, state):
+        """Resample the runs in ``do``, then jitter their particles with the kernel whose factor is
+        the weighted covariance of the cloud before resampling (Musso et al. 2001, post-RPF)."""
+        if not do.any():
+            return x
+        L = _weighted_cholesky(w[do], x[do])                    # of the cloud before resampling
+        sel = resample_runs(do, w, logw, rng, self._counts_of, x)
+        eps = (rng if do.all() else take_runs(rng, sel)).standard_normal((len(sel), x.shape[1], x.shape[2]))
+        x[sel] += self.bandwidth * (eps @ np.swapaxes(L, -1, -2))  # per-run (N, n) @ (n, n)
+        return x
 
     def __repr__(self) -> str:
         return (f"RegularizedParticleFilter(N={self.n_particles}, resampling={self.resampling!r}, "
