@@ -97,7 +97,7 @@ def configurations():
     add("APF (UNGM)", "today", "ung", 1000, lambda m: AuxiliaryParticleFilter(m, 1000))
     add("RPF (UNGM)", "today", "ung", 1000, lambda m: RegularizedParticleFilter(m, 1000))
     add("EKF-proposal PF (BOT)", "today", "bot", 1000, lambda m: GaussianProposalParticleFilter(m, 1000))
-    add("UKF-proposal PF (BOT)", "today", "bot", 1000,
+    add("UT-proposal PF (BOT)", "today", "bot", 1000,
         lambda m: GaussianProposalParticleFilter(m, 1000, proposal="unscented"))
     add("PFPF(EDH) (BOT)", "today", "bot", 1000, lambda m: ParticleFlowParticleFilter(m, 1000, flow="edh"))
     add("PFPF(LEDH) (BOT)", "today", "bot", 100, lambda m: ParticleFlowParticleFilter(m, 100, flow="ledh"))

@@ -85,7 +85,7 @@ FILTERS = {
     "APF": (cv_model, lambda m: AuxiliaryParticleFilter(m, 64)),
     "RPF": (cv_model, lambda m: RegularizedParticleFilter(m, 64, ess_threshold=0.5)),
     "EKF-proposal PF": (cv_model, lambda m: GaussianProposalParticleFilter(m, 64)),
-    "UKF-proposal PF": (cv_model, lambda m: GaussianProposalParticleFilter(m, 64, proposal="unscented",
+    "UT-proposal PF": (cv_model, lambda m: GaussianProposalParticleFilter(m, 64, proposal="unscented",
                                                                             ess_threshold=0.5)),
     "PFPF(EDH)": (cv_model, lambda m: ParticleFlowParticleFilter(m, 64, flow="edh", ess_threshold=0.5)),
     "PFPF(LEDH)": (cv_model, lambda m: ParticleFlowParticleFilter(m, 16, flow="ledh", n_steps=8)),

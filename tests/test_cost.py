@@ -194,7 +194,7 @@ def test_parameter_broadcast_counts_pairs():
 def test_todays_particle_filters_hand_counts(ung, bot):
     """APF: f and a likelihood at the look-ahead point, then a transition and a likelihood (4N);
     RPF: the bootstrap PF's 2N (the kernel jitter is no model call); EKF-proposal PF: f, h and
-    dh/dx at each particle's transition mean, one likelihood (4N); UKF-proposal PF: f, h at the
+    dh/dx at each particle's transition mean, one likelihood (4N); UT-proposal PF: f, h at the
     2n+1 sigma points, one likelihood; PFPF: the EKF alongside (f, Jacobian of f, Jacobian of h:
     one each), f and a transition per particle, h and its Jacobian at the linearisation point in
     each pseudo-time step (EDH: one point; LEDH: one per particle), one likelihood per particle."""

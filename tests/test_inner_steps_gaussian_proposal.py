@@ -379,7 +379,7 @@ def test_collapse_is_reported_under_the_filters_name_and_floating_point_errors_a
     contain the divide/underflow. Checked against the wrong formula once: errstate(divide=None)."""
     z0 = np.array([[[0.0, 4.0], [30.0, 30.0]], [[0.0, 4.0], [1.0, -1.0]]])
     z1 = np.zeros((2, 2, 2))
-    for proposal, name in [("linearized", "EKF-proposal PF"), ("unscented", "UKF-proposal PF")]:
+    for proposal, name in [("linearized", "EKF-proposal PF"), ("unscented", "UT-proposal PF")]:
         f = GaussianProposalParticleFilter(Bilinear(dead_runs=[1]), 2, proposal=proposal, ess_threshold=0.0)
         with np.errstate(all="raise"), pytest.warns(WeightCollapseWarning,
                                                     match=rf"^{name}: weight collapse in 2 of 4 run-steps"):
@@ -420,7 +420,7 @@ def test_constructor_settings_names_and_requirements():
     ekf = GaussianProposalParticleFilter(Bilinear(), 7)
     ukf = GaussianProposalParticleFilter(Bilinear(), 3, proposal="unscented", resampling="residual",
                                          ess_threshold=0.25)
-    assert (ekf.name, ukf.name) == ("EKF-proposal PF", "UKF-proposal PF")
+    assert (ekf.name, ukf.name) == ("EKF-proposal PF", "UT-proposal PF")
     assert ekf.model_requirements == ("f", "h", "additive_measurement", "transition_density", "jacobian_h")
     assert ukf.model_requirements == ("f", "h", "additive_measurement", "transition_density")
     assert (ekf.proposal, ekf.n_particles, ekf.resampling, ekf.ess_threshold) == ("linearized", 7, "systematic", None)

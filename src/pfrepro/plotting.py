@@ -81,7 +81,7 @@ METHOD_COLORS = {
     "APF": "#8c6d31",         # ochre
     "RPF": "#637939",         # moss
     "EKF-prop. PF": "#7b4173",  # plum
-    "UKF-prop. PF": "#a55194",  # light plum
+    "UT-prop. PF": "#a55194",   # light plum
     "PFPF-EDH": "#e7969c",    # rose
     "PFPF-LEDH": "#843c39",   # maroon
     "SMC²": "#5254a3",        # indigo

@@ -5,8 +5,11 @@ likelihood is narrow compared with the prior (the bearings-only offset start), a
 every particle lands where y_k says it cannot be and the weights collapse. The optimal
 proposal p(x_k | x_{k-1}, y_k) avoids that; for additive Gaussian noise it is Gaussian
 when h is linear, and a local linearisation (Doucet, Godsill & Andrieu 2000, sec. II-D-2)
-or an unscented transform (van der Merwe, Doucet, de Freitas & Wan 2000, the "UPF"
-proposal, here around each particle's transition) gives a Gaussian approximation of it.
+or an unscented transform of the transition around each particle gives a Gaussian
+approximation of it. The unscented variant is *not* van der Merwe, Doucet, de Freitas & Wan's
+(2000) unscented particle filter: the UPF propagates a covariance per particle from step to
+step, while this proposal starts every step from N(f(x_{k-1}^i), Q) and carries no covariance
+(hence its name, "UT-proposal PF").
 For particle i, with mu = f(x_{k-1}^i, k)::
 
     prior            N(mu, Q)
@@ -98,7 +101,7 @@ class GaussianProposalParticleFilter(ParticleLoop):
         self.n_particles = check_positive_int(n_particles, "n_particles")
         self.resampling = check_scheme(resampling)
         self.ess_threshold = None if ess_threshold is None else check_probability(ess_threshold, "ess_threshold")
-        self.name = "EKF-proposal PF" if proposal == "linearized" else "UKF-proposal PF"
+        self.name = "EKF-proposal PF" if proposal == "linearized" else "UT-proposal PF"
         self._Q = np.asarray(model.Q, float)
         self._LQ = np.linalg.cholesky(self._Q)
         self._R = np.asarray(model.R, float)
