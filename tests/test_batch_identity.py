@@ -121,3 +121,20 @@ def test_run_is_the_same_in_any_batch(name):
             assert np.array_equal(a, b, equal_nan=True), (
                 f"{name}: {key} of runs {start}..{start + size - 1} differ between a batch of {BIG} and one "
                 f"of {size} (max abs difference {np.nanmax(np.abs(a - b)):.3g})")
+
+
+@pytest.mark.parametrize("name", ["KF", "EKF", "UKF"])
+def test_kalman_family_run_is_the_same_in_any_batch(name):
+    """The Kalman family too: its mean is a product over a (runs, n) array, which rounds a lone
+    run differently unless written per run (the command line's chunks of one run)."""
+    from pfrepro.filters import ExtendedKalmanFilter, KalmanFilter, UnscentedKalmanFilter
+
+    model = cv_model()
+    y = model.simulate(T, BIG, truth_streams(11, BIG)).y
+    filt = {"KF": KalmanFilter, "EKF": ExtendedKalmanFilter, "UKF": UnscentedKalmanFilter}[name](model)
+    full = filt.filter(y)
+    for start, size in ((2, 3), (0, 1), (6, 1)):
+        part = filt.filter(y[start:start + size])
+        for key in ("x", "P"):
+            a, b = getattr(full, key)[start:start + size], getattr(part, key)
+            assert np.array_equal(a, b), f"{name}: {key} of runs {start}.. differ (max {np.max(np.abs(a - b)):.3g})"

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..flow import solve_per_run
+from ..models.base import batch_matmul
 from .base import GaussianFilter
 
 __all__ = ["KalmanFilter", "ExtendedKalmanFilter", "kalman_update", "symmetrize"]
@@ -80,11 +81,12 @@ class KalmanFilter(GaussianFilter):
 
     def predict(self, x, P, k=None):
         F = self.model.F
-        return x @ F.T, symmetrize(F @ P @ F.T + self.model.Q)
+        # batch_matmul: a run's mean does not depend on how many runs share the call
+        return batch_matmul(x, F), symmetrize(F @ P @ F.T + self.model.Q)
 
     def update(self, x, P, y):
         H = self.model.H
-        nu = y - x @ H.T
+        nu = y - batch_matmul(x, H)
         x, P, S = kalman_update(x, P, nu, H, self.model.R)
         self._last_innovation = (nu, S)
         return x, P
