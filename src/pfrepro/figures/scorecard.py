@@ -71,7 +71,8 @@ def verdict_bars(counts: pd.DataFrame):
     c = counts.loc[rows, list(VERDICTS)]
     layout = current_layout()
     phone = layout is not None and layout.max_cols == 1
-    fig, ax = new_figure(figsize=(7.5, 1.6 + 0.55 * max(1, len(rows))))
+    # on the phone as tall as the layout allows (panel height 0.9 x width): the bars stay thick
+    fig, ax = new_figure(figsize=(6.0, 5.4) if phone else (7.5, 1.6 + 0.55 * max(1, len(rows))))
     left = np.zeros(len(rows))
     for v in VERDICTS:
         ax.barh(range(len(rows)), c[v].to_numpy(), left=left, color=VERDICT_COLORS[v], label=v,
