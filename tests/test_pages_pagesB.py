@@ -81,3 +81,85 @@ def test_scorecard_puts_build_internals_last():
     for internal in ("Sphinx", "_claims", "load_all_claims", "99_scorecard", "plt.subplots"):
         assert internal not in prose, internal
     assert "plt.subplots" not in text
+
+
+# ---- Li et al. (2012): generated sentences ------------------------------------------------------
+def _sens(ekf_m1, pf_m1, ekf_m2, pf_m2):
+    from pfrepro.experiments import ekf_pf_li2012 as E
+
+    rows = []
+    settings = [("P0", 0.1), ("P0", 2.0), ("resampling", "systematic"), ("EKF linearisation", E.FILTER_LABELS["EKF-prev"])]
+    for w, ve, vp in ((1, ekf_m1, pf_m1), (2, ekf_m2, pf_m2)):
+        for (st, val), a, b in zip(settings, ve, vp):
+            rows.append({"model": E.MODEL_LABELS[w], "setting": st, "value": val, "verdict_EKF": a, "verdict_PF": b})
+    return pd.DataFrame(rows)
+
+
+def test_li_sensitivity_cells_sentence_follows_the_verdicts():
+    from pfrepro.verdicts import ekf_pf_li2012 as V
+
+    N, R = "not reproduced", "reproduced"
+    s = V.sensitivity_cells_sentence(_sens([N, N, N, R], [N] * 4, [N] * 4, [N] * 4))
+    assert s == ("on model 1 the EKF cell is not reproduced under every setting but the circulating code's "
+                 "linearisation point (reproduced there) and the PF cell not reproduced under every setting; "
+                 "on model 2 both cells are not reproduced under every setting")
+    s = V.sensitivity_cells_sentence(_sens([R] * 4, [R, N, R, R], [N] * 4, [R] * 4))
+    assert s.startswith("on model 1 the EKF cell is reproduced under every setting and the PF cell reproduced "
+                        "under every setting but P0 = 2 (not reproduced there)")
+    assert s.endswith("on model 2 the EKF cell is not reproduced under every setting and the PF cell reproduced "
+                      "under every setting")
+    with pytest.raises(ValueError):
+        V.sensitivity_cells_sentence(_sens([N] * 4, [N] * 4, [N] * 4, [N] * 4).iloc[:0])
+
+
+def test_li_sensitivity_change_sentence():
+    from pfrepro.verdicts import ekf_pf_li2012 as V
+
+    assert V.sensitivity_change_sentence(0, 18).startswith("In none of the 18 prior and resampling settings does")
+    assert V.sensitivity_change_sentence(3, 18).startswith("In 3 of the 18 prior and resampling settings at least one")
+    assert V.sensitivity_change_sentence(18, 18).startswith("In every one of the 18")
+    with pytest.raises(ValueError):
+        V.sensitivity_change_sentence(19, 18)
+
+
+def test_li_sis_never_phrase_and_ordinal():
+    from pfrepro.verdicts import ekf_pf_li2012 as V
+
+    assert V.sis_never_phrase(0, 0, 100) == "it does so in every run of both models"
+    assert V.sis_never_phrase(0, 4, 100) == "it never does in 0 of the 100 runs of model 1 and 4 of model 2"
+    with pytest.raises(ValueError):
+        V.sis_never_phrase(101, 0, 100)
+    assert [V._ordinal(n) for n in (1, 2, 3, 4, 11, 12, 13, 21, 22)] == [
+        "largest", "2nd largest", "3rd largest", "4th largest", "11th largest", "12th largest", "13th largest",
+        "21st largest", "22nd largest"]
+
+
+def test_li_cells_in_words():
+    from pfrepro.verdicts import ekf_pf_li2012 as V
+
+    assert V.cells_in_words([]) == "none"
+    assert V.cells_in_words(["table1-pf-model2"]) == "the model 2 PF cell"
+    assert V.cells_in_words(["table1-ekf-model1", "table1-pf-model2"]) == "the model 1 EKF and model 2 PF cells"
+    with pytest.raises(ValueError):
+        V.cells_in_words(["ratio-7x"])
+
+
+def test_li_table1_shows_eight_columns_at_the_texts_rounding():
+    from pfrepro.figures import ekf_pf_li2012 as F
+
+    t1 = pd.DataFrame({"model": ["Model 1", "Model 2"], "filter": ["EKF", "PF"], "published": [30.1709, 1.0479],
+                       "ours": [19.6577, 1.3214], "se": [0.9541, 0.0277], "z": [-11.01, 9.65],
+                       "verdict": ["not reproduced"] * 2, "exact": [4.609, 1.316], "exact_se": [0.077, 0.028],
+                       "published_minus_exact_in_se": [332.5, -9.63]})
+    shown = F.table1_shown(t1).data
+    assert shown.shape[1] <= 8
+    assert list(shown["ours (± se)"]) == ["19.66 ± 0.95", "1.321 ± 0.028"]
+    assert list(shown["published"]) == ["30.1709", "1.0479"]
+
+
+@pytest.mark.parametrize("chapter", ["30_ekf_pf.md", "40_cmspf.md"])
+def test_chapter_figures_go_through_show_figure(chapter):
+    text = (BOOK / chapter).read_text()
+    assert "plt.show()" not in text and "plt.subplots" not in text
+    assert "image:\n    alt:" not in text          # the alt text moved to the call
+    assert text.count("show_figure(") >= text.count("  figure:\n    caption:")
