@@ -12,6 +12,7 @@ import pandas as pd
 from ..experiments import ekf_pf_li2012 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
+from ._layout import legend_below, letter, phone, plain_log
 
 __all__ = ["one_run_panel", "per_time_panel", "figs_1_3", "figs_2_4", "fig1", "fig2", "fig3", "fig4",
            "table1_plot", "table1_shown", "ess_plot", "sweep_plot", "statistic_readings_table", "gap_table",
@@ -31,40 +32,19 @@ _LEGEND = {"EKF": "EKF, eq (10)", "EKF-prev": r"EKF, $B_k$ at $\hat x_{k-1|k-1}$
 
 
 def _phone() -> bool:
-    """Whether the figure is being drawn for the phone (one panel per row, a narrow column)."""
-    from ..plotting import current_layout
-
-    layout = current_layout()
-    return layout is not None and layout.max_cols == 1
+    return phone()
 
 
 def _legend_below(fig, axes, ncol: int = 2):
-    """One legend for the whole figure, below its panels (entries of every panel, each label once),
-    in ``ncol`` columns on the laptop and one on the phone; made after the layout, so the panels
-    keep their size and the saved PNG (``bbox_inches="tight"``) grows to hold it."""
-    handles, labels = {}, []
-    for ax in np.atleast_1d(axes).ravel():
-        for h, lab in zip(*ax.get_legend_handles_labels()):
-            if lab not in handles:
-                handles[lab] = h
-                labels.append(lab)
-    if not labels:
-        return None
-    fig.tight_layout()
-    bottom = min(a.get_tightbbox(fig.canvas.get_renderer()).transformed(fig.transFigure.inverted()).y0
-                 for a in np.atleast_1d(axes).ravel() if a.get_visible())
-    return fig.legend([handles[lab] for lab in labels], labels, loc="upper center", bbox_to_anchor=(0.5, bottom),
-                      ncol=1 if _phone() else min(ncol, len(labels)), frameon=False)
+    return legend_below(fig, axes, ncol)
+
+
+def _letter(i: int) -> str:
+    return letter(i)
 
 
 def _plain_log(ax, axis: str = "y") -> None:
-    """A log axis labelled 2, 5, 10, 20, ... in plain numbers (not 2×10¹), without minor labels."""
-    from matplotlib.ticker import LogLocator, NullFormatter, ScalarFormatter
-
-    a = ax.yaxis if axis == "y" else ax.xaxis
-    a.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
-    a.set_major_formatter(ScalarFormatter())
-    a.set_minor_formatter(NullFormatter())
+    plain_log(ax, axis)
 
 
 def _size(w: float, h: float, phone_h: float | None = None) -> tuple:
@@ -72,8 +52,6 @@ def _size(w: float, h: float, phone_h: float | None = None) -> tuple:
     return (w, phone_h) if phone_h is not None and _phone() else (w, h)
 
 
-def _letter(i: int) -> str:
-    return f"({'abcdefgh'[i]})"
 
 
 def one_run_panel(ax, res, which: int, fig_no: int, run: int = 0) -> None:
