@@ -63,4 +63,31 @@ def choices_cards(choices):
     from ..choices import choices_table
 
     t = choices_table(choices)
-    return HTML(labelled_table_html(t.map(lambda v: html.escape(str(v))), classes="pf-claims pf-text pf-choices"))
+    return HTML(labelled_table_html(t.map(lambda v: html.escape(reader_text(str(v)))),
+                                    classes="pf-claims pf-text pf-choices"))
+
+
+_SUB = str.maketrans("0123456789k+-=()aeioruvxnmpsthlj", "₀₁₂₃₄₅₆₇₈₉ₖ₊₋₌₍₎ₐₑᵢₒᵣᵤᵥₓₙₘₚₛₜₕₗⱼ")
+_SUP = str.maketrans("0123456789i+-nT", "⁰¹²³⁴⁵⁶⁷⁸⁹ⁱ⁺⁻ⁿᵀ")
+
+
+def reader_text(text: str) -> str:
+    """Plain-text formulas and names as a reader reads them: ``x_k`` -> ``xₖ``, ``x_{k-1}`` ->
+    ``xₖ₋₁``, ``x_(k-1)`` -> ``xₖ₋₁``, ``y_1:k`` -> ``y₁:ₖ``, ``x_k^i`` -> ``xₖⁱ``, ``sigma_w2`` ->
+    ``sigma w2`` (a name with underscores reads as words). Only for display: the claims and
+    choices keep their text."""
+    import re
+
+    def sub(m):
+        body = m.group(2) or m.group(3) or m.group(4)
+        if all(ch in "0123456789k+-=()aeioruvxnmpsthlj:|" for ch in body):
+            return m.group(1) + "".join(ch if ch in ":|" else ch.translate(_SUB) for ch in body)
+        return m.group(0)
+
+    # one-letter symbols with a subscript: x_k, x_{k-1}, x_(k-1), y_1:k, B_k
+    out = re.sub(r"(?<![A-Za-z0-9_])([A-Za-zσηαβθ]\u0302?)_(?:\{([^{}]+)\}|\(([^()]+)\)|([0-9k]+(?::[0-9k]+)?|th))(?![A-Za-z_])", sub, text)
+    out = re.sub(r"\^(\{[^{}]+\}|[0-9iTn])", lambda m: m.group(1).strip("{}").translate(_SUP)
+                 if all(c in "0123456789i+-nT" for c in m.group(1).strip("{}")) else m.group(0), out)
+    # remaining snake_case names read as words
+    return re.sub(r"\b([A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]+)+)\b", lambda m: m.group(1).replace("_", " "), out)
+

@@ -14,7 +14,7 @@ from .. import published
 from ..experiments import cmspf_ning2011 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
-from ._layout import legend_below, letter, phone, plain_log
+from ._layout import legend_below, letter, phone, plain_log, reader_text
 
 __all__ = ["printed", "styled", "divisor_check", "table1_per_run_long", "table1_strip", "sensitivity_fig",
            "table1_side_by_side", "table1_summary", "table2_vs_published", "table3_vs_published",
@@ -70,6 +70,16 @@ def divisor_check(table_id: str, runs=range(1, 21), tol: float = 2e-4) -> pd.Dat
                   "variance, divisor n": v0, "divisor that matches": match,
                   "mean matches": abs(v.mean() - pm) < 1e-4 + 1e-4 * abs(pm)}
     return pd.DataFrame(out).T.rename_axis("column")
+
+
+def step_checks_shown(checks: pd.DataFrame):
+    """:func:`pfrepro.experiments.cmspf_ning2011.step_checks` for the page: the paper's statements
+    and the checks with symbols for the plain-text subscripts (``x_k`` -> ``xₖ``), styled."""
+    out = checks.copy()
+    for col in ("paper", "check"):
+        if col in out:
+            out[col] = out[col].map(lambda v: reader_text(str(v)))
+    return out.style.format({"deviation": "{:.2g}"}).set_table_attributes('class="pf-text"')
 
 
 def divisor_shown(checks: dict) -> pd.DataFrame:
@@ -496,7 +506,7 @@ def fig1_flowchart(checks: pd.DataFrame):
     for s_ in order:
         mark = "✓" if bool(checks.loc[s_, "passes"]) else "✗ fails"
         head = f"{mark} {s_} ({checks.loc[s_, 'line']})"
-        body = textwrap.wrap(str(checks.loc[s_, "paper"]), chars)
+        body = textwrap.wrap(reader_text(str(checks.loc[s_, "paper"])), chars)
         boxes.append((s_, head, body))
     gap = 0.28                                     # inches between boxes (the arrow)
     heights = [(1 + len(b)) * line + 0.12 for _, _, b in boxes]

@@ -12,7 +12,7 @@ import pandas as pd
 from ..experiments import ekf_pf_li2012 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
-from ._layout import legend_below, letter, phone, plain_log
+from ._layout import legend_below, letter, phone, plain_log, reader_text
 
 __all__ = ["one_run_panel", "per_time_panel", "figs_1_3", "figs_2_4", "fig1", "fig2", "fig3", "fig4",
            "table1_plot", "table1_shown", "ess_plot", "sweep_plot", "statistic_readings_table", "gap_table",
@@ -405,7 +405,8 @@ def statements_table(reg, results):
     rows = []
     for cid, line in STATEMENT_CLAIMS.items():
         c = by_id[cid]
-        rows.append({"paper": line, "claim": c.text, "judged by": c.note, "verdict": c.verdict_text()})
+        rows.append({"paper": line, "claim": reader_text(c.text), "judged by": reader_text(c.note),
+                     "verdict": c.verdict_text()})
     return pd.DataFrame(rows)
 
 
