@@ -163,3 +163,22 @@ def test_chapter_figures_go_through_show_figure(chapter):
     assert "plt.show()" not in text and "plt.subplots" not in text
     assert "image:\n    alt:" not in text          # the alt text moved to the call
     assert text.count("show_figure(") >= text.count("  figure:\n    caption:")
+
+
+def test_li_optimum_prose_follows_the_sign():
+    from pfrepro.verdicts import ekf_pf_li2012 as V
+
+    p = V.optimum_prose(-8.63, -9.63, -6.75)
+    assert p["li_pub_optimum_head"] == "The published PF values are below the optimum."
+    assert p["li_pub_optimum_sentence"].startswith(
+        "The published PF values lie 8.6 standard errors below them (model 1) and 9.6 standard errors below "
+        "(model 2), and on model 2 the published EKF value too (6.8 se below).")
+    assert "no filter can do that much better" in p["li_pub_optimum_sentence"]
+    p = V.optimum_prose(1.2, 3.0, 4.0)          # the printed values above the optimum: no bound claimed
+    assert p["li_pub_optimum_head"] == "The published PF values are not below the optimum."
+    assert "3.0 standard errors above" in p["li_pub_optimum_sentence"]
+    assert "lies 4.0 se above it" in p["li_pub_optimum_sentence"]
+    assert "no filter" not in p["li_pub_optimum_sentence"]
+    assert V.optimum_prose(-3.0, 0.5, 0.0)["li_pub_optimum_head"].startswith("A published PF value")
+    with pytest.raises(ValueError):
+        V.optimum_prose(float("nan"), 0.0, 0.0)

@@ -593,6 +593,8 @@ def prose(reg, results) -> dict:
         out[f"li_exact_m{w}"], out[f"li_exact_m{w}_se"] = ex.mean, ex.se
         out[f"li_pubpf_below_exact_m{w}"] = float((ex.mean - pub.loc["PF", E.MODEL_LABELS[w]]) / ex.se)
         out[f"li_pubekf_below_exact_m{w}"] = float((ex.mean - pub.loc["EKF", E.MODEL_LABELS[w]]) / ex.se)
+    out.update(optimum_prose(*(-out[k] for k in ("li_pubpf_below_exact_m1", "li_pubpf_below_exact_m2",
+                                                   "li_pubekf_below_exact_m2"))))
     ekf1 = res[1].rmse("EKF")
     out["li_ekf1_median"], out["li_ekf1_p90"] = float(np.median(ekf1)), float(np.quantile(ekf1, 0.9))
     out["li_ekf1_max"] = float(ekf1.max())
@@ -610,6 +612,37 @@ def prose(reg, results) -> dict:
     out.update(_gap_prose(res))
     out.update(_verdict_prose(reg, R))
     return out
+
+
+def optimum_prose(z_pf1: float, z_pf2: float, z_ekf2: float) -> dict:
+    """Where the published PF values (and the model-2 EKF value) lie against the exact posterior
+    mean's RMSE, in words, from ``z = (published − exact) / se(exact)`` (the sign of Table 1's
+    last column): the paragraph's head ``li_pub_optimum_head`` and its sentence
+    ``li_pub_optimum_sentence`` (with the consequence "no filter can do that much better" only when
+    a published PF value lies more than 2 se below the optimum)."""
+    import math
+
+    for name, z in (("z_pf1", z_pf1), ("z_pf2", z_pf2), ("z_ekf2", z_ekf2)):
+        if not isinstance(z, (int, float)) or not math.isfinite(z):
+            raise ValueError(f"optimum_prose: {name} must be a finite number, got {z!r}")
+
+    def where(z, unit="standard errors"):
+        return f"{abs(z):.1f} {unit} {'below' if z < 0 else 'above'}"
+
+    below = [z < -2 for z in (z_pf1, z_pf2)]
+    head = ("The published PF values are below the optimum." if all(below) else
+            "A published PF value is below the optimum." if any(below) else
+            "The published PF values are not below the optimum.")
+    sent = f"The published PF values lie {where(z_pf1)} them (model 1) and {where(z_pf2)} (model 2)"
+    if z_ekf2 < -2:
+        sent += f", and on model 2 the published EKF value too ({where(z_ekf2, 'se')})"
+    else:
+        sent += f"; the published model-2 EKF value lies {where(z_ekf2, 'se')} it"
+    sent += "."
+    if any(below):
+        sent += (" The posterior mean minimises the expected squared error at every step, so no filter can "
+                 "do that much better on the model as printed.")
+    return {"li_pub_optimum_head": head, "li_pub_optimum_sentence": sent}
 
 
 def sis_never_phrase(never_m1: int, never_m2: int, runs: int) -> str:
