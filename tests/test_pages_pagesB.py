@@ -182,3 +182,12 @@ def test_li_optimum_prose_follows_the_sign():
     assert V.optimum_prose(-3.0, 0.5, 0.0)["li_pub_optimum_head"].startswith("A published PF value")
     with pytest.raises(ValueError):
         V.optimum_prose(float("nan"), 0.0, 0.0)
+
+
+def test_ning_reading_words():
+    from pfrepro.verdicts.cmspf_ning2011 import reading_words
+
+    assert reading_words("sigma_v_t3=R 100, sigma_w2=1") == "σ_v² = 100, σ_w² = 1"
+    assert reading_words("eta=0.2") == "η = 0.2"
+    assert reading_words("N_t23=100") == "N = 100"
+    assert reading_words("the main reading") == "the main reading"
