@@ -41,7 +41,7 @@ def paper_label(key: str) -> str:
 
 def verdict_counts(claims: pd.DataFrame, order) -> pd.DataFrame:
     """Claims per paper and verdict: one row per key of ``order`` (papers in book order), one column
-    per verdict of :data:`pfrepro.claims.VERDICTS`, ``total``, and a last row ``all claims``.
+    per verdict of ``pfrepro.claims.VERDICTS``, ``total``, and a last row ``all claims``.
     ``claims`` is :func:`pfrepro.claims.load_all_claims`'s frame (it may be empty)."""
     from ..claims import VERDICTS
 
