@@ -169,7 +169,7 @@ def table1_strip(per_run: pd.DataFrame, grid_rmse=None):
     labels = ["paper (rows 1–20)", "ours (20 runs)", "mean", "exact posterior mean"]
     if grid_rmse is None:
         handles, labels = handles[:3], labels[:3]
-    legend_below(fig, axs, ncol=4, handles=handles, labels=labels)
+    legend_below(fig, axs, ncol=2, handles=handles, labels=labels)
     return fig
 
 

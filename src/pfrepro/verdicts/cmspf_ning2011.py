@@ -1020,11 +1020,11 @@ def _prose_table3(R) -> dict:
     ok = [k for k, v in attain.items() if v]
     para = []
     if below:
-        para.append(f"Under {', '.join(below)} the published {p['col']} mean ({p['text']} ± {p['se']:.2f}) "
+        para.append(f"Under {', '.join(reading_words(b) for b in below)} the published {p['col']} mean ({p['text']} ± {p['se']:.2f}) "
                     "is significantly below the exact posterior mean: no filter that does not know the state can do "
                     "that on average.")
     if ok:
-        para.append(f"Under {', '.join(ok)} it is not, and the published values are attainable by a filter.")
+        para.append(f"Under {', '.join(reading_words(o) for o in ok)} it is not, and the published values are attainable by a filter.")
     para.append("The conclusion therefore depends on a reading the paper does not settle; the claim below records "
                 "every reading and its verdict follows their spread (inconclusive)." if below and ok else
                 "Every reading supports the same conclusion.")
@@ -1133,7 +1133,7 @@ def _prose_verdicts(reg, R) -> dict:
     for tb in ("Table 1", "Table 2", "Table 3"):
         r = best[tb].idxmax()
         m = cells[(cells.table == tb) & (cells.reading == r)].shape[0]
-        parts.append(f"{tb}: most cells under {r} ({int(round(best[tb].max() * m))} of {m})")
+        parts.append(f"{tb}: most cells under {reading_words(r)} ({int(round(best[tb].max() * m))} of {m})")
     out["cms_which_reading"] = Md("; ".join(parts))
     verdicts = [c.verdict for c in reg.claims]
     for v in ["reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive"]:
