@@ -40,13 +40,14 @@ def letter(i: int) -> str:
     return f"({'abcdefghijklmnop'[i]})"
 
 
-def plain_log(ax, axis: str = "y") -> None:
-    """A log axis labelled 1, 2, 5, 10, 20, ... in plain numbers (not 2×10¹), without minor labels."""
-    from matplotlib.ticker import LogLocator, NullFormatter, ScalarFormatter
+def plain_log(ax, axis: str = "y", subs=(1.0, 2.0, 5.0)) -> None:
+    """A log axis labelled 1, 2, 5, 10, 20, ... (``subs`` of each decade) in plain numbers ("0.1",
+    "20", not 2×10¹), without minor labels."""
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
     a = ax.yaxis if axis == "y" else ax.xaxis
-    a.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
-    a.set_major_formatter(ScalarFormatter())
+    a.set_major_locator(LogLocator(subs=subs))
+    a.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     a.set_minor_formatter(NullFormatter())
 
 

@@ -288,7 +288,7 @@ def table1_plot(per_run: pd.DataFrame, grid_rmse):
     """Table 1 as a plot: mean RMSE (±2 se) of PF, CMS-PF and PF(2N) against N, beside the paper's."""
     s = table1_summary(per_run)
     m1, se1 = per_run.mean().unstack(), (per_run.std(ddof=1) / np.sqrt(len(per_run))).unstack()
-    fig, ax = new_figure(figsize=(7, 4))
+    fig, ax = new_figure(figsize=(7, 7) if phone() else (7, 4))
     Ns = np.array(E.TABLE1_N)
     ax.errorbar(Ns, m1["PF"], 2 * se1["PF"], marker="o", capsize=3, color=method_color("PF"), label="PF (ours)")
     ax.errorbar(Ns * 1.04, m1["CMS-PF"], 2 * se1["CMS-PF"], marker="s", capsize=3, color=method_color("CMS-PF"), label="CMS-PF (ours)")
@@ -296,8 +296,8 @@ def table1_plot(per_run: pd.DataFrame, grid_rmse):
     ax.plot(Ns, s["PF paper"].astype(float), "o--", color=method_color("PF"), alpha=0.6, label="PF (paper)")
     ax.plot(Ns, s["CMS-PF paper"].astype(float), "s--", color=method_color("CMS-PF"), alpha=0.6, label="CMS-PF (paper)")
     ax.axhline(np.mean(grid_rmse), color="k", lw=1, label="exact posterior mean (grid)")
-    ax.set_xscale("log"); ax.set_xlabel("number of particles $N$"); ax.set_ylabel(f"mean RMSE over {len(per_run)} runs")
-    plain_log(ax, "x")
+    ax.set_xscale("log"); ax.set_xlabel("number of particles $N$"); ax.set_ylabel(f"mean RMSE ({len(per_run)} runs)")
+    plain_log(ax, "x", subs=(1.0,) if phone() else (1.0, 2.0, 5.0))
     ax.set_title(r"Table 1, $\sigma_v = 1$ (bars: ±2 se)")
     legend_below(fig, ax, ncol=2)
     return fig
@@ -319,7 +319,7 @@ def fig2(f2):
 
 def fig3(f3: pd.DataFrame, f3_grid: dict):
     """Fig. 3: RMSE (±2 se) and relative time per run of CMS-PF and PF against N (``E.fig3()``)."""
-    fig, ax = new_figure(figsize=(8, 6.5) if phone() else (8, 4))
+    fig, ax = new_figure(figsize=(8, 8) if phone() else (8, 4))
     idx = np.arange(1, len(f3) + 1)
     ax.errorbar(idx, f3["CMS-PF RMSE"], 2 * f3["CMS-PF se"], marker="s", capsize=3, color=method_color("CMS-PF"), label="CMS-PF RMSE")
     ax.errorbar(idx, f3["PF RMSE"], 2 * f3["PF se"], marker="o", capsize=3, color=method_color("PF"), label="PF RMSE")
@@ -354,13 +354,13 @@ def fig_one_step(d: dict, title: str):
             ax.axvline(d["x_true"], color="k", lw=1, label="true state")
         ax.set_ylim(-0.3, 1.6)   # room above the particles for the legend
         ax.set_yticks([]); ax.set_xlabel("$x$")
-        ax.legend(loc="upper center", ncol=1, frameon=False)
+        ax.legend(loc="upper center", ncol=1, frameon=False, handlelength=1.0, handletextpad=0.4)
 
     strip(axs[0, 0], [(d["x_prev"], "o", "particles at $k-1$"), (d["x_map"], "*", "map particles")], "a")
     axs[0, 0].set_title("(a) before prediction, map")
     strip(axs[0, 1], [(d["x_pred"], "o", "predicted"), (d["x_map"], "*", "map")], "b")
     axs[0, 1].set_title("(b) predicted and map particles")
-    strip(axs[0, 2], [(d["x_pred"], "o", "without mapping"), (d["x_sel"], "*", "with mapping (kept)")], "c")
+    strip(axs[0, 2], [(d["x_pred"], "o", "without map"), (d["x_sel"], "*", "with map (kept)")], "c")
     axs[0, 2].set_title("(c) particle sets")
     axs[1, 0].stem(d["x_pred"], d["w_plain"], markerfmt="o"); axs[1, 0].set_title("(d) weights without mapping")
     lw = np.r_[d["ll_pred"], d["ll_map"]]; wc = np.exp(lw - lw.max()); wc /= wc.sum()
@@ -392,7 +392,7 @@ def fig6(f6_base: dict, f6_maps: dict, sens: pd.DataFrame | None = None, sens_re
         axs[1].axvspan(0.2, 0.8, color="grey", alpha=0.15, label="paper's range [0.2, 0.8]")
         axs[1].set_xscale("log")
         axs[1].set_xlabel(r"adjustment factor $\alpha$ ($\eta$)"); axs[1].set_ylabel("mean RMSE")
-        plain_log(axs[1], "x")
+        plain_log(axs[1], "x", subs=(1.0,))
         axs[1].set_title(r"(b) RMSE against $\alpha$ ($\sigma_v = 1$, $N$ = 200)" if not phone()
                          else r"(b) RMSE against $\alpha$")
         legend_below(fig, axs[1], ncol=2)
@@ -431,14 +431,15 @@ def oracle_table(t3: pd.DataFrame, t3_oracle: pd.DataFrame) -> pd.DataFrame:
 def consistency_fig(cons: pd.DataFrame):
     """RMS distance of the PF's and the CMS-PF's estimates to the exact posterior mean against N
     (``E.consistency()``, ±2 se, log scales)."""
-    fig, ax = new_figure(figsize=(6, 3.5))
+    fig, ax = new_figure(figsize=(6, 5.5) if phone() else (6, 3.5))
     for f, mk in [("PF", "o"), ("CMS-PF", "s")]:
         c = cons[cons["filter"] == f]
         ax.errorbar(c["N"], c["dist to exact mean"], 2 * c["se"], marker=mk, capsize=3, label=f)
     ax.set_xscale("log"); ax.set_yscale("log"); ax.set_xlabel("particles $N$"); ax.set_ylabel("RMS distance to exact mean")
-    plain_log(ax, "x")
-    ax.legend(loc="best"); ax.set_title(r"Consistency ($\sigma_v = 1$)")
-    fig.tight_layout()
+    plain_log(ax, "x", subs=(1.0,) if phone() else (1.0, 2.0, 5.0))
+    plain_log(ax, "y", subs=(1.0, 2.0, 5.0))
+    ax.set_title(r"Consistency ($\sigma_v = 1$)")
+    legend_below(fig, ax, ncol=2)
     return fig
 
 

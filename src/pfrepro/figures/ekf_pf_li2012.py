@@ -376,6 +376,9 @@ def nsweep_plot(nsweep: dict, res: dict):
             _plain_log(ax)
         axes[2].loglog(d.index, d["amortised_ratio"], "o-", color=c, label=f"{E.MODEL_LABELS[w]}, amortised")
         axes[2].loglog(d.index, d["single_run_ratio"], "s--", color=c, label=f"{E.MODEL_LABELS[w]}, single run")
+    for ax in axes:
+        plain_log(ax, "x", subs=(1.0,))
+    plain_log(axes[2], "y", subs=(1.0, 3.0))
     axes[2].set_xlabel("particles $N$")
     axes[2].set_ylabel("PF time / EKF time")
     axes[2].set_title("(c) cost relative to the EKF")
