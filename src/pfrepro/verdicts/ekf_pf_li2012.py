@@ -842,10 +842,10 @@ def _statements_md(reg, R) -> str:
                 "(the degeneracy section above), not more particles."
                 if c['more-particles-less-degeneracy'].verdict == "not reproduced" else "."))
     b.append(f"- **\"The optimal importance function is hard to sample\"** (l.137): "
-             f"*{c['optimal-proposal-hard'].verdict_text()}*. $p(x_k \\mid x_{{k-1}}, y_k)$ has no standard form here and "
+             f"*{c['optimal-proposal-hard'].verdict_text()}*. p(xₖ | xₖ₋₁, yₖ) has no standard form here and "
              f"is bimodal at {prop[1][2]:.0%} (model 1) and {prop[2][2]:.0%} (model 2) of the PF's particle-steps "
              "(the quadratic measurement cannot tell +x from −x).")
-    b.append(f"- **\"The prior proposal ignores $y_k$, so its particles describe the posterior less well\"** "
+    b.append(f"- **\"The prior proposal ignores yₖ, so its particles describe the posterior less well\"** "
              f"(l.145): *{c['prior-ignores-y'].verdict_text()}*. On the same particles the optimal proposal "
              f"would keep an ESS of {prop[1][0]:.0f} (model 1) and {prop[2][0]:.0f} (model 2) of {n0}, the prior "
              f"proposal {prop[1][1]:.0f} and {prop[2][1]:.0f}.")
