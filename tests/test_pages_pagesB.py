@@ -191,3 +191,13 @@ def test_ning_reading_words():
     assert reading_words("eta=0.2") == "η = 0.2"
     assert reading_words("N_t23=100") == "N = 100"
     assert reading_words("the main reading") == "the main reading"
+
+
+def test_reader_text_turns_plain_subscripts_into_symbols():
+    from pfrepro.figures._layout import reader_text
+
+    assert reader_text("x_k = x_{k-1}/2 + w_k") == "xₖ = xₖ₋₁/2 + wₖ"
+    assert reader_text("Var(x_k | y_1:k)/N") == "Var(xₖ | y₁:ₖ)/N"
+    assert reader_text("the resampled x~_k^i") == "the resampled x̃ₖⁱ"
+    assert reader_text("plan_ratio_m1") == "plan ratio m1"
+    assert reader_text("10 % of N, l.133") == "10 % of N, l.133"

@@ -82,11 +82,11 @@ def reader_text(text: str) -> str:
     def sub(m):
         body = m.group(2) or m.group(3) or m.group(4)
         if all(ch in "0123456789k+-=()aeioruvxnmpsthlj:|" for ch in body):
-            return m.group(1) + "".join(ch if ch in ":|" else ch.translate(_SUB) for ch in body)
+            return m.group(1).replace("~", "\u0303") + "".join(ch if ch in ":|" else ch.translate(_SUB) for ch in body)
         return m.group(0)
 
     # one-letter symbols with a subscript: x_k, x_{k-1}, x_(k-1), y_1:k, B_k
-    out = re.sub(r"(?<![A-Za-z0-9_])([A-Za-zσηαβθ]\u0302?)_(?:\{([^{}]+)\}|\(([^()]+)\)|([0-9k]+(?::[0-9k]+)?|th))(?![A-Za-z_])", sub, text)
+    out = re.sub(r"(?<![A-Za-z0-9_])([A-Za-zσηαβθ](?:\u0302|~)?)_(?:\{([^{}]+)\}|\(([^()]+)\)|([0-9k]+(?::[0-9k]+)?|th))(?![A-Za-z_])", sub, text)
     out = re.sub(r"\^(\{[^{}]+\}|[0-9iTn])", lambda m: m.group(1).strip("{}").translate(_SUP)
                  if all(c in "0123456789i+-nT" for c in m.group(1).strip("{}")) else m.group(0), out)
     # remaining snake_case names read as words
