@@ -74,12 +74,24 @@ def divisor_check(table_id: str, runs=range(1, 21), tol: float = 2e-4) -> pd.Dat
 
 def step_checks_shown(checks: pd.DataFrame):
     """:func:`pfrepro.experiments.cmspf_ning2011.step_checks` for the page: the paper's statements
-    and the checks with symbols for the plain-text subscripts (``x_k`` -> ``xₖ``), styled."""
+    and the checks with symbols for the plain-text subscripts (``x_k`` -> ``xₖ``), as HTML whose rows
+    become cards on a phone (:func:`pfrepro.bookinfo.labelled_table_html`, class ``pf-steps``)."""
+    import html
+
+    from IPython.display import HTML
+
+    from ..bookinfo import labelled_table_html
+
     out = checks.copy()
     for col in ("paper", "check"):
         if col in out:
             out[col] = out[col].map(lambda v: reader_text(str(v)))
-    return out.style.format({"deviation": "{:.2g}"}).set_table_attributes('class="pf-text"')
+    if "deviation" in out:
+        out["deviation"] = [f"{v:.2g}" for v in out["deviation"]]
+    if "passes" in out:
+        out["passes"] = ["yes" if bool(v) else "no" for v in out["passes"]]
+    out = out.rename_axis("step").reset_index()
+    return HTML(labelled_table_html(out.map(lambda v: html.escape(str(v))), classes="pf-claims pf-text pf-steps"))
 
 
 def divisor_shown(checks: dict) -> pd.DataFrame:
