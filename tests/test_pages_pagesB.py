@@ -201,3 +201,13 @@ def test_reader_text_turns_plain_subscripts_into_symbols():
     assert reader_text("the resampled x~_k^i") == "the resampled x̃ₖⁱ"
     assert reader_text("plan_ratio_m1") == "plan ratio m1"
     assert reader_text("10 % of N, l.133") == "10 % of N, l.133"
+
+
+def test_ning_beyond_sentence_counts_not_ids():
+    from pfrepro.verdicts.cmspf_ning2011 import beyond_sentence
+
+    s = beyond_sentence(["reproduced"] * 10 + ["not reproduced"] * 4 + ["inconclusive"] * 2)
+    assert s == ("Of the 16 claims beyond the single table entries, 10 are reproduced, 0 are qualitatively "
+                 "reproduced, 4 are not reproduced and 2 are inconclusive.")
+    assert beyond_sentence(["inconclusive"]).startswith("Of the one claim beyond the single table entries, 0 are")
+    assert beyond_sentence([]) == "No claim goes beyond the single table entries."

@@ -968,6 +968,18 @@ _TAG_WORDS = [(re.compile(r"sigma_v_t\d=R (\d+)"), r"σ_v² = \1"), (re.compile(
               (re.compile(r"\bukf="), "UKF "), (re.compile(r"\bespf="), "ESPF ")]
 
 
+def beyond_sentence(verdicts) -> str:
+    """The verdicts of the claims beyond the single table cells, counted: "Of the 16 claims beyond the
+    single table entries, 10 are reproduced, ..." (``verdict_sentence``'s counts)."""
+    verdicts = list(verdicts)
+    if not verdicts:
+        return "No claim goes beyond the single table entries."
+    head, rest = verdict_sentence(verdicts).split(", ", 1)
+    n = len(verdicts)
+    return (f"Of the {n} claims beyond the single table entries, " if n > 1 else
+            "Of the one claim beyond the single table entries, ") + rest + "."
+
+
 def reading_words(tag: str) -> str:
     """A reading tag in reader words: ``"sigma_v_t3=R 100, sigma_w2=1"`` -> ``"σ_v² = 100, σ_w² = 1"``,
     ``"eta=0.2"`` -> ``"η = 0.2"``; the main reading and unknown tags are returned as they are."""
@@ -1146,6 +1158,10 @@ def _prose_verdicts(reg, R) -> dict:
         txt = ", ".join(f"`{c.claim_id}`" + (f" ({c.verdict_text()[len('inconclusive ('):-1]})" if v == "inconclusive" else "")
                         for c in cs)
         out[f"cms_ids_{v.replace(' ', '_')}"] = Md(txt or "none")
+    beyond = [c.verdict for c in reg.claims
+              if not c.claim_id.startswith(("t1_pf_", "t1_cms_mean", "t2_rmse_", "t3_mean_"))]
+    # the claims beyond the single table cells, counted in words (the table above names each one)
+    out["cms_beyond_sentence"] = Md(beyond_sentence(beyond))
     return out
 
 
