@@ -251,7 +251,7 @@ def test_new_figures_and_shown_table_small():
     for fig in (F.sweep_plot(sens), F.ess_plot({w: ex.degeneracy(res[w], n_particles=60) for w in (1, 2)}, 60)):
         assert len(fig.axes) == 2
         plt.close(fig)
-    shown = F.table1_shown(ex.table1(res))
+    shown = F.table1_shown(ex.table1(res)).data   # a Styler (no index column)
     assert shown["published"].tolist() == ["30.1709", "3.9459", "1.1281", "1.0479"]
 
 
@@ -266,7 +266,7 @@ def test_chapter_tables_and_figures_small():
 
     sims = {w: ex.simulate(w, 3, 8) for w in (1, 2)}
     res = {w: ex.run(w, 3, 8, ex.FILTERS, sim=sims[w], n_particles=60) for w in (1, 2)}
-    assert F.statistic_readings_table(res).shape == (4, 6)
+    assert F.statistic_readings_table(res).data.shape == (4, 6)
     assert F.gap_table(res).data.shape == (6, 6)   # (model, filter) x RMSE, se, exact, gap, gap se, relative
     cnt = {w: ex.cost_evidence(w, sims[w], repeats=1, seed=8) for w in (1, 2)}
     assert list(cnt[1].columns) == ["model evals / step", "count ratio", "time ratio", "time ratio min",
@@ -274,7 +274,7 @@ def test_chapter_tables_and_figures_small():
     assert cnt[1]["count ratio"].equals(ex.cost_count_table(1, sims[1], seed=8)["count ratio"])
     assert "count ratio" in F.count_table(cnt).to_html()
     cost = {w: ex.cost_ratios(w, sims[w], include=("EKF", "UKF", "PF"), repeats=1, seed=8) for w in (1, 2)}
-    assert F.cost_table(cost).shape == (3, 4)
+    assert F.cost_table(cost).data.shape == (3, 4)
     sens = ex.sensitivity(sims, 8, P0_values=(2.0,), schemes=("multinomial",))
     shown = F.sensitivity_shown(sens)
     assert len(shown) == len(sens) and set(" ".join(shown["verdicts"]).split()) <= set("RQNI–")

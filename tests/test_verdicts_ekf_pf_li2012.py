@@ -228,7 +228,7 @@ def test_prose_words_follow_the_verdicts(run1):
     assert p["li_ratio_m1_z"] == pytest.approx((p["li_ratio_m1"] - 7) / p["li_ratio_m1_se"])
     assert p["li_runs_table"] == 2 and p["li_seed_table"] == 1 and p["li_n_seeds"] == 1 + E.N_SPREAD_SETS
     incon = [c.claim_id for c in reg.claims if c.claim_id.startswith("table1") and c.verdict == "inconclusive"]
-    assert p["li_cells_incon"] == (", ".join(incon) or "none") and p["li_n_cells_incon"] == len(incon)
+    assert p["li_cells_incon"] == V.cells_in_words(incon) and p["li_n_cells_incon"] == len(incon)
     assert isinstance(p["li_n_cells_incon_phrase"], Md)
     assert str(p["li_n_cells_incon_phrase"]) == f"{len(incon)} {'is' if len(incon) == 1 else 'are'} matched"
     # every table cell inconclusive: the phrase agrees in number, the list names all four
@@ -239,7 +239,7 @@ def test_prose_words_follow_the_verdicts(run1):
     reg = V.record_claims(ClaimsRegistry(E.PAPER, choices=E.CHOICES), R)
     p = V.prose(reg, R)
     assert str(p["li_n_cells_incon_phrase"]) == "4 are matched" and p["li_n_cells_repro"] == 0
-    assert p["li_cells_incon"] == ", ".join(IDS[:4])
+    assert p["li_cells_incon"] == "the model 1 EKF, model 1 PF, model 2 EKF and model 2 PF cells"
 
 
 def test_prose_seed_rank_and_sis_never_below(run1):
@@ -250,8 +250,12 @@ def test_prose_seed_rank_and_sis_never_below(run1):
     R.deg[1]["SIS"]["first_below"] = np.array([np.nan, np.nan])
     reg = V.record_claims(ClaimsRegistry(E.PAPER, choices=E.CHOICES), R)
     p = V.prose(reg, R)
-    assert p["li_seed_prev_rank"] == f"{sel.sum()}th" and p["li_seed_prev_min_m1"] == 0.0
+    assert p["li_seed_prev_rank"] == f"{sel.sum()}th largest" and p["li_seed_prev_min_m1"] == 0.0
     assert np.isnan(p["li_sis_first_med_m1"]) and p["li_sis_never_m1"] == 2
+    assert p["li_sis_never_phrase"] == f"it never does in 2 of the {R.runs['table']} runs of model 1 and 0 of model 2"
+    sp.loc[sel, "mean"] = -np.arange(sel.sum(), dtype=float)      # now the largest
+    p = V.prose(V.record_claims(ClaimsRegistry(E.PAPER, choices=E.CHOICES), R), R)
+    assert p["li_seed_prev_rank"] == "largest"
 
 
 def _timings(amortised=50.0, n_values=(50, 1000)):

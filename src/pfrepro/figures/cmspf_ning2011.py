@@ -14,6 +14,7 @@ from .. import published
 from ..experiments import cmspf_ning2011 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
+from ._layout import legend_below, letter, phone, plain_log, reader_text
 
 __all__ = ["printed", "styled", "divisor_check", "table1_per_run_long", "table1_strip", "sensitivity_fig",
            "table1_side_by_side", "table1_summary", "table2_vs_published", "table3_vs_published",
@@ -71,6 +72,73 @@ def divisor_check(table_id: str, runs=range(1, 21), tol: float = 2e-4) -> pd.Dat
     return pd.DataFrame(out).T.rename_axis("column")
 
 
+def step_checks_shown(checks: pd.DataFrame):
+    """:func:`pfrepro.experiments.cmspf_ning2011.step_checks` for the page: the paper's statements
+    and the checks with symbols for the plain-text subscripts (``x_k`` -> ``xₖ``), as HTML whose rows
+    become cards on a phone (:func:`pfrepro.bookinfo.labelled_table_html`, class ``pf-steps``)."""
+    import html
+
+    from IPython.display import HTML
+
+    from ..bookinfo import labelled_table_html
+
+    out = checks.copy()
+    for col in ("paper", "check"):
+        if col in out:
+            out[col] = out[col].map(lambda v: reader_text(str(v)))
+    if "deviation" in out:
+        out["deviation"] = [f"{v:.2g}" for v in out["deviation"]]
+    if "passes" in out:
+        out["passes"] = ["yes" if bool(v) else "no" for v in out["passes"]]
+    out = out.rename_axis("step").reset_index()
+    return HTML(labelled_table_html(out.map(lambda v: html.escape(str(v))), classes="pf-claims pf-text pf-steps"))
+
+
+def divisor_shown(checks: dict) -> pd.DataFrame:
+    """The divisor checks of several tables for the page, at most eight columns: ``checks`` maps a
+    table label to :func:`divisor_check`'s frame; the mean of the rows carries a ✓ where it matches
+    the printed mean (✗ where not) instead of a column of its own."""
+    out = []
+    for label, d in checks.items():
+        d = d.copy()
+        d["mean of the rows"] = [f"{m:.4f} {'✓' if ok else '✗'}" for m, ok in zip(d["mean of the rows"], d["mean matches"])]
+        out.append(d.drop(columns=["mean matches"]).assign(table=label).set_index("table", append=True)
+                   .swaplevel(0, 1))
+    return pd.concat(out)
+
+
+def _pm(m, se, digits: int = 3) -> list:
+    return ["—" if pd.isna(a) else (f"{a:.{digits}f}" if pd.isna(b) else f"{a:.{digits}f} ± {b:.{digits}f}")
+            for a, b in zip(m, se)]
+
+
+def table1_summary_shown(summary: pd.DataFrame) -> pd.DataFrame:
+    """:func:`table1_summary` for the page, at most eight columns: ours as "mean ± se" beside the
+    paper's printed mean, the noise readings in symbols."""
+    out = pd.DataFrame({"PF, paper": summary["PF paper"], "PF, ours": _pm(summary["PF ours"], summary["PF se"]),
+                        "CMS-PF, paper": summary["CMS-PF paper"],
+                        "CMS-PF, ours": _pm(summary["CMS-PF ours"], summary["CMS-PF se"]),
+                        "PF with 2N, ours": [f"{v:.3f}" for v in summary["PF with 2N ours"]]}, index=summary.index)
+    for col, name in (("CMS-PF ours (sigma_w^2=10)", "CMS-PF, ours, σ_w² = 10"), ("PF ours (sigma_w^2=10)", "PF, ours, σ_w² = 10")):
+        if col in summary:
+            out[name] = [f"{v:.3f}" for v in summary[col]]
+    return out
+
+
+def table2_shown(tab2: pd.DataFrame) -> pd.DataFrame:
+    """:func:`table2_vs_published` for the page, at most eight columns: our RMSE as "mean ± se",
+    the noise reading in symbols, counts as whole numbers."""
+    out = pd.DataFrame({"RMSE, paper": tab2["RMSE paper"], "RMSE, ours": _pm(tab2["RMSE ours"], tab2["se"])},
+                       index=tab2.index)
+    if "RMSE ours (sigma_w^2=10)" in tab2:
+        out["RMSE, ours, σ_w² = 10"] = ["—" if pd.isna(v) else f"{v:.3f}" for v in tab2["RMSE ours (sigma_w^2=10)"]]
+    out["seconds, paper (printed)"] = tab2["time/s paper (printed)"]
+    for col in ("time ratio to PF, paper", "time ratio to PF, ours"):
+        out[col] = ["—" if pd.isna(v) else f"{v:.2f}" for v in tab2[col]]
+    out["likelihoods per step"] = ["—" if pd.isna(v) else f"{v:.0f}" for v in tab2["likelihood evaluations / step"]]
+    return out.fillna("—")
+
+
 def table1_per_run_long(per_run: pd.DataFrame) -> pd.DataFrame:
     """Table 1's per-run RMSEs, the paper's (printed strings) and ours, one row per run, N and filter."""
     pt = printed("Table 1")
@@ -86,37 +154,39 @@ def table1_per_run_long(per_run: pd.DataFrame) -> pd.DataFrame:
 
 def table1_strip(per_run: pd.DataFrame, grid_rmse=None):
     """Table 1 as two distributions per setting: the paper's 20 per-run RMSEs (rows 1-20) and our
-    20, side by side for each N and filter (the runs are independent draws: only the
-    distributions, not run i against run i, can be compared). Bars: the means."""
+    20, side by side for each N, one panel per filter ((a) PF, (b) CMS-PF; the runs are independent
+    draws: only the distributions, not run i against run i, can be compared). Bars: the means."""
+    from matplotlib.lines import Line2D
+
     pub = published.table(E.PAPER, "Table 1")
-    fig, ax = new_figure(figsize=(7, 4))
+    fig, axs = new_figure(1, 2, figsize=(10.2, 4.4), sharey=True)
     rng = np.random.default_rng(0)  # horizontal jitter of the dots only (display)
-    ticks, labels = [], []
-    for j, N in enumerate(E.TABLE1_N):
-        for h, f in enumerate(("PF", "CMS-PF")):
+    for i, (ax, f) in enumerate(zip(axs, ("PF", "CMS-PF"))):
+        col = method_color(f)
+        for j, N in enumerate(E.TABLE1_N):
             for s_, (src, vals) in enumerate((("paper", pub.loc[[str(i) for i in range(1, 21)], f"N={N} {f}"].to_numpy(float)),
                                               ("ours", per_run[(N, f)].to_numpy()))):
-                x0 = j * 5 + h * 2 + s_
-                col = method_color(f)
+                x0 = j * 3 + s_
                 ax.plot(x0 + rng.uniform(-0.25, 0.25, vals.size), vals, "o" if src == "ours" else "x", ms=3.5,
                         color=col, mfc="none" if src == "paper" else col, alpha=0.8)
                 ax.plot([x0 - 0.35, x0 + 0.35], [vals.mean()] * 2, color="k", lw=1.5)
-            ticks.append(j * 5 + h * 2 + 0.5); labels.append(f"{f}\nN={N}")
-    if grid_rmse is not None:
-        ax.axhline(np.mean(grid_rmse), color="grey", lw=1, ls=":")
-    ax.set_xticks(ticks, labels, fontsize=8)
-    ax.set_ylabel("per-run RMSE")
-    from matplotlib.lines import Line2D
-    ax.legend([Line2D([], [], marker="x", ls="", color="0.3"), Line2D([], [], marker="o", ls="", color="0.3"),
-               Line2D([], [], color="k"), Line2D([], [], color="grey", ls=":")],
-              ["paper (rows 1–20)", "ours (20 runs)", "mean", "exact posterior mean"], fontsize=8, ncol=2)
-    ax.set_title("Table 1, sigma_v = 1: 20 runs each, paper (x) and ours (o)")
-    fig.tight_layout()
+        if grid_rmse is not None:
+            ax.axhline(np.mean(grid_rmse), color="grey", lw=1, ls=":")
+        ax.set_xticks([j * 3 + 0.5 for j in range(len(E.TABLE1_N))], [str(N) for N in E.TABLE1_N])
+        ax.set_xlabel("particles $N$")
+        ax.set_ylabel("per-run RMSE")
+        ax.set_title(f"{letter(i)} {f}")
+    handles = [Line2D([], [], marker="x", ls="", color="0.3"), Line2D([], [], marker="o", ls="", color="0.3"),
+               Line2D([], [], color="k"), Line2D([], [], color="grey", ls=":")]
+    labels = ["paper (rows 1–20)", "ours (20 runs)", "mean", "exact posterior mean"]
+    if grid_rmse is None:
+        handles, labels = handles[:3], labels[:3]
+    legend_below(fig, axs, ncol=2, handles=handles, labels=labels)
     return fig
 
 
-SENS_LABELS = {"eta": "adjustment factor eta", "big_fraction": "n_big / N", "n_th": "N_th / N",
-               "carrier": "carrier", "u": "logistic u", "burn_in": "burn-in T0", "init": "carrier initialisation"}
+SENS_LABELS = {"eta": r"adjustment factor $\eta$", "big_fraction": r"$n_\mathrm{big}/N$", "n_th": r"$N_\mathrm{th}/N$",
+               "carrier": "carrier", "u": "logistic $u$", "burn_in": r"burn-in $T_0$", "init": "carrier initialisation"}
 
 
 def sensitivity_fig(sens: pd.DataFrame, sens_ref: dict):
@@ -125,7 +195,7 @@ def sensitivity_fig(sens: pd.DataFrame, sens_ref: dict):
     stays legible at the book's column width."""
     pars = list(dict.fromkeys(sens["parameter"]))
     nrow = (len(pars) + 2) // 2
-    fig, axs = new_figure(nrow, 2, figsize=(7, 2.3 * nrow), sharey=True)
+    fig, axs = new_figure(nrow, 2, figsize=(7, 2.6 * nrow), sharey=True)
     axs = np.atleast_2d(axs)
     for ax, par in zip(axs.flat, pars):
         s = sens[sens.parameter == par]
@@ -134,18 +204,17 @@ def sensitivity_fig(sens: pd.DataFrame, sens_ref: dict):
         ch = s["chosen"].to_numpy(bool)
         ax.plot(x[ch], s["RMSE"].to_numpy()[ch], "r*", ms=12, label="chosen value")
         ax.set_xticks(x, [f"{v:.3g}" if not isinstance(v, str) else v for v in s["value"]],
-                      rotation=45 if len(s) > 6 else 0)
+                      rotation=45 if len(s) > 4 or any(isinstance(v, str) for v in s["value"]) else 0,
+                      ha="right" if len(s) > 4 or any(isinstance(v, str) for v in s["value"]) else "center",
+                      rotation_mode="anchor")
         ax.axhline(sens_ref["PF"]["mean"], color=method_color("PF"), ls="--", label="PF")
         ax.axhline(sens_ref["Grid (exact)"]["mean"], color="k", lw=1, label="exact posterior mean")
         ax.set_xlabel(SENS_LABELS.get(par, par))
-    for ax in axs[:, 0]:
+    for ax in axs.flat[:len(pars)]:
         ax.set_ylabel("mean RMSE")
-    h, l = axs.flat[0].get_legend_handles_labels()
-    spare = list(axs.flat)[len(pars):]
-    for ax in spare:
-        ax.axis("off")
-    (spare[0] if spare else axs.flat[0]).legend(h, l, loc="center", fontsize=9)
-    fig.tight_layout()
+    for ax in list(axs.flat)[len(pars):]:
+        ax.remove()
+    legend_below(fig, list(axs.flat)[:len(pars)], ncol=2)
     return fig
 
 
@@ -231,7 +300,7 @@ def table1_plot(per_run: pd.DataFrame, grid_rmse):
     """Table 1 as a plot: mean RMSE (±2 se) of PF, CMS-PF and PF(2N) against N, beside the paper's."""
     s = table1_summary(per_run)
     m1, se1 = per_run.mean().unstack(), (per_run.std(ddof=1) / np.sqrt(len(per_run))).unstack()
-    fig, ax = new_figure(figsize=(7, 4))
+    fig, ax = new_figure(figsize=(7, 7) if phone() else (7, 4))
     Ns = np.array(E.TABLE1_N)
     ax.errorbar(Ns, m1["PF"], 2 * se1["PF"], marker="o", capsize=3, color=method_color("PF"), label="PF (ours)")
     ax.errorbar(Ns * 1.04, m1["CMS-PF"], 2 * se1["CMS-PF"], marker="s", capsize=3, color=method_color("CMS-PF"), label="CMS-PF (ours)")
@@ -239,36 +308,37 @@ def table1_plot(per_run: pd.DataFrame, grid_rmse):
     ax.plot(Ns, s["PF paper"].astype(float), "o--", color=method_color("PF"), alpha=0.6, label="PF (paper)")
     ax.plot(Ns, s["CMS-PF paper"].astype(float), "s--", color=method_color("CMS-PF"), alpha=0.6, label="CMS-PF (paper)")
     ax.axhline(np.mean(grid_rmse), color="k", lw=1, label="exact posterior mean (grid)")
-    ax.set_xscale("log"); ax.set_xlabel("number of particles N"); ax.set_ylabel(f"mean RMSE over {len(per_run)} runs")
-    ax.set_title("Table 1, sigma_v = 1 (bars: ±2 se)"); ax.legend(fontsize=8)
-    fig.tight_layout()
+    ax.set_xscale("log"); ax.set_xlabel("number of particles $N$"); ax.set_ylabel(f"mean RMSE ({len(per_run)} runs)")
+    plain_log(ax, "x", subs=(1.0,) if phone() else (1.0, 2.0, 5.0))
+    ax.set_title(r"Table 1, $\sigma_v = 1$ (bars: ±2 se)")
+    legend_below(fig, ax, ncol=2)
     return fig
 
 
 def fig2(f2):
     """Fig. 2: one run, truth, EKF, CMS-PF and the exact posterior mean (``f2`` = ``E.fig2_run()``)."""
     k = np.arange(1, f2.sim.T + 1)
-    fig, ax = new_figure(figsize=(8, 4))
+    fig, ax = new_figure(figsize=(8, 6.5) if phone() else (8, 4))
     ax.plot(k, f2.x_true[0, :, 0], "k.-", label="true state")
     ax.plot(k, f2.results["EKF"].x[0, :, 0], "o-", mfc="none", color=method_color("EKF"), label=f"EKF (RMSE {f2.rmse('EKF')[0]:.2f})")
     ax.plot(k, f2.results["CMS-PF"].x[0, :, 0], "*-", color=method_color("CMS-PF"), label=f"CMS-PF, N = 200 (RMSE {f2.rmse('CMS-PF')[0]:.2f})")
     ax.plot(k, f2.results["Grid (exact)"].x[0, :, 0], "--", color="grey",
             label=f"exact posterior mean (RMSE {f2.rmse('Grid (exact)')[0]:.2f})")
-    ax.set_xlabel("time step k"); ax.set_ylabel("state x_k"); ax.set_title("Fig. 2: one run, sigma_v^2 = 1")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    ax.set_xlabel("time step $k$"); ax.set_ylabel("state $x_k$"); ax.set_title(r"Fig. 2: one run, $\sigma_v^2 = 1$")
+    legend_below(fig, ax, ncol=2)
     return fig
 
 
 def fig3(f3: pd.DataFrame, f3_grid: dict):
     """Fig. 3: RMSE (±2 se) and relative time per run of CMS-PF and PF against N (``E.fig3()``)."""
-    fig, ax = new_figure(figsize=(8, 4))
+    fig, ax = new_figure(figsize=(8, 8) if phone() else (8, 4))
     idx = np.arange(1, len(f3) + 1)
     ax.errorbar(idx, f3["CMS-PF RMSE"], 2 * f3["CMS-PF se"], marker="s", capsize=3, color=method_color("CMS-PF"), label="CMS-PF RMSE")
     ax.errorbar(idx, f3["PF RMSE"], 2 * f3["PF se"], marker="o", capsize=3, color=method_color("PF"), label="PF RMSE")
     ax.axhline(f3_grid["mean"], color="k", lw=1, label="exact posterior mean RMSE")
-    ax.set_xticks(idx, [str(n) for n in f3.index], rotation=45)
-    ax.set_xlabel("number of particles N"); ax.set_ylabel("mean RMSE")
+    ax.set_xticks(idx, [str(n) if (i % 2 == 0 or not phone()) else "" for i, n in enumerate(f3.index)],
+                  rotation=90 if phone() else 45)
+    ax.set_xlabel("number of particles $N$"); ax.set_ylabel("mean RMSE")
     ax2 = ax.twinx()
     ax2.plot(idx, f3["CMS-PF time [s]"] / f3["PF time [s]"].iloc[0], "s--", color=method_color("CMS-PF"), mfc="none",
              label=f"CMS-PF time / PF(N={f3.index[0]}) time")
@@ -276,33 +346,41 @@ def fig3(f3: pd.DataFrame, f3_grid: dict):
              label=f"PF time / PF(N={f3.index[0]}) time")
     ax2.set_ylabel("time per run, relative")
     h1, l1 = ax.get_legend_handles_labels(); h2, l2 = ax2.get_legend_handles_labels()
-    ax.legend(h1 + h2, l1 + l2, fontsize=8, loc="center right"); ax.set_title("Fig. 3, sigma_v = 10 (bars ±2 se)")
-    fig.tight_layout()
+    ax.set_title(r"Fig. 3, $\sigma_v = 10$ (bars ±2 se)")
+    legend_below(fig, [ax, ax2], ncol=2, handles=h1 + h2, labels=l1 + l2)
     return fig
 
 
 def fig_one_step(d: dict, title: str):
-    """Figs. 4-5: one step with and without mapping (``d`` = ``E.one_step(carrier)``)."""
-    fig, axs = new_figure(2, 3, figsize=(10.2, 6))
+    """Figs. 4-5: one step with and without mapping (``d`` = ``E.one_step(carrier)``), six panels:
+    (a)-(c) particle positions along the state axis, (d)-(f) their normalised weights."""
+    import textwrap
+
+    fig, axs = new_figure(2, 3, figsize=(10.2, 6.4))
     N = d["N"]
-    ax = axs[0, 0]; ax.plot(d["x_prev"], np.zeros(N), "o", mfc="none", label="particles at k-1")
-    ax.plot(d["x_map"], np.full(N, 0.1), "*", ms=4, label="map particles")
-    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(a) before prediction, map"); ax.legend(fontsize=8)
-    ax = axs[0, 1]; ax.plot(d["x_pred"], np.zeros(N), "o", mfc="none", label="predicted")
-    ax.plot(d["x_map"], np.full(N, 0.1), "*", ms=4, label="map")
-    ax.axvline(d["x_true"], color="k", lw=1, label="true state")
-    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(b) predicted and map particles"); ax.legend(fontsize=8)
-    ax = axs[0, 2]; ax.plot(d["x_pred"], np.zeros(N), "o", mfc="none", label="without mapping")
-    ax.plot(d["x_sel"], np.full(N, 0.1), "*", ms=4, label="with mapping (kept)")
-    ax.axvline(d["x_true"], color="k", lw=1, label="true state")
-    ax.set_ylim(-0.5, 0.6); ax.set_yticks([]); ax.set_xlabel("x"); ax.set_title("(c) particle sets"); ax.legend(fontsize=8)
+
+    def strip(ax, rows, name):
+        for y, (x, mk, lab) in enumerate(rows):
+            ax.plot(x, np.full(np.size(x), 0.3 * y), mk, mfc="none" if mk == "o" else None, ms=5, label=lab)
+        if name != "a":
+            ax.axvline(d["x_true"], color="k", lw=1, label="true state")
+        ax.set_ylim(-0.3, 1.6)   # room above the particles for the legend
+        ax.set_yticks([]); ax.set_xlabel("$x$")
+        ax.legend(loc="upper center", ncol=1, frameon=False, handlelength=1.0, handletextpad=0.4)
+
+    strip(axs[0, 0], [(d["x_prev"], "o", "particles at $k-1$"), (d["x_map"], "*", "map particles")], "a")
+    axs[0, 0].set_title("(a) before prediction, map")
+    strip(axs[0, 1], [(d["x_pred"], "o", "predicted"), (d["x_map"], "*", "map")], "b")
+    axs[0, 1].set_title("(b) predicted and map particles")
+    strip(axs[0, 2], [(d["x_pred"], "o", "without map"), (d["x_sel"], "*", "with map (kept)")], "c")
+    axs[0, 2].set_title("(c) particle sets")
     axs[1, 0].stem(d["x_pred"], d["w_plain"], markerfmt="o"); axs[1, 0].set_title("(d) weights without mapping")
     lw = np.r_[d["ll_pred"], d["ll_map"]]; wc = np.exp(lw - lw.max()); wc /= wc.sum()
-    axs[1, 1].stem(np.r_[d["x_pred"], d["x_map"]], wc, markerfmt="."); axs[1, 1].set_title("(e) predicted + map (likelihood)")
+    axs[1, 1].stem(np.r_[d["x_pred"], d["x_map"]], wc, markerfmt="."); axs[1, 1].set_title("(e) predicted + map")
     axs[1, 2].stem(d["x_sel"], d["w_sel"], markerfmt="*"); axs[1, 2].set_title("(f) weights with mapping")
     for ax in axs[1]:
-        ax.axvline(d["x_true"], color="k", lw=1); ax.set_xlabel("x"); ax.set_ylabel("normalised weight")
-    fig.suptitle(title)
+        ax.axvline(d["x_true"], color="k", lw=1); ax.set_xlabel("$x$"); ax.set_ylabel("normalised weight")
+    fig.suptitle(textwrap.fill(title, 28) if phone() else title)
     fig.tight_layout()
     return fig
 
@@ -313,11 +391,11 @@ def fig6(f6_base: dict, f6_maps: dict, sens: pd.DataFrame | None = None, sens_re
     fig, axs = new_figure(1, 2 if sens is not None else 1, figsize=(10.2, 4) if sens is not None else (6, 4))
     ax0 = axs[0] if sens is not None else axs
     for i, (a, x2) in enumerate(f6_maps.items()):
-        ax0.plot(x2, np.full(x2.size, i), "|", ms=10, label=f"alpha = {a}")
-    ax0.plot(f6_base["x_pred"], np.full(f6_base["N"], -1), "|", ms=10, color="grey", label="predicted")
-    ax0.axvline(f6_base["x_true"], color="k", lw=1, label="true state")
-    ax0.set_yticks(range(-1, len(f6_maps)), ["predicted"] + [f"alpha={a}" for a in f6_maps])
-    ax0.set_xlabel("x"); ax0.set_title(f"Fig. 6: map particles for several alpha (N = {f6_base['N']})")
+        ax0.plot(x2, np.full(x2.size, i), "|", ms=10)
+    ax0.plot(f6_base["x_pred"], np.full(f6_base["N"], -1), "|", ms=10, color="grey")
+    ax0.axvline(f6_base["x_true"], color="k", lw=1)
+    ax0.set_yticks(range(-1, len(f6_maps)), ["predicted"] + [rf"$\alpha$ = {a}" for a in f6_maps])
+    ax0.set_xlabel("$x$"); ax0.set_title(f"(a) Fig. 6: map particles, $N$ = {f6_base['N']}")
     if sens is not None:
         se_eta = sens[sens.parameter == "eta"]
         axs[1].errorbar(se_eta["value"], se_eta["RMSE"], 2 * se_eta["se"], marker="o", capsize=3, color=method_color("CMS-PF"), label="CMS-PF")
@@ -325,9 +403,13 @@ def fig6(f6_base: dict, f6_maps: dict, sens: pd.DataFrame | None = None, sens_re
         axs[1].axhline(sens_ref["Grid (exact)"]["mean"], color="k", lw=1, label="exact posterior mean")
         axs[1].axvspan(0.2, 0.8, color="grey", alpha=0.15, label="paper's range [0.2, 0.8]")
         axs[1].set_xscale("log")
-        axs[1].set_xlabel("adjustment factor alpha (eta)"); axs[1].set_ylabel("mean RMSE"); axs[1].legend(fontsize=8)
-        axs[1].set_title("RMSE against alpha (sigma_v = 1, N = 200)")
-    fig.tight_layout()
+        axs[1].set_xlabel(r"adjustment factor $\alpha$ ($\eta$)"); axs[1].set_ylabel("mean RMSE")
+        plain_log(axs[1], "x", subs=(1.0,))
+        axs[1].set_title(r"(b) RMSE against $\alpha$ ($\sigma_v = 1$, $N$ = 200)" if not phone()
+                         else r"(b) RMSE against $\alpha$")
+        legend_below(fig, axs[1], ncol=2)
+    else:
+        fig.tight_layout()
     return fig
 
 
@@ -361,13 +443,15 @@ def oracle_table(t3: pd.DataFrame, t3_oracle: pd.DataFrame) -> pd.DataFrame:
 def consistency_fig(cons: pd.DataFrame):
     """RMS distance of the PF's and the CMS-PF's estimates to the exact posterior mean against N
     (``E.consistency()``, ±2 se, log scales)."""
-    fig, ax = new_figure(figsize=(6, 3.5))
+    fig, ax = new_figure(figsize=(6, 5.5) if phone() else (6, 3.5))
     for f, mk in [("PF", "o"), ("CMS-PF", "s")]:
         c = cons[cons["filter"] == f]
         ax.errorbar(c["N"], c["dist to exact mean"], 2 * c["se"], marker=mk, capsize=3, label=f)
-    ax.set_xscale("log"); ax.set_yscale("log"); ax.set_xlabel("N"); ax.set_ylabel("RMS distance to exact posterior mean")
-    ax.legend(); ax.set_title("Consistency (sigma_v = 1)")
-    fig.tight_layout()
+    ax.set_xscale("log"); ax.set_yscale("log"); ax.set_xlabel("particles $N$"); ax.set_ylabel("RMS distance to exact mean")
+    plain_log(ax, "x", subs=(1.0,) if phone() else (1.0, 2.0, 5.0))
+    plain_log(ax, "y", subs=(1.0, 2.0, 5.0))
+    ax.set_title(r"Consistency ($\sigma_v = 1$)")
+    legend_below(fig, ax, ncol=2)
     return fig
 
 
@@ -416,35 +500,48 @@ def figures(R) -> dict:
 def fig1_flowchart(checks: pd.DataFrame):
     """Fig. 1 of the paper (the CMS-PF flowchart, printed as an image only), redrawn from sec 2.2's
     steps (l.64-98): one box per step with the paper's statement, coloured by the check of our filter
-    against that step (:func:`pfrepro.experiments.cmspf_ning2011.step_checks`: green passes, red fails);
-    the loop k → k + 1 (Step 5) and the resampling branch (Step 3) as arrows."""
+    against that step (:func:`pfrepro.experiments.cmspf_ning2011.step_checks`: green passes, red fails),
+    an arrow from each step to the next, and the loop k → k + 1 (Step 5) back to Step 2.1 noted
+    below the last box. The statements wrap to the width of the drawing (laptop or phone), at the
+    layout's type size."""
+    import textwrap
+
     import matplotlib.pyplot as plt
     from matplotlib.patches import FancyBboxPatch
 
     order = list(checks.index)
-    # every text at the book's 8 pt minimum (MIN_FONT_PT): taller boxes, the resampling branch in a
-    # left margin of its own
-    fig, ax = plt.subplots(figsize=(9.6, 0.95 * len(order) + 0.6))
-    ax.set_xlim(-2.3, 11.3)
-    ax.set_ylim(-0.6, len(order) * 1.0 + 0.1)
+    fig, ax = new_figure(figsize=(6.5, 6.5))
+    width_in = fig.get_size_inches()[0]
+    size = plt.rcParams["font.size"]
+    line = 1.35 * size / 72                       # inches per text line
+    chars = max(18, int((width_in - 0.4) / (0.62 * size / 72)))   # characters per line inside a box
+    boxes = []
+    for s_ in order:
+        mark = "✓" if bool(checks.loc[s_, "passes"]) else "✗ fails"
+        head = f"{mark} {s_} ({checks.loc[s_, 'line']})"
+        body = textwrap.wrap(reader_text(str(checks.loc[s_, "paper"])), chars)
+        boxes.append((s_, head, body))
+    gap = 0.28                                     # inches between boxes (the arrow)
+    heights = [(1 + len(b)) * line + 0.12 for _, _, b in boxes]
+    loop = textwrap.wrap("↻ Step 5: k ← k + 1, back to Step 2.1", chars) if "Step 2.1" in order else []
+    total = sum(heights) + gap * (len(boxes) - 1) + (len(loop) * line + gap if loop else 0) + 0.1
+    fig.set_size_inches(width_in, total)
+    ax.set_position([0, 0, 1, 1])
+    ax.set_xlim(0, width_in); ax.set_ylim(0, total)
     ax.axis("off")
-    ys = {s: len(order) - 1 - i + 0.4 for i, s in enumerate(order)}
-    for s in order:
-        ok = bool(checks.loc[s, "passes"])
-        y = ys[s]
-        ax.add_patch(FancyBboxPatch((0.0, y - 0.36), 9.4, 0.72, boxstyle="round,pad=0.02",
+    top = total - 0.05
+    centres = []
+    for (s_, head, body), h in zip(boxes, heights):
+        ok = bool(checks.loc[s_, "passes"])
+        ax.add_patch(FancyBboxPatch((0.05, top - h), width_in - 0.1, h, boxstyle="round,pad=0.0,rounding_size=0.06",
                                     fc="#e3f2e3" if ok else "#f8d7d7", ec="#2e7d32" if ok else "#c62828", lw=1))
-        ax.text(0.15, y + 0.13, f"{s}  ({checks.loc[s, 'line']})", fontsize=8, weight="bold", va="center")
-        ax.text(0.15, y - 0.16, str(checks.loc[s, "paper"]), fontsize=8, va="center")
-        ax.text(9.3, y, "✓" if ok else "✗", fontsize=11, color="#2e7d32" if ok else "#c62828", va="center", ha="right")
-    for a, b in zip(order[:-1], order[1:]):
-        ax.annotate("", xy=(4.1, ys[b] + 0.37), xytext=(4.1, ys[a] - 0.37),
-                    arrowprops=dict(arrowstyle="->", lw=0.9))
-    if "Step 2.1" in ys and order[-1] in ys:      # Step 5: k = k + 1, back to Step 2
-        ax.annotate("", xy=(9.4, ys["Step 2.1"]), xytext=(9.4, ys[order[-1]]),
-                    arrowprops=dict(arrowstyle="->", lw=0.9, connectionstyle="arc3,rad=0.45"))
-        ax.text(10.6, (ys["Step 2.1"] + ys[order[-1]]) / 2, "Step 5:\nk ← k + 1", fontsize=8, ha="center", va="center")
-    if "Step 3" in ys:
-        ax.text(-0.15, ys["Step 3"], "N_eff < N_th?\nyes: resample", fontsize=8, ha="right", va="center")
-    ax.set_title("Fig. 1 (CMS-PF flow), redrawn from sec 2.2; each step checked on our filter", fontsize=8)
+        ax.text(0.15, top - 0.06, head, weight="bold", va="top", color="#1b5e20" if ok else "#b71c1c")
+        if body:
+            ax.text(0.15, top - 0.06 - line, "\n".join(body), va="top", linespacing=1.35)
+        centres.append((top, top - h))
+        top -= h + gap
+    for (_, b0), (t1, _) in zip(centres[:-1], centres[1:]):
+        ax.annotate("", xy=(width_in / 2, t1), xytext=(width_in / 2, b0), arrowprops=dict(arrowstyle="->", lw=0.9))
+    if loop:
+        ax.text(width_in / 2, centres[-1][1] - gap, "\n".join(loop), ha="center", va="top", linespacing=1.35)
     return fig

@@ -12,10 +12,12 @@ import pandas as pd
 from ..experiments import ekf_pf_li2012 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
+from ._layout import legend_below, letter, phone, plain_log, reader_text
 
 __all__ = ["one_run_panel", "per_time_panel", "figs_1_3", "figs_2_4", "fig1", "fig2", "fig3", "fig4",
            "table1_plot", "table1_shown", "ess_plot", "sweep_plot", "statistic_readings_table", "gap_table",
-           "cost_table", "count_table", "sensitivity_shown", "seed_spread_plot", "nsweep_plot", "tables", "figures",
+           "cost_table", "count_table", "nsweep_table", "degeneracy_vs_n_table", "statements_table", "pm", "DIGITS",
+           "sensitivity_shown", "seed_spread_plot", "nsweep_plot", "tables", "figures",
            "TABLES", "FIGURES", "N_STEPS"]
 
 #: what :func:`tables` and :func:`figures` make
@@ -25,6 +27,31 @@ FIGURES = ("Fig. 1", "Fig. 2", "Fig. 3", "Fig. 4")
 N_STEPS = 8
 #: figure number -> (model, kind)
 _FIG = {1: (1, "run"), 2: (1, "rmse"), 3: (2, "run"), 4: (2, "rmse")}
+#: legend names where the experiments' labels are plain text (the figures use the text's symbols)
+_LEGEND = {"EKF": "EKF, eq (10)", "EKF-prev": r"EKF, $B_k$ at $\hat x_{k-1|k-1}$ (code)"}
+
+
+def _phone() -> bool:
+    return phone()
+
+
+def _legend_below(fig, axes, ncol: int = 2):
+    return legend_below(fig, axes, ncol)
+
+
+def _letter(i: int) -> str:
+    return letter(i)
+
+
+def _plain_log(ax, axis: str = "y") -> None:
+    plain_log(ax, axis)
+
+
+def _size(w: float, h: float, phone_h: float | None = None) -> tuple:
+    """``(w, h)``, or ``(w, phone_h)`` on the phone: panels whose rotated tick labels need height."""
+    return (w, phone_h) if phone_h is not None and _phone() else (w, h)
+
+
 
 
 def one_run_panel(ax, res, which: int, fig_no: int, run: int = 0) -> None:
@@ -37,7 +64,6 @@ def one_run_panel(ax, res, which: int, fig_no: int, run: int = 0) -> None:
         ax.plot(k, res.results["Exact"].x[run, :, 0], ":", color=REFERENCE_COLOR, lw=2, label="exact posterior mean")
     ax.set_ylabel("state $x_k$")
     ax.set_title(f"Fig. {fig_no}: {E.MODEL_LABELS[which]}, one run")
-    ax.legend(fontsize=8, ncol=4, loc="upper left")
 
 
 def per_time_panel(ax, res, which: int, fig_no: int) -> None:
@@ -48,19 +74,20 @@ def per_time_panel(ax, res, which: int, fig_no: int) -> None:
     ax.plot(pt.index, pt["PF"], "-s", color=method_color("PF"), ms=3, label="PF")
     if "Exact" in pt:
         ax.plot(pt.index, pt["Exact"], ":", color=REFERENCE_COLOR, lw=2, label="exact posterior mean")
-    ax.set_xlabel("time step k (s)")
+    ax.set_xlabel("time step $k$")
     ax.set_ylabel(f"RMSE over {res.sim.runs} runs")
     ax.set_title(f"Fig. {fig_no}: {E.MODEL_LABELS[which]}")
-    ax.legend(fontsize=8)
 
 
 def figs_1_3(figs: dict, run: int = 0):
     """Figs. 1 and 3 stacked: one run of each model. ``figs`` maps model -> MonteCarloResult."""
-    fig, axes = new_figure(2, 1, figsize=(9, 7), sharex=True)
+    # on the phone each panel as tall as the layout allows: 60 steps in 3 inches are dense
+    fig, axes = new_figure(2, 1, figsize=(9, 14) if _phone() else (9, 7), sharex=True)
     for ax, w, fno in zip(axes, (1, 2), (1, 3)):
         one_run_panel(ax, figs[w], w, fno, run)
-    axes[-1].set_xlabel("time step k (s)")
-    fig.tight_layout()
+    for ax in axes:
+        ax.set_xlabel("time step $k$")
+    _legend_below(fig, axes, ncol=4)
     return fig
 
 
@@ -69,19 +96,19 @@ def figs_2_4(figs: dict):
     fig, axes = new_figure(1, 2, figsize=(10.2, 4))
     for ax, w, fno in zip(axes, (1, 2), (2, 4)):
         per_time_panel(ax, figs[w], w, fno)
-    fig.tight_layout()
+    _legend_below(fig, axes, ncol=3)
     return fig
 
 
 def _single(fig_no: int, figs: dict):
     which, kind = _FIG[fig_no]
-    fig, ax = new_figure(figsize=(9, 3.8) if kind == "run" else (6, 4))
+    fig, ax = new_figure(figsize=((9, 7) if _phone() else (9, 3.8)) if kind == "run" else (6, 4))
     if kind == "run":
         one_run_panel(ax, figs[which], which, fig_no)
-        ax.set_xlabel("time step k (s)")
+        ax.set_xlabel("time step $k$")
     else:
         per_time_panel(ax, figs[which], which, fig_no)
-    fig.tight_layout()
+    _legend_below(fig, ax, ncol=4)
     return fig
 
 
@@ -105,17 +132,34 @@ def fig4(figs: dict):
     return _single(4, figs)
 
 
+#: digits of each model's RMSEs, in the table and in the text (one rounding for both)
+DIGITS = {"Model 1": 2, "Model 2": 3}
+
+
+def pm(value: float, se: float, digits: int) -> str:
+    """``"19.66 ± 0.95"``: a value and its standard error at ``digits`` decimals."""
+    return f"{value:.{digits}f} ± {se:.{digits}f}"
+
+
 def table1_shown(t1):
-    """Table 1 as the chapter shows it: :func:`~pfrepro.experiments.ekf_pf_li2012.table1`'s frame
-    with the ``published`` column as the paper prints it (``30.1709``, :func:`pfrepro.published.formatter`),
-    our numbers as floats (rounded by the display)."""
+    """Table 1 as the chapter shows it, eight columns: the published value as the paper prints it
+    (``30.1709``, :func:`pfrepro.published.formatter`), ours and the exact posterior's RMSE as
+    "mean ± se" at the digits the text uses (:data:`DIGITS`), z, the verdict of the cell under the
+    main reading and how many of the exact posterior's standard errors the published value lies
+    from it. ``t1`` is :func:`~pfrepro.experiments.ekf_pf_li2012.table1`'s frame (the download
+    keeps its every column)."""
     from .. import published
 
     fmt = published.formatter(E.PAPER, "Table 1")
-    show = t1.rename(columns={"published_minus_exact_in_se": "(published − exact)/se(exact)",
-                              "verdict": "verdict (main reading)"}).copy()
-    show["published"] = show["published"].map(fmt)
-    return show
+    d = [DIGITS.get(m, 3) for m in t1["model"]]
+    return pd.DataFrame({
+        "model": t1["model"], "filter": t1["filter"], "published": t1["published"].map(fmt),
+        "ours (± se)": [pm(v, e, k) for v, e, k in zip(t1["ours"], t1["se"], d)],
+        "z": [f"{v:.1f}" for v in t1["z"]],
+        "verdict (main reading)": t1["verdict"],
+        "exact posterior (± se)": [pm(v, e, k) for v, e, k in zip(t1["exact"], t1["exact_se"], d)],
+        "published − exact, in se": [f"{v:.1f}" for v in t1["published_minus_exact_in_se"]],
+    }).style.hide(axis="index")
 
 
 def table1_plot(t1):
@@ -134,11 +178,11 @@ def table1_plot(t1):
         ax.set_xticks(x, sub["filter"])
         ax.set_xlim(-0.6, len(sub) - 0.4)
         ax.set_ylabel("mean per-run RMSE")
-        ax.set_title(f"Table 1, {col}")
+        ax.set_title(f"{_letter(w - 1)} Table 1, {col}" + (" (log scale)" if w == 1 else ""))
         if w == 1:
             ax.set_yscale("log")
-        ax.legend(fontsize=8)
-    fig.tight_layout()
+            _plain_log(ax)
+    _legend_below(fig, axes, ncol=3)
     return fig
 
 
@@ -150,19 +194,17 @@ def ess_plot(deg: dict, n_particles: int = E.N_PARTICLES):
     axes = np.atleast_1d(axes)
     for ax, (w, d) in zip(axes, deg.items()):
         t = d["ess_over_time"]
-        for n, c, lab in (("PF", method_color("PF"), "PF, resampling every step"),
-                           ("SIS", method_color("SIS"), "SIS, no resampling")):
-            ax.plot(t.index, t[(n, "median")], color=c, lw=2, label=f"{lab} (median)")
+        for n, c, lab in (("PF", method_color("PF"), "PF"), ("SIS", method_color("SIS"), "SIS")):
+            ax.plot(t.index, t[(n, "median")], color=c, lw=2, label=f"{lab}: median")
             ax.fill_between(t.index, t[(n, "q10")], t[(n, "q90")], color=c, alpha=0.2, lw=0,
-                            label="10-90 % of runs")
-        ax.axhline(E.FEW_FRACTIONS[0], color="k", ls=":", lw=1, label=f"{E.FEW_FRACTIONS[0]:.0%} of N")
+                            label=f"{lab}: 10–90 % of runs")
+        ax.axhline(E.FEW_FRACTIONS[0], color="k", ls=":", lw=1, label=f"{E.FEW_FRACTIONS[0]:.0%} of $N$")
         ax.set_yscale("log")
         ax.set_ylim(0.5 / n_particles, 1.2)
-        ax.set_xlabel("time step k")
-        ax.set_title(f"{E.MODEL_LABELS[w]}, N = {n_particles}")
-    axes[0].set_ylabel("effective sample size / N")
-    axes[-1].legend(fontsize=8, loc="center right")
-    fig.tight_layout()
+        ax.set_xlabel("time step $k$")
+        ax.set_ylabel("effective sample size / $N$")
+        ax.set_title(f"{_letter(list(deg).index(w))} {E.MODEL_LABELS[w]}, $N$ = {n_particles}")
+    _legend_below(fig, axes, ncol=2)
     return fig
 
 
@@ -171,24 +213,24 @@ def sweep_plot(sens):
     (±2 se) and the exact posterior's under every swept value, with the published cells, one panel
     per model. ``sens`` is :func:`~pfrepro.experiments.ekf_pf_li2012.sensitivity`'s frame."""
     pub = E.published_table1()
-    fig, axes = new_figure(1, 2, figsize=(10.2, 3.8))
+    fig, axes = new_figure(1, 2, figsize=_size(10.2, 3.8, 6.5))
     for ax, w in zip(axes, (1, 2)):
         col = E.MODEL_LABELS[w]
         sub = sens[(sens["model"] == col) & sens["setting"].isin(["P0", "resampling"])].reset_index(drop=True)
         x = np.arange(len(sub))
-        labels = [f"P0={v:g}" if st == "P0" else str(v) for st, v in zip(sub["setting"], sub["value"])]
+        labels = [f"$P_0$ = {v:g}" if st == "P0" else str(v) for st, v in zip(sub["setting"], sub["value"])]
         for name, c, dx in (("EKF", method_color("EKF"), -0.12), ("PF", method_color("PF"), 0.12)):
             ax.errorbar(x + dx, sub[name], 2 * sub[f"{name}_se"], fmt="o", color=c, capsize=3, label=f"{name} (±2 se)")
             ax.axhline(float(pub.loc[name, col]), color=c, ls="--", lw=1, label=f"{name}, published")
         ex = sub["exact"].to_numpy(float)
         ax.plot(x[np.isfinite(ex)], ex[np.isfinite(ex)], "s", color=REFERENCE_COLOR, ms=5, label="exact posterior")
-        ax.set_xticks(x, labels, rotation=45, fontsize=8)
+        ax.set_xticks(x, labels, rotation=60, ha="right", rotation_mode="anchor")
         ax.set_ylabel("mean per-run RMSE")
-        ax.set_title(col)
+        ax.set_title(f"{_letter(w - 1)} {col}" + (" (log scale)" if w == 1 else ""))
         if w == 1:
             ax.set_yscale("log")
-        ax.legend(fontsize=8, ncol=2)
-    fig.tight_layout()
+            _plain_log(ax)
+    _legend_below(fig, axes, ncol=3)
     return fig
 
 
@@ -198,9 +240,12 @@ def statistic_readings_table(res: dict):
     model -> MonteCarloResult."""
     import pandas as pd
 
-    out = pd.concat({E.MODEL_LABELS[w]: E.statistic_readings(res[w], list(E.FILTERS)) for w in res}, axis=1)
-    out.index.name = "filter"
-    return out
+    words = {"mean_run_rmse": "mean of per-run RMSE", "pooled": "pooled RMS",
+             "mean_time_rmse": "time average of per-time RMSE"}
+    out = pd.concat({E.MODEL_LABELS[w]: E.statistic_readings(res[w], list(E.FILTERS)).rename(columns=words)
+                     for w in res}, axis=1)
+    out.index = [E.FILTER_LABELS.get(n, n) if n == "Exact" else n for n in out.index]
+    return out.style.format("{:.3f}")
 
 
 def gap_table(res: dict):
@@ -226,17 +271,42 @@ def cost_table(cost: dict):
     (:func:`~pfrepro.experiments.ekf_pf_li2012.cost_ratios`; context, never a claim)."""
     import pandas as pd
 
-    return pd.concat({E.MODEL_LABELS[w]: cost[w][["single_run_ratio", "amortised_ratio"]] for w in cost}, axis=1)
+    words = {"single_run_ratio": "single run", "amortised_ratio": "amortised over 100 runs"}
+    out = pd.concat({E.MODEL_LABELS[w]: cost[w][list(words)].rename(columns=words) for w in cost}, axis=1)
+    out.index = [E.FILTER_LABELS.get(n, n) if n == "Exact" else n for n in out.index]
+    return out.style.format("{:.2f}")
 
 
 def count_table(cnt: dict):
     """Model evaluations per step and their ratio to the EKF's (the cost claim's evidence), beside
-    the single-run time ratio (context), per model (:func:`~pfrepro.experiments.ekf_pf_li2012.cost_evidence`), styled."""
-    import pandas as pd
+    the single-run time ratio (context: median and [min, max] over interleaved repeats), per model
+    (:func:`~pfrepro.experiments.ekf_pf_li2012.cost_evidence`), styled."""
+    rows = []
+    for w, c in cnt.items():
+        for name, r in c.iterrows():
+            row = {"model": E.MODEL_LABELS[w], "filter": E.FILTER_LABELS.get(name, name) if name == "Exact" else name,
+                   "model evaluations per step": f"{r['model evals / step']:.0f}",
+                   "count ratio to the EKF": f"{r['count ratio']:.4g}"}
+            if "time ratio" in r.index:  # measured beside the count (context)
+                row["time ratio (median)"] = f"{r['time ratio']:.2f}"
+                row["time ratio [min, max]"] = f"[{r['time ratio min']:.2f}, {r['time ratio max']:.2f}]"
+            rows.append(row)
+    return pd.DataFrame(rows).style.hide(axis="index")
 
-    return pd.concat({E.MODEL_LABELS[w]: cnt[w] for w in cnt}).style.format(
-        {"model evals / step": "{:.0f}", "count ratio": "{:.4g}", "time ratio": "{:.2f}",
-         "time ratio min": "{:.2f}", "time ratio max": "{:.2f}"})
+
+def nsweep_table(nsweep: dict):
+    """The numbers behind :func:`nsweep_plot`: per model and N, the PF's mean per-run RMSE (± se),
+    its paired gap to the exact posterior (± se) and its time relative to the EKF (single run and
+    amortised); ``nsweep`` maps model -> :func:`~pfrepro.experiments.ekf_pf_li2012.rmse_and_cost_vs_n`."""
+    rows = []
+    for w, d in nsweep.items():
+        k = DIGITS.get(E.MODEL_LABELS[w], 3)
+        for n, r in d.iterrows():
+            rows.append({"model": E.MODEL_LABELS[w], "N": int(n), "PF RMSE (± se)": pm(r["rmse"], r["se"], k),
+                         "gap to exact (± se)": pm(r["gap"], r["gap_se"], k + 1),
+                         "time ratio, single run": f"{r['single_run_ratio']:.2f}",
+                         "time ratio, amortised": f"{r['amortised_ratio']:.1f}"})
+    return pd.DataFrame(rows).style.hide(axis="index")
 
 
 #: one-letter verdicts of the sensitivity table (the chapter gives the legend)
@@ -266,21 +336,22 @@ def seed_spread_plot(spread):
     linearisation point (±2 se), with the published EKF value, one panel per model; ``spread`` is
     :func:`~pfrepro.experiments.ekf_pf_li2012.ekf_seed_spread`'s frame."""
     pub = E.published_table1()
-    fig, axes = new_figure(1, 2, figsize=(10.2, 3.6))
+    fig, axes = new_figure(1, 2, figsize=_size(10.2, 3.6, 6.0))
     for ax, w in zip(axes, (1, 2)):
         sub = spread[spread["model"] == E.MODEL_LABELS[w]]
         seeds = list(dict.fromkeys(sub["seed"]))
-        for j, (n, c) in enumerate((("EKF", method_color("EKF")), ("EKF-prev", SERIES_COLORS[1]))):
+        for j, (n, c, mk) in enumerate((("EKF", method_color("EKF"), "o"), ("EKF-prev", "#6a3d9a", "s"))):
             q = sub[sub["filter"] == n]
-            ax.errorbar(np.arange(len(q)) + 0.15 * (j - 0.5), q["mean"], 2 * q["se"], fmt="o", color=c,
-                        capsize=2, label=E.FILTER_LABELS[n])
+            ax.errorbar(np.arange(1, len(q) + 1) + 0.15 * (j - 0.5), q["mean"], 2 * q["se"], fmt=mk, color=c,
+                        capsize=2, label=_LEGEND[n])
         ax.axhline(pub.loc["EKF", E.MODEL_LABELS[w]], color=REFERENCE_COLOR, ls="--", label="published EKF (Table 1)")
-        ax.set_xticks(np.arange(len(seeds)), [str(v) for v in seeds], rotation=60, fontsize=8)
-        ax.set_xlabel("seed of the 100-run set")
+        step = 1 if len(seeds) <= 6 or not _phone() else 2
+        ax.set_xticks(np.arange(1, len(seeds) + 1, step))
+        ax.set_xlabel("100-run set (1: Table 1's)" if seeds and int(seeds[0]) == E.SEEDS["table"]
+                      else "100-run set")
         ax.set_ylabel("mean per-run RMSE")
-        ax.set_title(E.MODEL_LABELS[w])
-        ax.legend(fontsize=8)
-    fig.tight_layout()
+        ax.set_title(f"{_letter(w - 1)} {E.MODEL_LABELS[w]}")
+    _legend_below(fig, axes, ncol=2)
     return fig
 
 
@@ -296,18 +367,22 @@ def nsweep_plot(nsweep: dict, res: dict):
         ax.axhline(res[w].rmse("Exact").mean(), color=REFERENCE_COLOR, ls=":", lw=2, label="exact posterior mean")
         ax.axhline(res[w].rmse("EKF").mean(), color=method_color("EKF"), ls="--", label="EKF")
         ax.set_xscale("log")
-        ax.set_xlabel("particles N")
+        ax.set_xlabel("particles $N$")
         ax.set_ylabel(f"mean per-run RMSE ({res[w].sim.runs} runs)")
-        ax.set_title(f"{E.MODEL_LABELS[w]}")
-        ax.legend(fontsize=8)
+        ax.set_title(f"{_letter(w - 1)} {E.MODEL_LABELS[w]}")
+        ax.legend(loc="best")
         if w == 1:
             ax.set_yscale("log")
+            _plain_log(ax)
         axes[2].loglog(d.index, d["amortised_ratio"], "o-", color=c, label=f"{E.MODEL_LABELS[w]}, amortised")
         axes[2].loglog(d.index, d["single_run_ratio"], "s--", color=c, label=f"{E.MODEL_LABELS[w]}, single run")
-    axes[2].set_xlabel("particles N")
-    axes[2].set_ylabel("PF time / EKF time per run")
-    axes[2].set_title("cost relative to the EKF")
-    axes[2].legend(fontsize=8)
+    for ax in axes:
+        plain_log(ax, "x", subs=(1.0,))
+    plain_log(axes[2], "y", subs=(1.0, 3.0))
+    axes[2].set_xlabel("particles $N$")
+    axes[2].set_ylabel("PF time / EKF time")
+    axes[2].set_title("(c) cost relative to the EKF")
+    axes[2].legend(loc="best")
     fig.tight_layout()
     return fig
 
@@ -333,7 +408,8 @@ def statements_table(reg, results):
     rows = []
     for cid, line in STATEMENT_CLAIMS.items():
         c = by_id[cid]
-        rows.append({"paper": line, "claim": c.text, "judged by": c.note, "verdict": c.verdict_text()})
+        rows.append({"paper": line, "claim": reader_text(c.text), "judged by": reader_text(c.note),
+                     "verdict": c.verdict_text()})
     return pd.DataFrame(rows)
 
 

@@ -21,6 +21,8 @@ run; capped by the budget). Nothing here runs an experiment.
 """
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pandas as pd
 
@@ -870,7 +872,7 @@ def takeaway(reg, R) -> str:
     elif better is not None and better.cause == "depends on the reading":
         holds_ = better.judgement.under("holds")
         first = ("Whether CMS-PF beats the bootstrap PF depends on settings the paper does not give (it holds only "
-                 "under " + ", ".join(holds_) + "), so it is no safe replacement for a plain PF.")
+                 "under " + ", ".join(reading_words(h) for h in holds_) + "), so it is no safe replacement for a plain PF.")
     else:
         need = f" ({better.runs_needed} runs per reading would decide it)" if better is not None and better.runs_needed else ""
         first = ("Whether CMS-PF beats the bootstrap PF is not decided by our runs" + need
@@ -957,6 +959,36 @@ def _prose_tables(R) -> dict:
     return out
 
 
+#: how a reading tag reads in running text (the tags stay the claims' keys)
+_TAG_WORDS = [(re.compile(r"sigma_v_t\d=R (\d+)"), r"σ_v² = \1"), (re.compile(r"sigma_w2="), "σ_w² = "),
+              (re.compile(r"\beta="), "η = "), (re.compile(r"\bn_big="), "n_big = "), (re.compile(r"\bn_th="), "N_th = "),
+              (re.compile(r"\bcarrier_init="), "carrier start "), (re.compile(r"\bcarrier="), "carrier "),
+              (re.compile(r"\bburn_in="), "burn-in T₀ = "), (re.compile(r"\bu="), "u = "),
+              (re.compile(r"\bpf_resampling="), "PF resampling "), (re.compile(r"\bN_t23="), "N = "),
+              (re.compile(r"\bukf="), "UKF "), (re.compile(r"\bespf="), "ESPF ")]
+
+
+def beyond_sentence(verdicts) -> str:
+    """The verdicts of the claims beyond the single table cells, counted: "Of the 16 claims beyond the
+    single table entries, 10 are reproduced, ..." (``verdict_sentence``'s counts)."""
+    verdicts = list(verdicts)
+    if not verdicts:
+        return "No claim goes beyond the single table entries."
+    head, rest = verdict_sentence(verdicts).split(", ", 1)
+    n = len(verdicts)
+    return (f"Of the {n} claims beyond the single table entries, " if n > 1 else
+            "Of the one claim beyond the single table entries, ") + rest + "."
+
+
+def reading_words(tag: str) -> str:
+    """A reading tag in reader words: ``"sigma_v_t3=R 100, sigma_w2=1"`` -> ``"σ_v² = 100, σ_w² = 1"``,
+    ``"eta=0.2"`` -> ``"η = 0.2"``; the main reading and unknown tags are returned as they are."""
+    out = str(tag)
+    for pat, rep in _TAG_WORDS:
+        out = pat.sub(rep, out)
+    return out
+
+
 def _prose_fig3(R) -> dict:
     f3u = {t: R.plans["f3"]["runs"] for t in E.F3_TAGS}
     sl_all, sl_up = f3_pairs(R.f3_runs)
@@ -964,7 +996,7 @@ def _prose_fig3(R) -> dict:
            "cms_f3_slope_up": -sl_up[0], "cms_f3_slope_up_se": sl_up[1]}
     pairs = {t: f3_pairs(R.f3_reading(t, f3u[t])) for t in E.F3_TAGS}
     out["cms_f3_readings"] = Md("Under every reading: " + "; ".join(
-        f"{t} ({f3u[t]} runs): {_f3_word(pairs[t])}" for t in E.F3_TAGS) + ".")
+        f"{reading_words(t)} ({f3u[t]} runs): {_f3_word(pairs[t])}" for t in E.F3_TAGS) + ".")
     out["cms_f3_main_word"] = Md(_f3_word(f3_pairs(R.f3_runs)))
     # where the error still falls beyond N = 100, reading by reading (the same decisions as the readings sentence)
     w = {True: "falls", False: "rises", None: "shows no trend beyond Monte Carlo noise"}
@@ -976,7 +1008,7 @@ def _prose_fig3(R) -> dict:
         small = "Whatever falls, falls at small N: under no reading does the error fall over N ≥ 100"
     else:
         small = ("Whether the error still falls beyond N = 100 depends on the reading: over N ≥ 100 it "
-                 + "; it ".join(f"{word} under {' / '.join(ts)}" for word, ts in up_by.items()))
+                 + "; it ".join(f"{word} under {' / '.join(reading_words(t) for t in ts)}" for word, ts in up_by.items()))
     out["cms_f3_beyond_100"] = Md(small + "; what more particles do not remove is the bias of the improper "
                                   "weights (see *Beyond the paper*).")
     return out
@@ -1000,11 +1032,11 @@ def _prose_table3(R) -> dict:
     ok = [k for k, v in attain.items() if v]
     para = []
     if below:
-        para.append(f"Under {', '.join(below)} the published {p['col']} mean ({p['text']} ± {p['se']:.2f}) "
+        para.append(f"Under {', '.join(reading_words(b) for b in below)} the published {p['col']} mean ({p['text']} ± {p['se']:.2f}) "
                     "is significantly below the exact posterior mean: no filter that does not know the state can do "
                     "that on average.")
     if ok:
-        para.append(f"Under {', '.join(ok)} it is not, and the published values are attainable by a filter.")
+        para.append(f"Under {', '.join(reading_words(o) for o in ok)} it is not, and the published values are attainable by a filter.")
     para.append("The conclusion therefore depends on a reading the paper does not settle; the claim below records "
                 "every reading and its verdict follows their spread (inconclusive)." if below and ok else
                 "Every reading supports the same conclusion.")
@@ -1079,7 +1111,7 @@ def _prose_verdicts(reg, R) -> dict:
     main2 = R.t2_reading(E.T2_MAIN, R.n["t2"])
     d, se = _f2_order(main2)[0]
     out = {"cms_f2_sentence": Md(f"Over Table 2's {R.n['t2']} runs the EKF's RMSE exceeds the CMS-PF's by {d:.2f} ± "
-                                 f"{se:.2f} (paired; claim `f2_cms_better_than_ekf`).")}
+                                 f"{se:.2f} (paired; a claim of the verdict table).")}
     c = f6_choice(R)
     n6 = R.plans["f6"]["runs"]
     er = c["eta_runs"]
@@ -1098,12 +1130,12 @@ def _prose_verdicts(reg, R) -> dict:
     parts = []
     for t in E.T2_READINGS:
         dd, ss = f6_pairs(R.f6_reading(t, n6))[0]
-        parts.append(f"{t.replace('sigma_v_t2=R ', 'σ_v² = ').replace('sigma_w2=', 'σ_w² = ')}: {per.get(t, '')} "
+        parts.append(f"{reading_words(t)}: {per.get(t, '')} "
                      f"(outside − inside {dd:+.3f} ± {ss:.3f})")
     out["cms_f6_sentence"] = Md(
         turn_txt + f"Chosen on runs 1–{c['half']} and judged on runs {c['half'] + 1}–{len(er)} (paired), the best value "
         f"outside [0.2, 0.8] (alpha = {c['out']:g}) minus the best inside (alpha = {c['in']:g}) is {c['d']:.3f} ± "
-        f"{c['se']:.3f} in RMSE: {word}. The claim `f6_alpha_range` reruns the sweep under each of Table 2's noise "
+        f"{c['se']:.3f} in RMSE: {word}. The claim on the paper's range reruns the sweep under each of Table 2's noise "
         f"readings on {n6} runs (its power plan; picked on runs 1–{n6 // 2}, judged on {n6 // 2 + 1}–{n6}): "
         + "; ".join(parts) + ".")
     cells, _ = which_reading(reg)
@@ -1113,7 +1145,7 @@ def _prose_verdicts(reg, R) -> dict:
     for tb in ("Table 1", "Table 2", "Table 3"):
         r = best[tb].idxmax()
         m = cells[(cells.table == tb) & (cells.reading == r)].shape[0]
-        parts.append(f"{tb}: most cells under {r} ({int(round(best[tb].max() * m))} of {m})")
+        parts.append(f"{tb}: most cells under {reading_words(r)} ({int(round(best[tb].max() * m))} of {m})")
     out["cms_which_reading"] = Md("; ".join(parts))
     verdicts = [c.verdict for c in reg.claims]
     for v in ["reproduced", "qualitatively reproduced", "not reproduced", "not checkable", "inconclusive"]:
@@ -1126,6 +1158,10 @@ def _prose_verdicts(reg, R) -> dict:
         txt = ", ".join(f"`{c.claim_id}`" + (f" ({c.verdict_text()[len('inconclusive ('):-1]})" if v == "inconclusive" else "")
                         for c in cs)
         out[f"cms_ids_{v.replace(' ', '_')}"] = Md(txt or "none")
+    beyond = [c.verdict for c in reg.claims
+              if not c.claim_id.startswith(("t1_pf_", "t1_cms_mean", "t2_rmse_", "t3_mean_"))]
+    # the claims beyond the single table cells, counted in words (the table above names each one)
+    out["cms_beyond_sentence"] = Md(beyond_sentence(beyond))
     return out
 
 

@@ -81,6 +81,22 @@ STATEMENT_CLAIMS = {"kf-optimal-linear": "l.35", "more-particles-less-degeneracy
 _CELLS = tuple(f"table1-{n.lower()}-model{w}" for w in (1, 2) for n in ("EKF", "PF"))
 
 
+def cells_in_words(cells) -> str:
+    """Table 1 cells in words: ``["table1-pf-model2"]`` -> ``"the model 2 PF cell"``, two or more
+    joined ("the model 1 EKF and model 2 PF cells"); ``"none"`` for none."""
+    from ..prose import join_and
+
+    names = []
+    for c in cells:
+        if c not in _CELLS:
+            raise ValueError(f"cells_in_words: {c!r} is not a Table 1 cell ({', '.join(_CELLS)})")
+        _, f, m = c.split("-")
+        names.append(f"model {m[-1]} {f.upper()}")
+    if not names:
+        return "none"
+    return f"the {names[0]} cell" if len(names) == 1 else f"the {join_and(names)} cells"
+
+
 def printed_pf_gain(which: int) -> float:
     """The PF's printed advantage on model ``which``: Table 1's EKF cell minus its PF cell (RMSE
     units; model 1: 30.1709 - 3.9459, model 2: 1.1281 - 1.0479), computed from the published data."""
@@ -564,6 +580,7 @@ def prose(reg, results) -> dict:
         out[f"li_sis_rmse_m{w}"] = float(d["SIS"]["rmse"].mean())
         out[f"li_pf_rmse_m{w}"] = float(d["PF"]["rmse"].mean())
         out[f"li_sis_excess_m{w}"], out[f"li_sis_excess_m{w}_se"] = paired_difference(d["SIS"]["rmse"], d["PF"]["rmse"])
+    out["li_sis_never_phrase"] = sis_never_phrase(out["li_sis_never_m1"], out["li_sis_never_m2"], R.runs["table"])
     # Table 1
     t1 = E.table1(res)
     for _, row in t1.iterrows():
@@ -576,6 +593,8 @@ def prose(reg, results) -> dict:
         out[f"li_exact_m{w}"], out[f"li_exact_m{w}_se"] = ex.mean, ex.se
         out[f"li_pubpf_below_exact_m{w}"] = float((ex.mean - pub.loc["PF", E.MODEL_LABELS[w]]) / ex.se)
         out[f"li_pubekf_below_exact_m{w}"] = float((ex.mean - pub.loc["EKF", E.MODEL_LABELS[w]]) / ex.se)
+    out.update(optimum_prose(*(-out[k] for k in ("li_pubpf_below_exact_m1", "li_pubpf_below_exact_m2",
+                                                   "li_pubekf_below_exact_m2"))))
     ekf1 = res[1].rmse("EKF")
     out["li_ekf1_median"], out["li_ekf1_p90"] = float(np.median(ekf1)), float(np.quantile(ekf1, 0.9))
     out["li_ekf1_max"] = float(ekf1.max())
@@ -593,6 +612,48 @@ def prose(reg, results) -> dict:
     out.update(_gap_prose(res))
     out.update(_verdict_prose(reg, R))
     return out
+
+
+def optimum_prose(z_pf1: float, z_pf2: float, z_ekf2: float) -> dict:
+    """Where the published PF values (and the model-2 EKF value) lie against the exact posterior
+    mean's RMSE, in words, from ``z = (published − exact) / se(exact)`` (the sign of Table 1's
+    last column): the paragraph's head ``li_pub_optimum_head`` and its sentence
+    ``li_pub_optimum_sentence`` (with the consequence "no filter can do that much better" only when
+    a published PF value lies more than 2 se below the optimum)."""
+    import math
+
+    for name, z in (("z_pf1", z_pf1), ("z_pf2", z_pf2), ("z_ekf2", z_ekf2)):
+        if not isinstance(z, (int, float)) or not math.isfinite(z):
+            raise ValueError(f"optimum_prose: {name} must be a finite number, got {z!r}")
+
+    def where(z, unit="standard errors"):
+        return f"{abs(z):.1f} {unit} {'below' if z < 0 else 'above'}"
+
+    below = [z < -2 for z in (z_pf1, z_pf2)]
+    head = ("The published PF values are below the optimum." if all(below) else
+            "A published PF value is below the optimum." if any(below) else
+            "The published PF values are not below the optimum.")
+    sent = f"The published PF values lie {where(z_pf1)} them (model 1) and {where(z_pf2)} (model 2)"
+    if z_ekf2 < -2:
+        sent += f", and on model 2 the published EKF value too ({where(z_ekf2, 'se')})"
+    else:
+        sent += f"; the published model-2 EKF value lies {where(z_ekf2, 'se')} it"
+    sent += "."
+    if any(below):
+        sent += (" The posterior mean minimises the expected squared error at every step, so no filter can "
+                 "do that much better on the model as printed.")
+    return {"li_pub_optimum_head": head, "li_pub_optimum_sentence": sent}
+
+
+def sis_never_phrase(never_m1: int, never_m2: int, runs: int) -> str:
+    """The runs in which SIS's ESS never falls below the threshold, in words: "it does so in every
+    run of both models", or "it never does in 3 of the 100 runs of model 1 and 0 of model 2"."""
+    for name, v in (("never_m1", never_m1), ("never_m2", never_m2)):
+        if not 0 <= v <= runs:
+            raise ValueError(f"sis_never_phrase: {name} must be in [0, runs={runs}], got {v}")
+    if never_m1 == 0 and never_m2 == 0:
+        return "it does so in every run of both models"
+    return f"it never does in {never_m1} of the {runs} runs of model 1 and {never_m2} of model 2"
 
 
 def _sensitivity_prose(R) -> dict:
@@ -617,12 +678,78 @@ def _sensitivity_prose(R) -> dict:
         out[f"li_sens_exact_min_m{w}"] = float(s[s["setting"] == "P0"]["exact"].min())
         prev = s[(s["setting"] == "EKF linearisation") & (s["value"] == E.FILTER_LABELS["EKF-prev"])].iloc[0]
         out[f"li_sens_prev_m{w}"], out[f"li_sens_prev_m{w}_se"] = float(prev["EKF"]), float(prev["EKF_se"])
-        out[f"li_sens_verdicts_m{w}"] = ", ".join(sorted(set(s["verdict_EKF"]) | set(s["verdict_PF"])))
+    out["li_sens_ndiff_sentence"] = sensitivity_change_sentence(n_diff, n_set)
+    out["li_sens_cells"] = sensitivity_cells_sentence(sens)
     return out
 
 
+def sensitivity_change_sentence(n_diff: int, n_set: int) -> str:
+    """How many of the swept settings change a verdict, e.g. "In none of the 18 prior and resampling
+    settings does any of the three verdicts differ from the baseline's"."""
+    if not 0 <= n_diff <= n_set:
+        raise ValueError(f"sensitivity_change_sentence: need 0 <= n_diff <= n_set, got {n_diff}, {n_set}")
+    if n_diff == 0:
+        return f"In none of the {n_set} prior and resampling settings does any of the three verdicts differ from the baseline's"
+    if n_diff == n_set:
+        return f"In every one of the {n_set} prior and resampling settings at least one of the three verdicts differs from the baseline's"
+    return (f"In {n_diff} of the {n_set} prior and resampling settings at least one of the three verdicts differs "
+            "from the baseline's")
+
+
+#: how the sensitivity table's settings read in running text
+def _setting_words(setting: str, value) -> str:
+    if setting == "P0":
+        return f"P0 = {float(value):g}"
+    if setting == "resampling":
+        return f"{value} resampling"
+    if value == E.FILTER_LABELS["EKF-prev"]:
+        return "the circulating code's linearisation point"
+    return "the eq (10) linearisation point" if value == E.FILTER_LABELS["EKF"] else str(value)
+
+
+def sensitivity_cells_sentence(sens) -> str:
+    """The Table 1 cell verdicts over every swept setting in words, per model and filter, e.g. "on
+    model 1 the EKF cell is not reproduced under every setting but the circulating code's
+    linearisation point (reproduced there) and the PF cell not reproduced under every setting; ..."
+
+    ``sens`` is :func:`~pfrepro.experiments.ekf_pf_li2012.sensitivity`'s frame (columns ``model``,
+    ``setting``, ``value``, ``verdict_EKF``, ``verdict_PF``)."""
+    from ..prose import join_and
+
+    parts = []
+    for w in (1, 2):
+        s = sens[sens["model"] == E.MODEL_LABELS[w]]
+        if s.empty:
+            continue
+        cells = []
+        for name in ("EKF", "PF"):
+            v = s[f"verdict_{name}"]
+            main = v.value_counts().idxmax()
+            other = s[v != main]
+            if other.empty:
+                cells.append(f"the {name} cell {main} under every setting")
+            else:
+                where = join_and(f"{_setting_words(st, val)} ({vd} there)" for st, val, vd in
+                                 zip(other["setting"], other["value"], other[f"verdict_{name}"]))
+                cells.append(f"the {name} cell {main} under every setting but {where}")
+        if len({c.split(" cell ", 1)[1] for c in cells}) == 1 and "but" not in cells[0]:
+            text = f"on model {w} both cells are {cells[0].split(' cell ', 1)[1]}"
+        else:
+            text = f"on model {w} {cells[0].replace(' cell ', ' cell is ', 1)} and {cells[1]}"
+        parts.append(text)
+    if not parts:
+        raise ValueError("sensitivity_cells_sentence: the sensitivity frame has no rows for models 1 and 2")
+    return "; ".join(parts)
+
+
 def _ordinal(n: int) -> str:
-    return {1: "1st", 2: "2nd", 3: "3rd"}.get(n, f"{n}th")
+    """"largest" for 1, else "2nd largest", "3rd largest", "11th largest"."""
+    if n < 1:
+        raise ValueError(f"_ordinal needs a rank >= 1, got {n}")
+    if n == 1:
+        return "largest"
+    suffix = "th" if 10 <= n % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(n % 10, "th")
+    return f"{n}{suffix} largest"
 
 
 def _spread_prose(R) -> dict:
@@ -670,7 +797,9 @@ def _verdict_prose(reg, R) -> dict:
     out["li_ratio_eff_m1"] = ratio_effect(1)
     plans = power_plans(R)
     out["li_plan_max"] = max(p["needed"] for p in plans)
-    out["li_plan_short"] = P.Md(", ".join(f"`{p['claim']}`" for p in plans if p["run"] < p["needed"]) or "none")
+    text = {c.claim_id: c.text for c in reg.claims}
+    out["li_plan_short"] = P.Md(P.join_and(f"“{text.get(p['claim'], p['claim'])}”" for p in plans if p["run"] < p["needed"])
+                                if any(p["run"] < p["needed"] for p in plans) else "none")
     if R.trunc is not None:
         out["li_statements"] = P.Md(_statements_md(reg, R))
     incon = [c for c in _CELLS if vt[c] == "inconclusive"]
@@ -678,7 +807,7 @@ def _verdict_prose(reg, R) -> dict:
     out["li_n_cells"] = len(_CELLS)
     out["li_n_cells_incon"] = len(incon)
     out["li_n_cells_incon_phrase"] = P.Md(P.count_is(len(incon), "matched"))
-    out["li_cells_incon"] = ", ".join(incon) or "none"
+    out["li_cells_incon"] = cells_in_words(incon)
     pf2t, pf2t_se = E.statistic_reading(res[2], "PF", "mean_time_rmse")
     out["li_pf2_time"], out["li_pf2_time_se"] = pf2t, pf2t_se
     out["li_pf2_time_rel"] = pf2t / _pub("PF", 2) - 1
@@ -710,13 +839,13 @@ def _statements_md(reg, R) -> str:
              f"{dn[n0]['late'].mean():.2f} at N = {n0}, while the model evaluations per step grow "
              f"{dn[n1]['evals'] / dn[n0]['evals']:.0f}-fold"
              + (": the share of useful particles falls as 1/N. What cures the degeneracy is resampling "
-                "(`resampling-limits-degeneracy`), not more particles."
+                "(the degeneracy section above), not more particles."
                 if c['more-particles-less-degeneracy'].verdict == "not reproduced" else "."))
     b.append(f"- **\"The optimal importance function is hard to sample\"** (l.137): "
-             f"*{c['optimal-proposal-hard'].verdict_text()}*. p(x_k | x_(k-1), y_k) has no standard form here and "
+             f"*{c['optimal-proposal-hard'].verdict_text()}*. p(xₖ | xₖ₋₁, yₖ) has no standard form here and "
              f"is bimodal at {prop[1][2]:.0%} (model 1) and {prop[2][2]:.0%} (model 2) of the PF's particle-steps "
              "(the quadratic measurement cannot tell +x from −x).")
-    b.append(f"- **\"The prior proposal ignores y_k, so its particles describe the posterior less well\"** "
+    b.append(f"- **\"The prior proposal ignores yₖ, so its particles describe the posterior less well\"** "
              f"(l.145): *{c['prior-ignores-y'].verdict_text()}*. On the same particles the optimal proposal "
              f"would keep an ESS of {prop[1][0]:.0f} (model 1) and {prop[2][0]:.0f} (model 2) of {n0}, the prior "
              f"proposal {prop[1][1]:.0f} and {prop[2][1]:.0f}.")
