@@ -16,7 +16,7 @@ from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F40
 from . import new_figure
 from ._layout import legend_below, letter, phone, plain_log, reader_text
 
-__all__ = ["printed", "styled", "divisor_check", "table1_per_run_long", "table1_strip", "sensitivity_fig",
+__all__ = ["printed", "styled", "divisor_check", "fig3_times", "timing_figures", "table1_per_run_long", "table1_strip", "sensitivity_fig",
            "table1_side_by_side", "table1_summary", "table2_vs_published", "table3_vs_published",
            "table1_plot", "fig2", "fig3", "fig_one_step", "fig6", "table3_per_run", "mechanism_table", "oracle_table",
            "consistency_fig", "consistency_table", "tables", "figures", "TABLES", "FIGURES", "N_STEPS"]
@@ -329,25 +329,52 @@ def fig2(f2):
     return fig
 
 
-def fig3(f3: pd.DataFrame, f3_grid: dict):
-    """Fig. 3: RMSE (±2 se) and relative time per run of CMS-PF and PF against N (``E.fig3()``)."""
+def _fig3_time_lines(ax, f3: pd.DataFrame, idx) -> None:
+    """Fig. 3's measured time per run of CMS-PF and PF, relative to the PF at the first N, on ``ax``."""
+    ax.plot(idx, f3["CMS-PF time [s]"] / f3["PF time [s]"].iloc[0], "s--", color=method_color("CMS-PF"), mfc="none",
+            label=f"CMS-PF time / PF(N={f3.index[0]}) time")
+    ax.plot(idx, f3["PF time [s]"] / f3["PF time [s]"].iloc[0], "o--", color=method_color("PF"), mfc="none",
+            label=f"PF time / PF(N={f3.index[0]}) time")
+    ax.set_ylabel("time per run, relative")
+
+
+def _fig3_n_axis(ax, f3: pd.DataFrame, idx) -> None:
+    ax.set_xticks(idx, [str(n) if (i % 2 == 0 or not phone()) else "" for i, n in enumerate(f3.index)],
+                  rotation=90 if phone() else 45)
+    ax.set_xlabel("number of particles $N$")
+
+
+def fig3(f3: pd.DataFrame, f3_grid: dict, times: bool = True):
+    """Fig. 3: RMSE (±2 se) and, with ``times``, relative time per run of CMS-PF and PF against N
+    (``E.fig3()``); ``times=False`` (``pfrepro run``) leaves the measured times to :func:`fig3_times`,
+    so the results files do not change with the machine's load."""
     fig, ax = new_figure(figsize=(8, 8) if phone() else (8, 4))
     idx = np.arange(1, len(f3) + 1)
     ax.errorbar(idx, f3["CMS-PF RMSE"], 2 * f3["CMS-PF se"], marker="s", capsize=3, color=method_color("CMS-PF"), label="CMS-PF RMSE")
     ax.errorbar(idx, f3["PF RMSE"], 2 * f3["PF se"], marker="o", capsize=3, color=method_color("PF"), label="PF RMSE")
     ax.axhline(f3_grid["mean"], color="k", lw=1, label="exact posterior mean RMSE")
-    ax.set_xticks(idx, [str(n) if (i % 2 == 0 or not phone()) else "" for i, n in enumerate(f3.index)],
-                  rotation=90 if phone() else 45)
-    ax.set_xlabel("number of particles $N$"); ax.set_ylabel("mean RMSE")
-    ax2 = ax.twinx()
-    ax2.plot(idx, f3["CMS-PF time [s]"] / f3["PF time [s]"].iloc[0], "s--", color=method_color("CMS-PF"), mfc="none",
-             label=f"CMS-PF time / PF(N={f3.index[0]}) time")
-    ax2.plot(idx, f3["PF time [s]"] / f3["PF time [s]"].iloc[0], "o--", color=method_color("PF"), mfc="none",
-             label=f"PF time / PF(N={f3.index[0]}) time")
-    ax2.set_ylabel("time per run, relative")
-    h1, l1 = ax.get_legend_handles_labels(); h2, l2 = ax2.get_legend_handles_labels()
+    _fig3_n_axis(ax, f3, idx)
+    ax.set_ylabel("mean RMSE")
+    axes, (h, lab) = [ax], ax.get_legend_handles_labels()
+    if times:
+        ax2 = ax.twinx()
+        _fig3_time_lines(ax2, f3, idx)
+        h2, l2 = ax2.get_legend_handles_labels()
+        axes, h, lab = [ax, ax2], h + h2, lab + l2
     ax.set_title(r"Fig. 3, $\sigma_v = 10$ (bars ±2 se)")
-    legend_below(fig, [ax, ax2], ncol=2, handles=h1 + h2, labels=l1 + l2)
+    legend_below(fig, axes, ncol=2, handles=h, labels=lab)
+    return fig
+
+
+def fig3_times(f3: pd.DataFrame):
+    """Fig. 3's measured times alone: time per run of CMS-PF and PF against N, relative to the PF at
+    the first N (wall clock: differs between runs; ``pfrepro run`` writes it to its timings)."""
+    fig, ax = new_figure(figsize=(8, 4))
+    idx = np.arange(1, len(f3) + 1)
+    _fig3_time_lines(ax, f3, idx)
+    _fig3_n_axis(ax, f3, idx)
+    ax.set_title("Fig. 3, measured time per run (context)")
+    legend_below(fig, [ax], ncol=2)
     return fig
 
 
@@ -491,10 +518,26 @@ def figures(R) -> dict:
     dict
         Label (``FIGURES``) -> matplotlib Figure.
     """
-    return {"Fig. 2": fig2(R.f2), "Fig. 3": fig3(R.f3, R.f3_grid),
+    return {"Fig. 2": fig2(R.f2), "Fig. 3": fig3(R.f3, R.f3_grid, times=False),
             "Fig. 4": fig_one_step(R.step_randn, "Fig. 4: randn carrier, one step (k = 20, N = 200)"),
             "Fig. 5": fig_one_step(R.step_chaos, "Fig. 5: logistic-map carrier, one step (k = 20, N = 200)"),
             "Fig. 6": fig6(R.f6_base, R.f6_maps, R.sens, R.sens_ref)}
+
+
+def timing_figures(R) -> dict:
+    """The measured times of Figs. 2-6, which ``pfrepro run`` writes apart from the results: Fig. 3's time panel.
+
+    Parameters
+    ----------
+    R : pfrepro.experiments.cmspf_ning2011.Ning2011Results
+        The results.
+
+    Returns
+    -------
+    dict
+        Label -> matplotlib Figure.
+    """
+    return {"Fig. 3": fig3_times(R.f3)}
 
 
 def fig1_flowchart(checks: pd.DataFrame):
