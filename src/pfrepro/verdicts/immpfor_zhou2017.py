@@ -35,7 +35,8 @@ from ..prose import Md
 from ..stats import paired_difference
 
 __all__ = ["MAIN_CLAIMS", "DEP_ALL", "WORD", "WORD_M", "MAIN_SCENARIO", "record_claims", "takeaway", "prose",
-           "holds", "posterior_readings", "robust_ids", "rel_readings", "EKF_REASON", "ITEMS"]
+           "holds", "posterior_readings", "robust_ids", "rel_readings", "EKF_REASON", "ITEMS",
+           "READING_WORDS", "reading_words", "d_sentence"]
 
 #: the paper's main claims (abstract and conclusion) — higher accuracy (Table 1 mean), smaller peak error,
 #: new particle sets that approximate the posterior, an RMSE curve that converges more strongly (sec 3)
@@ -318,9 +319,42 @@ def _counts(claim) -> tuple:
             len(j.per_reading))
 
 
+#: the readings' tags (``"<choice>=<value>"``) in words, for the prose and the tables
+READING_WORDS = {"models_q=q x4": "the filters' process noise × 4", "n_th=N": "resampling at every step (Nₜₕ = N)",
+                 "metric=diagonal": "a diagonal metric", "replace=always": "replacement at every step",
+                 "density=weights": "the weights as the density", "lik=mean": "the mean particle likelihood",
+                 "noise=low": "low noise", "noise=high": "high noise", "p_stay=0.98": "a sticky Markov chain (0.98)",
+                 "trajectory=6 deg/s": "sharp turns (6°/s)"}
+
+
+def reading_words(tag: str) -> str:
+    """A reading's tag in words: :data:`READING_WORDS`, ``"d=0.3"`` -> "d = 0.3", ``"own d=1"`` ->
+    "own parent only, d = 1"; any other ``"<choice>=<value>"`` as "<choice> = <value>" with spaces for "_"."""
+    tag = str(tag)
+    if tag in READING_WORDS:
+        return READING_WORDS[tag]
+    if tag.startswith("own "):
+        return "own parent only, " + reading_words(tag[4:])
+    name, eq, value = tag.partition("=")
+    return f"{name.replace('_', ' ')} = {value}" if eq else tag.replace("_", " ")
+
+
 def _names(tags, k: int = 3) -> str:
-    tags = list(tags)
+    tags = [reading_words(t) for t in tags]
     return ", ".join(tags[:k]) + (f" and {len(tags) - k} more" if len(tags) > k else "")
+
+
+def d_sentence(by: dict) -> str:
+    """Where IMMPFOR helps on the grid of d, from ``{True: better, False: worse, None: tied}`` (lists of d):
+    "IMMPFOR is significantly better than the IMMPF at d = 0.1, significantly worse at d = 1 and 3, and
+    tied at d = 0.3"; a list that is empty is said as "at no value of d" (never "d = none")."""
+    from ..prose import join_and
+
+    def at(vals):
+        return f"at $d$ = {join_and(f'{v:g}' for v in vals)}" if vals else "at no value of $d$"
+
+    return (f"IMMPFOR is significantly better than the IMMPF {at(by[True])}, significantly worse "
+            f"{at(by[False])}, and tied {at(by[None])}.")
 
 
 def takeaway(reg: ClaimsRegistry, results) -> str:
@@ -460,7 +494,8 @@ def prose(reg: ClaimsRegistry, results) -> dict:
     best = max(E.D_GRID, key=lambda d: ST[f"d={d:g}"]["rms"][0])
     out.update(imm_d_best=f"{best:g}", imm_d_best_diff=float(ST[f"d={best:g}"]["rms"][0]),
                imm_d_best_se=float(ST[f"d={best:g}"]["rms"][1]),
-               imm_d_better=_dlist(by[True]), imm_d_worse=_dlist(by[False]), imm_d_tie=_dlist(by[None]))
+               imm_d_better=_dlist(by[True]), imm_d_worse=_dlist(by[False]), imm_d_tie=_dlist(by[None]),
+               imm_d_sentence=Md(d_sentence(by)))
     for tag, key in (("replace=always", "always"), ("density=weights", "weights")):
         out[f"imm_r_{key}_diff"], out[f"imm_r_{key}_se"] = ST[tag]["rms"]
         out[f"imm_r_{key}_lost"] = E.plural(ROB[tag]["lost_b"], "track")
