@@ -44,11 +44,12 @@ def legend_columns(labels, ncol: int, width_in: float | None = None) -> int:
     layout = current_layout() or DESKTOP
     width_in = layout.width_in if width_in is None else width_in
     size = mpl.font_manager.FontProperties(size=mpl.rcParams["legend.fontsize"]).get_size_in_points()
-    # an entry: its handle (2 em) and gap (0.8 em + 2 em between columns) and its text (0.6 em per character)
-    widths = [(len(str(lab)) * 0.6 + 4.8) * size / 72 for lab in labels]
+    # an entry is its handle (2 em), a gap (0.8 em) and its text (about 0.55 em per character); columns are
+    # 2 em apart and the legend has 0.5 em of border on each side (matplotlib's defaults)
+    widths = [len(str(lab)) * 0.55 + 2.8 for lab in labels]
     for n in range(min(ncol, max(len(widths), 1)), 0, -1):
         cols = [max(widths[i::n]) for i in range(n)]
-        if sum(cols) <= width_in * 0.98:
+        if (sum(cols) + 2.0 * (n - 1) + 1.0) * size / 72 <= width_in * 0.98:
             return n
     return 1
 
@@ -331,6 +332,7 @@ def fig3():
     layout = current_layout()
     width = layout.width_in if layout is not None else 5.0
     fig, ax = new_figure(figsize=(min(width, 5.0), 4.6))
+    fig.set_size_inches(fig.get_size_inches()[0], 4.6)   # a diagram, not a panel: the column needs its height
     ax.set_xlim(0, 1); ax.set_ylim(0, 1); ax.axis("off")
     box = dict(boxstyle="round,pad=0.4", fc="0.93", ec="0.3")
     state = ax.text(0.5, 0.72, "state filter (step 2)\nbootstrap PF, $N_x$ particles\n"
@@ -350,7 +352,6 @@ def fig3():
         ax.annotate("", xy=(x, 0.5 - 0.08 if down else 0.5 + 0.08), xytext=(x, 0.5 + 0.08 if down else 0.5 - 0.08),
                     arrowprops=arrow)
         ax.text(x + (0.03 if down else -0.03), 0.5, lab, ha="left" if down else "right", va="center")
-    ax.text(0.5, 0.5, "step\n$k+1$", ha="center", va="center", color="0.35")
     fig.tight_layout()
     return fig
 
@@ -405,7 +406,7 @@ def sweeps_51(st, sd, cap=None, q_rel=None):
     q_rel = E.S51["dekf_q_rel"] if q_rel is None else q_rel
     caps = [c for c in E.S51["caps"]]
     rows = ["DPF" if c == cap else (f"cap {c:g}" if c else "no cap") for c in caps]
-    labels = [f"{c:g}" + (" (ours)" if c == cap else "") if c else "none" for c in caps]
+    labels = [f"{c:g}" + ("\n(ours)" if c == cap else "") if c else "none" for c in caps]
     fig, axs = new_figure(1, 3, figsize=(9.0, 2.9))
     pos = np.arange(len(rows))
     axs[0].errorbar(pos, st.loc[rows, "RMSE θ"], yerr=st.loc[rows, "se θ"], fmt="o-", color=method_color("DPF"),
@@ -423,7 +424,7 @@ def sweeps_51(st, sd, cap=None, q_rel=None):
     axs[2].errorbar(qpos, sd.loc[qrows, "RMSE x"], yerr=sd.loc[qrows, "se x"], fmt="s", color=method_color("DEKF"),
                     capsize=3, label="DEKF")
     axs[2].set_xticks(qpos, qlab, rotation=30, ha="right")
-    axs[2].set_xlabel("q₀ / P_θ0 (or unprojected θ)"); axs[2].set_ylabel("state RMSE")
+    axs[2].set_xlabel(r"$q_0 / P_{\theta,0}$ (or $\hat\theta$ unprojected)"); axs[2].set_ylabel("state RMSE")
     axs[2].set_title("(c) DEKF: parameter noise")
     legend_below(fig, axs, ncol=3)
     return fig
@@ -662,8 +663,9 @@ def table_52_display(results) -> pd.DataFrame:
     """The sec 5.2 table at T (main reading; ``pfrepro.experiments.dpf_hou2008.table_52``) as shown."""
     out = E.table_52(results.r52)
     out["θ (10⁻³/ft)"] = out["θ (10⁻³/ft)"].map("{:.3f}".format)
-    for c in ("altitude (ft)", "speed (ft/s)", "altitude, runs not lost (ft)"):
-        out[c] = out[c].map("{:.1f}".format)
+    # altitudes to the foot, as the prose and the readings table give them (one number, one rounding)
+    for c, fmt in (("altitude (ft)", "{:.0f}"), ("speed (ft/s)", "{:.1f}"), ("altitude, runs not lost (ft)", "{:.0f}")):
+        out[c] = out[c].map(fmt.format)
     return out.rename(columns=lambda c: c if c in ("runs", "failures") else c + " at T")
 
 

@@ -30,7 +30,8 @@ __all__ = ["MAIN_CLAIMS", "NO_CAP", "LOG_SIM", "N52", "MARGINS", "EXCLUDED", "ef
            "published_51", "s51_stats", "readings_51", "published_percentiles", "guess_spread", "guess_spread_at",
            "dpf_vs_exact", "liu_west_vs_dpf", "impoverishment", "cap_coverage", "liu_west_readings_51",
            "beta_vs_gaussian", "similar", "s52_stats", "readings_52", "tagged", "not_held_51", "stability_51",
-           "READING_WORDS_51", "reading_label_51", "not_held_sentence_51"]
+           "READING_WORDS_51", "reading_label_51", "not_held_sentence_51",
+           "lw_theta_phrase"]
 
 #: the paper's main claims (abstract — no parameter impoverishment, sampling efficiency of the Beta
 #: law, better accuracy and lower initial sensitivity than the DEKF; secs 5.1 and 5.2)
@@ -224,6 +225,15 @@ def not_held_sentence_51(R51: dict) -> str:
                      else f"for {sym} it is shown under every counted row")
     return ("The ordering the paper prints (DPF better than DEKF, shown when $z > 2$ on the paired difference of "
             f"the usual RMSE): {parts[0]}; {parts[1]}.")
+
+
+def lw_theta_phrase(diff) -> str:
+    """How Liu–West compares with the DPF in θ, from the paired difference (Liu–West minus DPF in the
+    θ RMSE, its standard error): "is the more accurate of the two in θ" when it is shown lower (z < -2),
+    "is the less accurate of the two in θ" when shown higher, else "is not distinguishable from it in θ"."""
+    holds = ordering_holds(-diff[0], diff[1])   # DPF minus Liu-West > 0: Liu-West better
+    return {True: "is the more accurate of the two in $\\theta$", False: "is the less accurate of the two in $\\theta$",
+            None: "is not distinguishable from it in $\\theta$"}[holds]
 
 
 def published_percentiles(R) -> dict:
@@ -805,7 +815,8 @@ def prose(reg: ClaimsRegistry, results) -> dict:
                                                      / exd["theta_var"][:, -1])))
     lw_vs = liu_west_vs_dpf(R)
     out.update({"dpf_lw_dx": lw_vs["x"][0], "dpf_lw_dx_se": lw_vs["x"][1], "dpf_lw_dth": lw_vs["θ"][0],
-                "dpf_lw_dth_se": lw_vs["θ"][1], "dpf_lw_dth_z": z_of(lw_vs["θ"])})
+                "dpf_lw_dth_se": lw_vs["θ"][1], "dpf_lw_dth_z": z_of(lw_vs["θ"]),
+                "dpf_lw_theta_phrase": Md(lw_theta_phrase(lw_vs["θ"]))})
 
     # sec 5.2: the truth, the bound, the integration
     from ..models.reentry import FT   # metres per foot: only to convert the literal (metric) reading
