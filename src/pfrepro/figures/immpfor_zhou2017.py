@@ -162,7 +162,7 @@ def d_sweep_figure(sweep: pd.DataFrame, ablation: pd.DataFrame | None = None):
         d = np.asarray(df.index, float)
         ax.errorbar(d, df["diff"], yerr=df["se"], fmt=st, color=col, ms=4, lw=1, capsize=3, label=lab)
     ax.set_xscale("log")
-    ax.set_xlabel("step coefficient d [neighbour spacings]")
+    ax.set_xlabel("step coefficient $d$")   # in neighbour spacings (the caption)
     ax.set_ylabel("IMMPF − IMMPFOR [m]")
     legend_below(fig, ax, ncol=2)
     return fig
