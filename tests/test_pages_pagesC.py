@@ -200,3 +200,14 @@ def test_reading_words(tag, words):
                                          ((-0.001, 0.003), "not distinguishable")])
 def test_lw_theta_phrase_follows_the_sign(diff, words):
     assert words in V.lw_theta_phrase(diff)
+
+
+@pytest.mark.parametrize("k, n, words", [(0, 16, "none of the 16"), (1, 16, "1 of the 16"), (16, 16, "all 16"),
+                                         (1, 1, "the one")])
+def test_k_of(k, n, words):
+    assert VI.k_of(k, n) == words
+
+
+def test_k_of_refuses_impossible_counts():
+    with pytest.raises(ValueError):
+        VI.k_of(3, 2)

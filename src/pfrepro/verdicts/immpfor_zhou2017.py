@@ -36,7 +36,7 @@ from ..stats import paired_difference
 
 __all__ = ["MAIN_CLAIMS", "DEP_ALL", "WORD", "WORD_M", "MAIN_SCENARIO", "record_claims", "takeaway", "prose",
            "holds", "posterior_readings", "robust_ids", "rel_readings", "EKF_REASON", "ITEMS",
-           "READING_WORDS", "reading_words", "d_sentence"]
+           "READING_WORDS", "reading_words", "d_sentence", "k_of"]
 
 #: the paper's main claims (abstract and conclusion) — higher accuracy (Table 1 mean), smaller peak error,
 #: new particle sets that approximate the posterior, an RMSE curve that converges more strongly (sec 3)
@@ -344,6 +344,15 @@ def _names(tags, k: int = 3) -> str:
     return ", ".join(tags[:k]) + (f" and {len(tags) - k} more" if len(tags) > k else "")
 
 
+def k_of(k: int, n: int) -> str:
+    """``k`` of ``n`` in words: "none of the 16", "1 of the 16", "all 16" (``n`` > 1), "the one" (``n`` = 1)."""
+    if not 0 <= k <= n:
+        raise ValueError(f"k_of needs 0 <= k <= n, got {k}, {n}")
+    if n == 1:
+        return "the one" if k == 1 else "none of the one"
+    return "none of the " + str(n) if k == 0 else (f"all {n}" if k == n else f"{k} of the {n}")
+
+
 def d_sentence(by: dict) -> str:
     """Where IMMPFOR helps on the grid of d, from ``{True: better, False: worse, None: tied}`` (lists of d):
     "IMMPFOR is significantly better than the IMMPF at d = 0.1, significantly worse at d = 1 and 3, and
@@ -482,8 +491,14 @@ def prose(reg: ClaimsRegistry, results) -> dict:
         out.update({f"imm_{k}_pf": float(pf.mean()), f"imm_{k}_or": float(orr.mean()), f"imm_{k}_d": d_,
                     f"imm_{k}_se": se_, f"imm_{k}_holds": E.plural(sum(v is True for v in dec.values()), "reading"),
                     f"imm_{k}_n": len(read)})
+        n_h, n_w = sum(v is True for v in dec.values()), sum(v is False for v in dec.values())
         if key == "w1":
-            out["imm_w1_worse"] = E.plural(sum(v is False for v in dec.values()), "reading")
+            out["imm_w1_worse"] = E.plural(n_w, "reading")
+            out["imm_w1_sentence"] = (f"IMMPFOR's set is significantly closer under {k_of(n_h, len(read))} and "
+                                      f"significantly further under {k_of(n_w, len(read))} readings.")
+        else:
+            out["imm_post_sentence"] = (f"IMMPFOR is significantly closer under {k_of(n_h, len(read))} readings of "
+                                        "d, the replacement schedule and the density.")
     out["imm_post_every"] = f"{(E.POST_STEPS[1] - E.POST_STEPS[0]) * S['T_s']:g}"
     out["imm_post_nsteps"] = len(E.POST_STEPS)
     modes = E.mode_summary(R.main, "IMMPF")
