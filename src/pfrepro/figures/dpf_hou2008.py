@@ -20,7 +20,7 @@ from . import new_figure
 __all__ = ["pm", "rmse_table", "fig1", "fig3", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "fig_exact", "plain_math", "cell_html", "card_table", "choices_display", "legend_below", "legend_columns", "chapter_figure_alts", "CHAPTER_FIGURE_ALTS", "tables",
            "figures", "chapter_figures", "TABLES", "FIGURES", "N_STEPS", "paper_row_51", "sweeps_51",
            "integration_error", "errata_table", "readings_51_table", "sensitivity_display", "dekf_sensitivity_display",
-           "law_table", "coverage_display", "table_52_display", "readings_52_table"]
+           "law_table", "coverage_display", "table_52_display", "readings_52_table", "readings_52_tables"]
 
 #: the tables and figures of the paper :func:`tables` and :func:`figures` make (``pfrepro run``)
 TABLES = ("RMSE table",)
@@ -97,7 +97,9 @@ def cell_html(text, code_names: bool = True) -> str:
     ``n_th``) set as code, the way the prose shows them."""
     import html
 
-    body = html.escape(plain_math(text))
+    # a quoted word ("'small': 100 ft") in typographic quotes: it reads as a quotation, not as Python
+    text = re.sub(r"'([^'\n]{1,40})'", "\u2018\\1\u2019", plain_math(text))
+    body = html.escape(text)
     return _SNAKE.sub(lambda m: f"<code>{m.group(0)}</code>", body) if code_names else body
 
 
@@ -669,6 +671,14 @@ def table_52_display(results) -> pd.DataFrame:
     return out.rename(columns=lambda c: c if c in ("runs", "failures") else c + " at T")
 
 
+def readings_52_tables(results) -> tuple:
+    """:func:`readings_52_table` as the chapter shows it, in two tables of at most six columns, both by
+    reading: the errors (runs, failures, altitude and θ at T, runs lost) and the paired z of the orderings."""
+    t = readings_52_table(results)
+    z_cols = [c for c in t.columns if c.startswith("z ")]
+    return t.drop(columns=z_cols), t[["reading", *z_cols]]
+
+
 def readings_52_table(results) -> pd.DataFrame:
     """Sec 5.2 under every reading (``pfrepro.verdicts.dpf_hou2008.readings_52``): failures, errors at T
     and the paired z of every ordering."""
@@ -682,8 +692,7 @@ def readings_52_table(results) -> pd.DataFrame:
         "failures DPF / DEKF / LW": trio(st, "failures", lambda v: f"{int(v)}"),
         "altitude at T (ft)": trio(st, "altitude (ft)", lambda v: f"{v:.0f}"),
         "θ at T (% of θ)": trio(st, "θ (10⁻³/ft)", lambda v: f"{100 * v:.1f}"),
-        "z of DEKF − DPF (altitude, speed, θ): all / 10–20 s": (
-            ", ".join(f"{V.z_of(st[(k, 'all')]):.1f}" for k in ("alt", "vel", "th")) + " / "
-            + ", ".join(f"{V.z_of(st[(k, '10_20')]):.1f}" for k in ("alt", "vel", "th"))),
+        "z of DEKF − DPF (altitude, speed, θ)": ", ".join(f"{V.z_of(st[(k, 'all')]):.1f}" for k in ("alt", "vel", "th")),
+        "z of DEKF − DPF, 10–20 s": ", ".join(f"{V.z_of(st[(k, '10_20')]):.1f}" for k in ("alt", "vel", "th")),
         "z of LW − DPF in θ": f"{V.z_of(st['lw']):.1f}",
         "lost LW − DPF": pm(*st["stab"], 2)} for (ch, val), st in V.readings_52(results).items()])
