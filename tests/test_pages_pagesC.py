@@ -211,3 +211,11 @@ def test_k_of(k, n, words):
 def test_k_of_refuses_impossible_counts():
     with pytest.raises(ValueError):
         VI.k_of(3, 2)
+
+
+def test_choices_display_folds_the_long_table_and_counts_its_rows():
+    from pfrepro.experiments import dpf_hou2008 as E
+
+    html = F.choices_display(E.CHOICES, "pf-dpf-choices").data
+    assert html.startswith('<details class="pf-choices"><summary>The ' + str(len(E.CHOICES)) + " free choices")
+    assert not F.choices_display(E.CHOICES, "pf-dpf-choices", collapsed=False).data.startswith("<details")

@@ -118,12 +118,13 @@ def card_table(df, css_class: str, text: bool = True):
     return HTML(labelled_table_html(cells, classes=f"{'pf-text ' if text else ''}{css_class}"))
 
 
-def choices_display(choices, css_class: str, reg=None, plan_label=None):
+def choices_display(choices, css_class: str, reg=None, plan_label=None, collapsed: bool = True):
     """The free-choices table as the chapter shows it (``pfrepro.choices.choices_table``): choice names
     in words ("liu_west" -> "liu west"), a power-plan row ``plan_<claim id>`` named by its claim and
     linked to the claim's row of the claims table when ``reg`` (the registry) has that claim; other
     ``plan_*`` rows through ``plan_label(name)`` when given; cells as in :func:`card_table` (``css_class``:
-    the page's class for the table, which makes it cards on a phone)."""
+    the page's class for the table, which makes it cards on a phone). ``collapsed``: inside a
+    ``<details>`` element, closed, whose summary counts the rows (a long table is opened, not scrolled past)."""
     import html
 
     from IPython.display import HTML
@@ -144,8 +145,12 @@ def choices_display(choices, css_class: str, reg=None, plan_label=None):
 
     cells = t.astype(object).map(cell_html)
     cells["choice"] = [name(n) for n in t["choice"]]
-    return HTML(labelled_table_html(cells.rename(columns={"paper": "in the paper"}),
-                                    classes=f"pf-text {css_class}"))
+    table = labelled_table_html(cells.rename(columns={"paper": "in the paper"}), classes=f"pf-text {css_class}")
+    if not collapsed:
+        return HTML(table)
+    n = len(t)
+    return HTML(f'<details class="pf-choices"><summary>The {n} free choices, each with its value, status, reason '
+                f"and the paper's line (open the table)</summary>{table}</details>")
 
 
 def pm(m, se, digits=3) -> str:
