@@ -219,3 +219,9 @@ def test_choices_display_folds_the_long_table_and_counts_its_rows():
     html = F.choices_display(E.CHOICES, "pf-dpf-choices").data
     assert html.startswith('<details class="pf-choices"><summary>The ' + str(len(E.CHOICES)) + " free choices")
     assert not F.choices_display(E.CHOICES, "pf-dpf-choices", collapsed=False).data.startswith("<details")
+
+
+def test_causes_phrase():
+    assert VI.causes_phrase(["too few runs", "depends on the reading", "too few runs"]) == \
+        "2 (too few runs) and 1 (depends on the reading)"
+    assert VI.causes_phrase([]) == "none"

@@ -36,7 +36,8 @@ from ..stats import paired_difference
 
 __all__ = ["MAIN_CLAIMS", "DEP_ALL", "WORD", "WORD_M", "MAIN_SCENARIO", "record_claims", "takeaway", "prose",
            "holds", "posterior_readings", "robust_ids", "rel_readings", "EKF_REASON", "ITEMS",
-           "READING_WORDS", "reading_words", "d_sentence", "k_of"]
+           "READING_WORDS", "reading_words", "d_sentence", "k_of",
+           "causes_phrase"]
 
 #: the paper's main claims (abstract and conclusion) — higher accuracy (Table 1 mean), smaller peak error,
 #: new particle sets that approximate the posterior, an RMSE curve that converges more strongly (sec 3)
@@ -344,6 +345,15 @@ def _names(tags, k: int = 3) -> str:
     return ", ".join(tags[:k]) + (f" and {len(tags) - k} more" if len(tags) > k else "")
 
 
+def causes_phrase(causes) -> str:
+    """The inconclusive verdicts counted by cause, e.g. "9 (too few runs) and 9 (depends on the reading)"
+    (the cause in parentheses, so that the count never has to agree with it); "none" without any."""
+    from ..prose import join_and
+
+    causes = list(causes)
+    return join_and(f"{causes.count(k)} ({k})" for k in dict.fromkeys(causes)) if causes else "none"
+
+
 def k_of(k: int, n: int) -> str:
     """``k`` of ``n`` in words: "none of the 16", "1 of the 16", "all 16" (``n`` > 1), "the one" (``n`` = 1)."""
     if not 0 <= k <= n:
@@ -552,7 +562,7 @@ def prose(reg: ClaimsRegistry, results) -> dict:
     out["imm_v_peak"], out["imm_v_mean"] = (by_id["t1_or_smaller_peak"].verdict_text(),
                                             by_id["t1_or_smaller_mean"].verdict_text())
     causes = [c.judgement.cause for c in reg.claims if c.verdict == "inconclusive"]
-    out["imm_n_causes"] = ", ".join(f"{causes.count(k)} {k}" for k in dict.fromkeys(causes)) or "none"
+    out["imm_n_causes"] = causes_phrase(causes)
     # the items issue 31 found unjudged (l.217, l.23, conclusion 2, l.21)
     for key, cid in (("turns", "immpf_errors_large_at_turns"), ("freq", "frequent_manoeuvres_larger_peak"),
                      ("mm", "or_mismatched_models_near_truth"), ("dv", "resampling_loses_diversity"),
