@@ -7,6 +7,8 @@ chapter shows (:func:`chapter_figures` and the ``*_table`` functions).
 """
 from __future__ import annotations
 
+import re
+
 import matplotlib.ticker
 import numpy as np
 import pandas as pd
@@ -15,10 +17,10 @@ from ..experiments import dpf_hou2008 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
 
-__all__ = ["pm", "rmse_table", "fig1", "fig3", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "fig_exact", "legend_below", "tables",
+__all__ = ["pm", "rmse_table", "fig1", "fig3", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "fig_exact", "plain_math", "cell_html", "card_table", "choices_display", "legend_below", "legend_columns", "chapter_figure_alts", "CHAPTER_FIGURE_ALTS", "tables",
            "figures", "chapter_figures", "TABLES", "FIGURES", "N_STEPS", "paper_row_51", "sweeps_51",
            "integration_error", "errata_table", "readings_51_table", "sensitivity_display", "dekf_sensitivity_display",
-           "law_table", "coverage_display", "table_52_display", "readings_52_table"]
+           "law_table", "coverage_display", "table_52_display", "readings_52_table", "readings_52_tables"]
 
 #: the tables and figures of the paper :func:`tables` and :func:`figures` make (``pfrepro run``)
 TABLES = ("RMSE table",)
@@ -29,16 +31,126 @@ N_STEPS = len(E.STEPS)
 NAMES_51 = ("DPF", "DEKF", "Liu-West")
 
 
+def legend_columns(labels, ncol: int, width_in: float | None = None) -> int:
+    """Most legend columns (at most ``ncol``) whose entries fit side by side in ``width_in`` inches
+    (default: the layout's width, :func:`pfrepro.plotting.current_layout`, else 6.5 in) at the legend's
+    type size: a legend wider than the figure would widen the PNG and shrink all of its text."""
+    import matplotlib as mpl
+
+    from ..plotting import DESKTOP, current_layout
+
+    if ncol < 1:
+        raise ValueError(f"legend_columns needs ncol >= 1, got {ncol}")
+    layout = current_layout() or DESKTOP
+    width_in = layout.width_in if width_in is None else width_in
+    size = mpl.font_manager.FontProperties(size=mpl.rcParams["legend.fontsize"]).get_size_in_points()
+    # an entry is its handle (2 em), a gap (0.8 em) and its text (about 0.55 em per character); columns are
+    # 2 em apart and the legend has 0.5 em of border on each side (matplotlib's defaults)
+    widths = [len(str(lab)) * 0.55 + 2.8 for lab in labels]
+    for n in range(min(ncol, max(len(widths), 1)), 0, -1):
+        cols = [max(widths[i::n]) for i in range(n)]
+        if (sum(cols) + 2.0 * (n - 1) + 1.0) * size / 72 <= width_in * 0.98:
+            return n
+    return 1
+
+
 def legend_below(fig, axs, ncol=4, **kw):
-    """One legend for the figure, under the panels (never over the data): handles of every axis, deduplicated."""
+    """One legend for the figure, under the panels (never over the data): handles of every axis,
+    deduplicated, in as many columns (at most ``ncol``) as fit the width the figure is drawn for."""
     handles, labels = [], []
     for ax in np.atleast_1d(axs).ravel():
+        if ax is None:
+            continue
         for h, lab in zip(*ax.get_legend_handles_labels()):
             if lab not in labels:
                 handles.append(h); labels.append(lab)
     fig.tight_layout()
-    leg = fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0), ncol=ncol, frameon=False, **kw)
+    leg = fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                     ncol=legend_columns(labels, ncol), frameon=False, **kw)
     return leg
+
+
+#: Unicode subscripts for the characters of a plain-text index ("z_k" -> "zₖ", "r_l" -> "rₗ")
+_SUBSCRIPT = dict(zip("0123456789+-=()aehijklmnoprstuvxβγρφχ", "₀₁₂₃₄₅₆₇₈₉₊₋₌₍₎ₐₑₕᵢⱼₖₗₘₙₒₚᵣₛₜᵤᵥₓᵦᵧᵨᵩᵪ"))
+#: a symbol with a plain-text index: one letter (Latin or Greek, with an optional accent) and "_" + a
+#: short index or a braced one ("z_k", "x̂_{k-1}", "z_1:k-1", "α_0")
+_INDEXED = re.compile(r"(?<![\w.])([A-Za-zα-ωϕ][\u0302\u0303]?)_(\{[^{}]{1,12}\}|[0-9a-z][0-9a-z+\-]{0,2}(?::[0-9a-z+\-]{1,5})?)(?![\w(])")
+#: a snake_case identifier left in the text once the symbols are written (a function, choice or reading name)
+_SNAKE = re.compile(r"(?<![\w./:@-])[a-z][a-z0-9]*(?:_[a-z0-9]+)+(?![\w/@]|\.\w)")
+
+
+def plain_math(text: str) -> str:
+    """Text with plain-text indices written as Unicode subscripts ("p(z_k | θ, x̂_{k-1})" ->
+    "p(zₖ | θ, x̂ₖ₋₁)", "[r_l, r_u]" -> "[rₗ, rᵤ]"): the tables' formulas read as formulas, not as
+    code names. An index with a character Unicode has no subscript for is left as it is."""
+    def sub(m):
+        idx = m.group(2).strip("{}")
+        if all(ch in _SUBSCRIPT or ch == ":" for ch in idx):
+            return m.group(1) + "".join(_SUBSCRIPT.get(ch, ch) for ch in idx)
+        return m.group(0)
+
+    return _INDEXED.sub(sub, str(text))
+
+
+def cell_html(text, code_names: bool = True) -> str:
+    """One table cell as HTML: :func:`plain_math`, escaped, and the code names left (``run_all``,
+    ``n_th``) set as code, the way the prose shows them."""
+    import html
+
+    # a quoted word ("'small': 100 ft") in typographic quotes: it reads as a quotation, not as Python
+    text = re.sub(r"'([^'\n]{1,40})'", "\u2018\\1\u2019", plain_math(text))
+    body = html.escape(text)
+    return _SNAKE.sub(lambda m: f"<code>{m.group(0)}</code>", body) if code_names else body
+
+
+def card_table(df, css_class: str, text: bool = True):
+    """``df`` as an HTML table (``pfrepro.bookinfo.labelled_table_html``) whose cells carry their
+    column name, so that on a phone the page's stylesheet (``book/_static/pfrepro-pages.css``,
+    ``css_class``) shows each row as a card of "column: value" lines instead of columns one word
+    wide; every cell through :func:`cell_html`. ``text``: left-align every cell (a table of words)."""
+    from IPython.display import HTML
+
+    from ..bookinfo import labelled_table_html
+
+    if not isinstance(df, pd.DataFrame):
+        raise TypeError(f"card_table needs a DataFrame, got {type(df).__name__}")
+    cells = df.astype(object).map(lambda v: "—" if v is None or (isinstance(v, float) and np.isnan(v)) else cell_html(v))
+    return HTML(labelled_table_html(cells, classes=f"{'pf-text ' if text else ''}{css_class}"))
+
+
+def choices_display(choices, css_class: str, reg=None, plan_label=None, collapsed: bool = True):
+    """The free-choices table as the chapter shows it (``pfrepro.choices.choices_table``): choice names
+    in words ("liu_west" -> "liu west"), a power-plan row ``plan_<claim id>`` named by its claim and
+    linked to the claim's row of the claims table when ``reg`` (the registry) has that claim; other
+    ``plan_*`` rows through ``plan_label(name)`` when given; cells as in :func:`card_table` (``css_class``:
+    the page's class for the table, which makes it cards on a phone). ``collapsed``: inside a
+    ``<details>`` element, closed, whose summary counts the rows (a long table is opened, not scrolled past)."""
+    import html
+
+    from IPython.display import HTML
+
+    from ..bookinfo import claim_anchor, labelled_table_html
+    from ..choices import choices_table
+
+    t = choices_table(choices)
+    by = {c.claim_id: c for c in reg.claims} if reg is not None else {}
+
+    def name(n):
+        if n.startswith("plan_") and n[5:] in by:
+            c = by[n[5:]]
+            return (f'<a href="#{claim_anchor(reg.paper, c.claim_id)}">runs for: {html.escape(c.text)}</a>')
+        if n.startswith("plan_") and plan_label is not None:
+            return html.escape(plan_label(n))
+        return html.escape(n.replace("_", " "))
+
+    cells = t.astype(object).map(cell_html)
+    cells["choice"] = [name(n) for n in t["choice"]]
+    table = labelled_table_html(cells.rename(columns={"paper": "in the paper"}), classes=f"pf-text {css_class}")
+    if not collapsed:
+        return HTML(table)
+    n = len(t)
+    return HTML(f'<details class="pf-choices"><summary>The {n} free choices, each with its value, status, reason '
+                f"and the paper's line (open the table)</summary>{table}</details>")
 
 
 def pm(m, se, digits=3) -> str:
@@ -106,7 +218,7 @@ def fig4(r51, run: int = 0):
     axs[0].plot(kk, r51.sim.x[run, 1:, 0], "k-", lw=1, label="truth")
     axs[0].plot(kk, r51.results["DPF"].x[run, :, 0], "-", color=method_color("DPF"), lw=0.9, label="DPF")
     axs[0].plot(kk, r51.results["DEKF"].x[run, :, 0], "--", color=method_color("DEKF"), lw=0.9, label="DEKF")
-    axs[0].set_ylabel("x_k")
+    axs[0].set_ylabel("$x_k$")
     ex = r51.results["exact"].diagnostics
     qx = E.theta_interval(r51, "exact")
     axs[1].fill_between(kk, qx[0, run], qx[2, run], color="0.85", label="exact 95 %")
@@ -116,7 +228,7 @@ def fig4(r51, run: int = 0):
     axs[1].plot(kk, r51.results["Liu-West"].diagnostics["theta"][run], ":", color=method_color("Liu-West"), lw=1.2, label="Liu–West")
     axs[1].axhline(E.S51["theta_true"], color="k", lw=0.5, ls=":")
     axs[1].set_ylim(0, 1); axs[1].set_ylabel("θ estimate"); axs[1].set_xlabel("k")
-    legend_below(fig, axs, ncol=3, fontsize=8)
+    legend_below(fig, axs, ncol=3)
     return fig
 
 
@@ -141,11 +253,11 @@ def fig5(f5: dict, run: int = 0):
         for row in (0, 1):
             axs[row, col].axhline(E.S51["theta_true"], color="k", lw=0.5, ls=":")
             axs[row, col].set_ylim(-0.05, 1.05)
-        axs[0, col].set_title(f"({'ab'[col]}) {name}: θ estimate, quantiles over runs", fontsize=8)
-        axs[1, col].set_title(f"({'cd'[col]}) {name}: own posterior quantiles, run {run + 1}", fontsize=8)
+        axs[0, col].set_title(f"({'ab'[col]}) {name}, over runs")
+        axs[1, col].set_title(f"({'cd'[col]}) {name}, own posterior, run {run + 1}")
         axs[1, col].set_xlabel("k")
     axs[0, 0].set_ylabel("θ"); axs[1, 0].set_ylabel("θ")
-    legend_below(fig, axs, ncol=3, fontsize=8)
+    legend_below(fig, axs, ncol=3)
     return fig
 
 
@@ -172,8 +284,8 @@ def figs_7_9(r52, crb_ft=None, rm: dict | None = None):
         if j == 2:
             ax.plot(tt, np.asarray(crb_ft)[:T], color="k", lw=0.7, label="CRB sd of θ")
             ax.set_ylim(1e-7, 1e-2)
-        ax.set_yscale("log"); ax.set_xlabel("t (s)"); ax.set_title(f"({'abc'[j]}) RMSE of {lab}", fontsize=8)
-    legend_below(fig, axs, ncol=4, fontsize=8)
+        ax.set_yscale("log"); ax.set_xlabel("t (s)"); ax.set_title(f"({'abc'[j]}) RMSE of {lab}")
+    legend_below(fig, axs, ncol=4)
     return fig
 
 
@@ -183,12 +295,12 @@ def fig6(tr_ft, tr_lit_m):
 
     t = np.arange(tr_ft.shape[0])
     fig, axs = new_figure(1, 2, figsize=(7, 2.6))
-    axs[0].plot(t, tr_ft[:, 0] / 1e3, label="our reading (feet, drag ∝ x₂²)")
-    axs[0].plot(t, tr_lit_m[:, 0] / FT / 1e3, "--", label="literal reading (metric state, drag ∝ x₂)")
+    axs[0].plot(t, tr_ft[:, 0] / 1e3, label="our reading")
+    axs[0].plot(t, tr_lit_m[:, 0] / FT / 1e3, "--", label="literal reading")
     axs[0].set_xlabel("t (s)"); axs[0].set_ylabel("altitude (10³ ft)")
     axs[1].plot(t, tr_ft[:, 1] / 1e3); axs[1].plot(t, tr_lit_m[:, 1] / FT / 1e3, "--")
     axs[1].set_xlabel("t (s)"); axs[1].set_ylabel("speed (10³ ft/s)")
-    legend_below(fig, axs, ncol=2, fontsize=8)
+    legend_below(fig, axs, ncol=2)
     return fig
 
 
@@ -209,9 +321,8 @@ def fig1(pairs=FIG1_PAIRS):
                 ls=("-", "--", ":", "-.")[i // len(SERIES_COLORS) % 4] if len(pairs) > len(SERIES_COLORS) else "-",
                 lw=1.1, label=f"α = {a:g}, β = {b:g}")
     ax.set_ylim(0, 6); ax.set_xlim(0, 1)
-    ax.set_xlabel("y"); ax.set_ylabel("f(y; α, β)")
-    ax.legend(fontsize=8, frameon=False, ncol=2)
-    fig.tight_layout()
+    ax.set_xlabel("$y$"); ax.set_ylabel("$f(y;\\alpha,\\beta)$")
+    legend_below(fig, ax, ncol=4)   # under the axes: the curves fill the whole panel
     return fig
 
 
@@ -219,28 +330,35 @@ def fig3():
     """Fig. 3 regenerated (the paper's block diagram of dual estimation, sec 4.1, l.143): a state filter
     that uses the current parameter estimate and a parameter filter that uses the state estimate, both fed
     by z_k, alternating at every step. As implemented (``pfrepro.filters.DualParticleFilter``), the
-    parameter filter scores each θ by the one-step prediction from (x̂_{k-1}, P_{k-1}) (eq 11, second line)."""
-    from matplotlib.patches import FancyArrowPatch, FancyBboxPatch
+    parameter filter scores each θ by the one-step prediction from (x̂_{k-1}, P_{k-1}) (eq 11, second line).
 
-    fig, ax = new_figure(figsize=(6.4, 2.8))
-    ax.set_xlim(0, 10); ax.set_ylim(0, 4.4); ax.axis("off")
-    boxes = {"state": (3.2, 2.6, "state filter (step 2)\nbootstrap PF, N_x particles\np(x_k | z_1:k, θ̂_{k-1})"),
-             "param": (3.2, 0.3, "parameter filter (step 3)\nBeta(α_k, β_k), N_θ draws\np(θ | z_1:k)")}
-    for key, (x0, y0, text) in boxes.items():
-        ax.add_patch(FancyBboxPatch((x0, y0), 3.6, 1.4, boxstyle="round,pad=0.05", fc="0.93", ec="0.3"))
-        ax.text(x0 + 1.8, y0 + 0.7, text, ha="center", va="center", fontsize=8)
+    Drawn as a column (measurement, state filter, exchange, parameter filter, measurement) whose boxes
+    are sized by their text, so the same drawing reads on a laptop and on a phone."""
+    from ..plotting import current_layout
 
-    def arrow(a, b, text, xy, **kw):
-        ax.add_patch(FancyArrowPatch(a, b, arrowstyle="-|>", mutation_scale=10, lw=0.9, color="0.2", **kw))
-        ax.text(*xy, text, fontsize=8, ha="center", va="center")
-
-    arrow((0.6, 2.2), (3.15, 3.3), "", (0, 0))
-    arrow((0.6, 2.2), (3.15, 1.0), "", (0, 0))
-    ax.text(0.45, 2.2, "z_k", fontsize=9, ha="right", va="center")
-    arrow((6.85, 3.3), (9.2, 3.3), "x̂_k", (8.0, 3.55))
-    arrow((6.85, 1.0), (9.2, 1.0), "θ̂_k", (8.0, 1.25))
-    arrow((5.6, 2.55), (5.6, 1.75), "x̂_k, P_k (used at k + 1)", (7.35, 2.15))
-    arrow((4.4, 1.75), (4.4, 2.55), "θ̂_k (used at k + 1)", (2.75, 2.15))
+    layout = current_layout()
+    width = layout.width_in if layout is not None else 5.0
+    fig, ax = new_figure(figsize=(min(width, 5.0), 4.6))
+    fig.set_size_inches(fig.get_size_inches()[0], 4.6)   # a diagram, not a panel: the column needs its height
+    ax.set_xlim(0, 1); ax.set_ylim(0, 1); ax.axis("off")
+    box = dict(boxstyle="round,pad=0.4", fc="0.93", ec="0.3")
+    state = ax.text(0.5, 0.72, "state filter (step 2)\nbootstrap PF, $N_x$ particles\n"
+                    "uses $\\hat\\theta_{k-1}$, gives $\\hat x_k, P_k$", ha="center", va="center", bbox=box)
+    param = ax.text(0.5, 0.28, "parameter filter (step 3)\nBeta$(\\alpha_k, \\beta_k)$, $N_\\theta$ draws\n"
+                    "uses $\\hat x_{k-1}, P_{k-1}$, gives $\\hat\\theta_k$", ha="center", va="center", bbox=box)
+    z_top = ax.text(0.5, 0.985, "$z_k$", ha="center", va="top")
+    z_bot = ax.text(0.5, 0.015, "$z_k$", ha="center", va="bottom")
+    arrow = dict(arrowstyle="-|>", mutation_scale=14, lw=1.0, color="0.2")
+    ax.annotate("", xy=(0.5, 0.0), xycoords=state, xytext=(0.5, 0.0), textcoords=z_top,
+                arrowprops=dict(arrow, patchB=state.get_bbox_patch()))
+    ax.annotate("", xy=(0.5, 1.0), xycoords=param, xytext=(0.5, 1.0), textcoords=z_bot,
+                arrowprops=dict(arrow, patchB=param.get_bbox_patch()))
+    # the exchange: the state estimate goes down (right), the parameter estimate up (left), for step k + 1
+    for x, lab, down in ((0.68, "$\\hat x_k, P_k$", True), (0.32, "$\\hat\\theta_k$", False)):
+        src, dst = (state, param) if down else (param, state)
+        ax.annotate("", xy=(x, 0.5 - 0.08 if down else 0.5 + 0.08), xytext=(x, 0.5 + 0.08 if down else 0.5 - 0.08),
+                    arrowprops=arrow)
+        ax.text(x + (0.03 if down else -0.03), 0.5, lab, ha="left" if down else "right", va="center")
     fig.tight_layout()
     return fig
 
@@ -265,20 +383,20 @@ def fig2(outside_over_time=None, cases=((0.5, 1 / 12), (0.12, 0.01))):
         inside = (u > 0) & (u < 1)
         ax.plot(u[inside], beta_dist.pdf(u[inside], a, b), color=SERIES_COLORS[0], label="Beta")
         g = norm.pdf(u, mu, np.sqrt(var))
-        ax.plot(u, g, color=SERIES_COLORS[1], ls="--", label="Gaussian, same mean and variance")
+        ax.plot(u, g, color=SERIES_COLORS[1], ls="--", label="Gaussian, same moments")
         ax.fill_between(u, 0, g, where=~inside, color=SERIES_COLORS[1], alpha=0.35, lw=0)
         out = norm.cdf(0, mu, np.sqrt(var)) + norm.sf(1, mu, np.sqrt(var))
         ax.axvline(0, color="0.5", lw=0.6); ax.axvline(1, color="0.5", lw=0.6)
-        ax.set_title(f"({'abcd'[i]}) μ = {mu:g}, σ = {np.sqrt(var):.3g}\n{100 * out:.1f} % of the Gaussian outside", fontsize=8)
-        ax.set_xlabel("φ = (θ − r_l)/(r_u − r_l)")
+        ax.set_title(f"({'abcd'[i]}) μ = {mu:g}, σ = {np.sqrt(var):.3g}\n{100 * out:.1f} % outside")
+        ax.set_xlabel(r"$\phi = (\theta - r_l)/(r_u - r_l)$")
     axs[0].set_ylabel("density")
     if outside_over_time is not None:
         ax = axs[-1]
         k = np.arange(1, len(outside_over_time) + 1)
         ax.plot(k, 100 * np.asarray(outside_over_time), color=SERIES_COLORS[1], ls="--")
         ax.set_xlabel("k"); ax.set_ylabel("% of draws outside")
-        ax.set_title(f"({'abcd'[n - 1]}) DPF with a Gaussian law\n(sec 5.1, mean over runs)", fontsize=8)
-    legend_below(fig, axs, ncol=2, fontsize=8)
+        ax.set_title(f"({'abcd'[n - 1]}) Gaussian-law DPF\n(mean over runs)")
+    legend_below(fig, axs, ncol=2)
     return fig
 
 
@@ -295,7 +413,7 @@ def sweeps_51(st, sd, cap=None, q_rel=None):
     q_rel = E.S51["dekf_q_rel"] if q_rel is None else q_rel
     caps = [c for c in E.S51["caps"]]
     rows = ["DPF" if c == cap else (f"cap {c:g}" if c else "no cap") for c in caps]
-    labels = [f"{c:g}" + (" (ours)" if c == cap else "") if c else "none" for c in caps]
+    labels = [f"{c:g}" + ("\n(ours)" if c == cap else "") if c else "none" for c in caps]
     fig, axs = new_figure(1, 3, figsize=(9.0, 2.9))
     pos = np.arange(len(rows))
     axs[0].errorbar(pos, st.loc[rows, "RMSE θ"], yerr=st.loc[rows, "se θ"], fmt="o-", color=method_color("DPF"),
@@ -305,7 +423,7 @@ def sweeps_51(st, sd, cap=None, q_rel=None):
     axs[1].axhline(0.95, color=REFERENCE_COLOR, lw=0.8, ls="--", label="nominal 0.95")
     axs[1].set_ylim(-0.03, 1.03); axs[1].set_ylabel("coverage of θ at T")
     for ax, t in zip(axs[:2], ("(a) DPF: θ error", "(b) DPF: 95 % interval")):
-        ax.set_xticks(pos, labels); ax.set_xlabel("cap on α + β"); ax.set_title(t, fontsize=9)
+        ax.set_xticks(pos, labels); ax.set_xlabel("cap on α + β"); ax.set_title(t)
     qrows = [r for r in sd.index if str(r).startswith("q0")] + [r for r in sd.index if r == "unprojected"]
     qlab = [str(r).replace("q0 = ", "").replace(" P0", "") for r in qrows]
     qlab = [lab + (" (ours)" if lab == f"{q_rel:g}" else "") for lab in qlab]
@@ -313,15 +431,15 @@ def sweeps_51(st, sd, cap=None, q_rel=None):
     axs[2].errorbar(qpos, sd.loc[qrows, "RMSE x"], yerr=sd.loc[qrows, "se x"], fmt="s", color=method_color("DEKF"),
                     capsize=3, label="DEKF")
     axs[2].set_xticks(qpos, qlab, rotation=30, ha="right")
-    axs[2].set_xlabel("q₀ / P_θ0 (or unprojected θ)"); axs[2].set_ylabel("state RMSE")
-    axs[2].set_title("(c) DEKF: parameter noise", fontsize=9)
-    legend_below(fig, axs, ncol=3, fontsize=8)
+    axs[2].set_xlabel(r"$q_0 / P_{\theta,0}$ (or $\hat\theta$ unprojected)"); axs[2].set_ylabel("state RMSE")
+    axs[2].set_title("(c) DEKF: parameter noise")
+    legend_below(fig, axs, ncol=3)
     return fig
 
 
 def integration_error(integ, used=None):
     """The sec 5.2 integration sweep drawn: max state error over the 60 s truth (against 1024 RK4
-    substeps) per number of RK4 substeps, log-log, with the filters' choice marked. ``integ``:
+    substeps, ``pfrepro.experiments.dpf_hou2008.integration_error_52``) per number of RK4 substeps, log-log, with the filters' choice marked. ``integ``:
     ``pfrepro.experiments.dpf_hou2008.integration_error_52``."""
     used = E.S52["filter_substeps"] if used is None else used
     fig, ax = new_figure(figsize=(4.2, 2.9))
@@ -332,8 +450,7 @@ def integration_error(integ, used=None):
     ax.set_xticks(n, [f"{v:g}" for v in n], minor=False)
     ax.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
     ax.set_xlabel("RK4 substeps per second"); ax.set_ylabel("max error over 60 s")
-    ax.legend(fontsize=8, frameon=False)
-    fig.tight_layout()
+    legend_below(fig, ax, ncol=3)
     return fig
 
 
@@ -349,16 +466,16 @@ def fig_exact(r51, runs=None):
                         ("Liu-West", method_color("Liu-West"), ":")):
         d = r51.results[name].diagnostics["theta"][:nr] - exd["theta"][:nr]
         axs[0].plot(kk, np.sqrt(np.mean(d**2, 0)), color=c, ls=ls, label=name.replace("-", "–"))
-    axs[0].set_yscale("log"); axs[0].set_xlabel("k"); axs[0].set_ylabel("RMS distance to exact E[θ | z_1:k]")
-    axs[0].set_title("(a)", fontsize=8)
+    axs[0].set_yscale("log"); axs[0].set_xlabel("k"); axs[0].set_ylabel("RMS distance to exact mean")
+    axs[0].set_title("(a)")
     for name, c, ls in (("exact", "k", "-"), ("DPF", method_color("DPF"), "-"), ("DEKF", method_color("DEKF"), "--"),
                         ("Liu-West", method_color("Liu-West"), ":")):
         q = E.theta_interval(r51, name)
         cov = E.coverage(q[0, :nr], q[2, :nr], E.S51["theta_true"]).mean(0)   # the common runs only
         axs[1].plot(kk, cov, color=c, ls=ls, label=name.replace("-", "–"))
     axs[1].axhline(0.95, color="0.5", lw=0.6); axs[1].set_ylim(0, 1.02); axs[1].set_xlabel("k")
-    axs[1].set_ylabel("coverage of true θ by 95 % interval"); axs[1].set_title("(b)", fontsize=8)
-    legend_below(fig, axs, ncol=4, fontsize=8)
+    axs[1].set_ylabel("coverage of true θ"); axs[1].set_title("(b)")
+    legend_below(fig, axs, ncol=4)
     return fig
 
 
@@ -378,16 +495,55 @@ def _fig_runs_52(results):
     return E.first_runs(results.r52, n)
 
 
+#: the text alternative of every figure of the chapter, by its glue key (what the figure shows, for a
+#: reader who cannot see it; the caption says what it means)
+CHAPTER_FIGURE_ALTS = {
+    "dpf_fig1": "Beta densities on the unit interval for seven pairs of alpha and beta: the uniform, "
+                "U-shaped, bell-shaped, skewed to either side and concentrated laws.",
+    "dpf_fig3": "Block diagram: the measurement feeds a state filter and a parameter filter; the state "
+                "filter passes its estimate and covariance down, the parameter filter its estimate up, "
+                "each used at the next step.",
+    "dpf_fig4": "Two panels against the step k for one run: the true state with the DPF and DEKF "
+                "estimates, and the parameter estimates of the DPF, the DEKF and Liu-West with the "
+                "exact posterior mean and its 95 % band.",
+    "dpf_fig5": "Four panels of parameter quantiles against k for initial guesses 0.2, 0.5 and 0.7: "
+                "quantiles over runs and each filter's own posterior quantiles, for the DEKF and the DPF.",
+    "dpf_sweeps51": "Three panels: the DPF's parameter error and interval coverage against the cap on "
+                    "alpha plus beta, and the DEKF's state error against its parameter noise.",
+    "dpf_fig2": "Beta and Gaussian densities with equal moments, with the Gaussian's mass outside the "
+                "unit interval shaded, and the share of the Gaussian DPF's draws outside against k.",
+    "dpf_fig_exact": "Two panels against k: each method's distance to the exact posterior mean of the "
+                     "parameter (log scale), and the coverage of the true parameter by each method's "
+                     "95 % interval.",
+    "dpf_fig6": "Altitude and speed of the re-entering body against time under our reading and under "
+                "the literal one.",
+    "dpf_fig789": "Three panels of RMSE against time on log scales (altitude, speed and the ballistic "
+                  "parameter with its Cramér-Rao bound) for the DEKF, the DPF and Liu-West.",
+    "dpf_integration": "Largest altitude and speed error of the RK4 trajectory against the number of "
+                       "substeps per second, log-log, with the filters' choice marked by a dashed line.",
+}
+
+
+def chapter_figure_alts() -> dict:
+    """:data:`CHAPTER_FIGURE_ALTS` (a copy): the text alternative of every figure of the chapter."""
+    return dict(CHAPTER_FIGURE_ALTS)
+
+
 def chapter_figures(results) -> dict:
-    """Every figure of the chapter, by its glue key (the paper's Figs. 1-9, the sweeps, the exact
-    posterior and the integration error)."""
+    """Every figure of the chapter by its glue key, as a function of no argument that draws it (the
+    paper's Figs. 1-9, the sweeps, the exact posterior and the integration error): the book draws each
+    once for the laptop and once for the phone (``pfrepro.prose.glue_figure``), with the text
+    alternative of :data:`CHAPTER_FIGURE_ALTS`."""
     R = results
     st, sd = E.sensitivity_table(R.sens), E.sensitivity_table(R.dekf_sens)
-    return {"dpf_fig1": fig1(), "dpf_fig3": fig3(),
-            "dpf_fig4": fig4(R.r51, 0), "dpf_fig5": fig5(R.f5, 0), "dpf_sweeps51": sweeps_51(st, sd),
-            "dpf_fig2": fig2(R.x51.results["DPF Gaussian θ"].diagnostics["outside"].mean(0)),
-            "dpf_fig_exact": fig_exact(R.r51, R.s51["grid_runs"]), "dpf_fig6": fig6(R.tr_ft, R.tr_lit),
-            "dpf_fig789": figs_7_9(_fig_runs_52(R), R.crb_ft), "dpf_integration": integration_error(R.integ)}
+    outside = R.x51.results["DPF Gaussian θ"].diagnostics["outside"].mean(0)
+    r52 = _fig_runs_52(R)
+    return {"dpf_fig1": fig1, "dpf_fig3": fig3,
+            "dpf_fig4": lambda: fig4(R.r51, 0), "dpf_fig5": lambda: fig5(R.f5, 0),
+            "dpf_sweeps51": lambda: sweeps_51(st, sd), "dpf_fig2": lambda: fig2(outside),
+            "dpf_fig_exact": lambda: fig_exact(R.r51, R.s51["grid_runs"]),
+            "dpf_fig6": lambda: fig6(R.tr_ft, R.tr_lit),
+            "dpf_fig789": lambda: figs_7_9(r52, R.crb_ft), "dpf_integration": lambda: integration_error(R.integ)}
 
 
 def errata_table(ratio_3d: float, literal_spread: float) -> pd.DataFrame:
@@ -435,19 +591,25 @@ def readings_51_table(results) -> pd.DataFrame:
         inside = lo_q <= pub[(who, lab)] <= hi_q
         return f"{med:.{3 if lab == 'x' else 4}f}{' in' if inside else ''}"
 
+    def label(ch, val):
+        name = "main (T = 100, θ = 0.5)" if ch == "main" else V.reading_label_51(ch, val)
+        if (ch, val) in V.EXCLUDED:
+            name += " (context, not counted: " + V.EXCLUDED[(ch, val)].split(":")[0] + ")"
+        return name
+
     tab = pd.DataFrame([{
-        "reading": "main (T = 100, θ = 0.5)" if ch == "main" else f"{ch} = {val}", "runs": st["runs"],
+        "reading": label(ch, val), "runs": st["runs"],
         "failures DPF / DEKF": f"{st['fail'][0]} / {st['fail'][1]}",
-        "DPF x": cell(st, "DPF", "x"), "DEKF x": cell(st, "DEKF", "x"),
-        "DPF θ": cell(st, "DPF", "theta"), "DEKF θ": cell(st, "DEKF", "theta"),
-        "1 − DPF/DEKF (x)": pm(*st[("rel", "x")], 2), "1 − DPF/DEKF (θ)": pm(*st[("rel", "theta")], 2),
-        "counted": "no: " + V.EXCLUDED[(ch, val)].split(":")[0] if (ch, val) in V.EXCLUDED else "yes"}
+        "x: DPF / DEKF": f"{cell(st, 'DPF', 'x')} / {cell(st, 'DEKF', 'x')}",
+        "θ: DPF / DEKF": f"{cell(st, 'DPF', 'theta')} / {cell(st, 'DEKF', 'theta')}",
+        "1 − DPF/DEKF in x": pm(*st[("rel", "x")], 2), "1 − DPF/DEKF in θ": pm(*st[("rel", "theta")], 2)}
         for (ch, val), st in R51.items()])
     eff = V.effects_51(results)
-    tab.loc[len(tab)] = ["paper (1 run)", 1, "—", f"{pub[('DPF', 'x')]:.3f}", f"{pub[('DEKF', 'x')]:.3f}",
-                         f"{pub[('DPF', 'theta')]:.5f}", f"{pub[('DEKF', 'theta')]:.5f}", f"{eff['x']:.2f}",
-                         f"{eff['theta']:.2f}", "—"]
+    tab.loc[len(tab)] = ["paper (1 run)", 1, "—", f"{pub[('DPF', 'x')]:.3f} / {pub[('DEKF', 'x')]:.3f}",
+                         f"{pub[('DPF', 'theta')]:.5f} / {pub[('DEKF', 'theta')]:.5f}", f"{eff['x']:.2f}",
+                         f"{eff['theta']:.2f}"]
     return tab
+
 
 
 def sensitivity_display(st) -> pd.DataFrame:
@@ -457,8 +619,9 @@ def sensitivity_display(st) -> pd.DataFrame:
                          "RMSE θ": [pm(a, b, 3) for a, b in zip(st["RMSE θ"], st["se θ"])],
                          "cover. at T": st["coverage at T"].map("{:.2f}".format),
                          "α+β at T": st["median α+β at T"].map("{:.0f}".format),
-                         "capped %": st["capped steps %"].map("{:.1f}".format),
-                         "guards %": st["guard steps %"].map("{:.1f}".format)}, index=st.index)
+                         "steps capped / guarded (%)": [f"{a:.1f} / {b:.1f}" for a, b in
+                                                        zip(st["capped steps %"], st["guard steps %"])]},
+                        index=pd.Index(st.index, name="DPF setting"))
 
 
 def dekf_sensitivity_display(sd) -> pd.DataFrame:
@@ -466,7 +629,8 @@ def dekf_sensitivity_display(sd) -> pd.DataFrame:
     return pd.DataFrame({"runs": sd["runs"], "failures": sd["failures"],
                          "RMSE x": [pm(a, b, 2) for a, b in zip(sd["RMSE x"], sd["se x"])],
                          "RMSE θ": [pm(a, b, 3) for a, b in zip(sd["RMSE θ"], sd["se θ"])],
-                         "cover. at T": sd["coverage at T"].map("{:.2f}".format)}, index=sd.index)
+                         "cover. at T": sd["coverage at T"].map("{:.2f}".format)},
+                        index=pd.Index(sd.index, name="DEKF setting"))
 
 
 def law_table(results) -> pd.DataFrame:
@@ -480,8 +644,8 @@ def law_table(results) -> pd.DataFrame:
         "law": lab, "runs": rr.results[n].x.shape[0], "failures": int(E.lost_51(rr, n).sum()),
         "RMSE x": pm(*E.mean_se(E.rmse_51(rr, n, 0)), 2), "RMSE θ": pm(*E.mean_se(E.rmse_51(rr, n, 1)), 4),
         "convergence step": pm(*E.mean_se(ct[n]), 1),
-        "draws outside (%)": f"{100 * rr.results[n].diagnostics['outside'].mean():.2f}",
-        "% outside at k = 1": f"{100 * rr.results[n].diagnostics['outside'][:, 0].mean():.1f}",
+        "draws outside, %: all steps / k = 1": (f"{100 * rr.results[n].diagnostics['outside'].mean():.2f} / "
+                                                f"{100 * rr.results[n].diagnostics['outside'][:, 0].mean():.1f}"),
         "mean ESS of θ draws": f"{rr.results[n].diagnostics['ess_theta'].mean():.0f}"}
         for lab, n, rr in (("Beta (paper)", "DPF", R.r51), ("Gaussian, same moments", V.GA, R.x51))])
 
@@ -506,9 +670,18 @@ def table_52_display(results) -> pd.DataFrame:
     """The sec 5.2 table at T (main reading; ``pfrepro.experiments.dpf_hou2008.table_52``) as shown."""
     out = E.table_52(results.r52)
     out["θ (10⁻³/ft)"] = out["θ (10⁻³/ft)"].map("{:.3f}".format)
-    for c in ("altitude (ft)", "speed (ft/s)", "altitude, runs not lost (ft)"):
-        out[c] = out[c].map("{:.1f}".format)
+    # altitudes to the foot, as the prose and the readings table give them (one number, one rounding)
+    for c, fmt in (("altitude (ft)", "{:.0f}"), ("speed (ft/s)", "{:.1f}"), ("altitude, runs not lost (ft)", "{:.0f}")):
+        out[c] = out[c].map(fmt.format)
     return out.rename(columns=lambda c: c if c in ("runs", "failures") else c + " at T")
+
+
+def readings_52_tables(results) -> tuple:
+    """:func:`readings_52_table` as the chapter shows it, in two tables of at most six columns, both by
+    reading: the errors (runs, failures, altitude and θ at T, runs lost) and the paired z of the orderings."""
+    t = readings_52_table(results)
+    z_cols = [c for c in t.columns if c.startswith("z ")]
+    return t.drop(columns=z_cols), t[["reading", *z_cols]]
 
 
 def readings_52_table(results) -> pd.DataFrame:
@@ -524,7 +697,7 @@ def readings_52_table(results) -> pd.DataFrame:
         "failures DPF / DEKF / LW": trio(st, "failures", lambda v: f"{int(v)}"),
         "altitude at T (ft)": trio(st, "altitude (ft)", lambda v: f"{v:.0f}"),
         "θ at T (% of θ)": trio(st, "θ (10⁻³/ft)", lambda v: f"{100 * v:.1f}"),
-        "z DEKF−DPF: alt, speed, θ": ", ".join(f"{V.z_of(st[(k, 'all')]):.1f}" for k in ("alt", "vel", "th")),
-        "z 10–20 s": ", ".join(f"{V.z_of(st[(k, '10_20')]):.1f}" for k in ("alt", "vel", "th")),
-        "z LW−DPF θ": f"{V.z_of(st['lw']):.1f}",
+        "z of DEKF − DPF (altitude, speed, θ)": ", ".join(f"{V.z_of(st[(k, 'all')]):.1f}" for k in ("alt", "vel", "th")),
+        "z of DEKF − DPF, 10–20 s": ", ".join(f"{V.z_of(st[(k, '10_20')]):.1f}" for k in ("alt", "vel", "th")),
+        "z of LW − DPF in θ": f"{V.z_of(st['lw']):.1f}",
         "lost LW − DPF": pm(*st["stab"], 2)} for (ch, val), st in V.readings_52(results).items()])

@@ -15,10 +15,12 @@ from ..experiments import immpfor_zhou2017 as E
 from ..models.tracking import IDX_POS, IDX_VEL
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
+from .dpf_hou2008 import card_table, choices_display, legend_below  # noqa: F401  (the chapter shows its tables through them)
 
 __all__ = ["plans_table", "d_sweep_figure", "table1_frame", "table1_shown", "fig1", "shade_turns", "rmse_plot", "fig2", "fig3", "fig4",
            "fig5", "tables", "figures", "readings_table", "robustness_table", "equal_compute_table", "modes_table",
-           "fig_modes", "fig_dsweep", "sweep_frames", "TABLES", "FIGURES", "N_STEPS", "PF_NAMES"]
+           "fig_modes", "fig_dsweep", "sweep_frames", "chapter_figures", "CHAPTER_FIGURE_ALTS",
+           "held_table", "plan_label", "TABLES", "FIGURES", "N_STEPS", "PF_NAMES"]
 
 #: what :func:`tables` and :func:`figures` make
 TABLES = ("Table 1",)
@@ -94,8 +96,8 @@ def fig1(main, run: int = 0):
         ax.plot(xe[:, 0] / 1000, xe[:, 3] / 1000, st, color=method_color(n), lw=1, label=n)
     for k0 in (S["left_turn"][0], S["right_turn"][0]):
         ax.plot(xt[k0, 0] / 1000, xt[k0, 3] / 1000, "ko", ms=3)
-    ax.set_xlabel("Rx [km]"); ax.set_ylabel("Ry [km]"); ax.legend(fontsize=8); ax.set_aspect("equal")
-    fig.tight_layout()
+    ax.set_xlabel("$R_x$ [km]"); ax.set_ylabel("$R_y$ [km]"); ax.set_aspect("equal", adjustable="datalim")
+    legend_below(fig, ax, ncol=3)
     return fig
 
 
@@ -109,13 +111,14 @@ def rmse_plot(run_, names, idx_pos, idx_vel, title_pos, title_vel, styles=("-", 
     """Two panels of RMSE over the runs against time (components ``idx_pos``, ``idx_vel``); turns shaded."""
     kk = np.arange(1, E.SCENARIO["duration"] + 1)
     fig, axs = new_figure(1, 2, figsize=(9, 3.3))
-    for ax, idx, lab in ((axs[0], idx_pos, title_pos), (axs[1], idx_vel, title_vel)):
+    for j, (ax, idx, lab) in enumerate(((axs[0], idx_pos, title_pos), (axs[1], idx_vel, title_vel))):
         shade_turns(ax)
+        ax.set_title(f"({'ab'[j]})", loc="left")
         for i, (n, st) in enumerate(zip(names, styles)):
             ax.plot(kk, E.rmse_curves(run_.x_true, run_.results[n].x, idx), st, lw=1, label=n,
                     color=method_color(n, SERIES_COLORS[i % len(SERIES_COLORS)]))
         ax.set_xlabel("time [s]"); ax.set_ylabel(lab)
-    axs[0].legend(fontsize=8); fig.tight_layout()
+    legend_below(fig, axs, ncol=len(names))
     return fig
 
 
@@ -152,17 +155,16 @@ def d_sweep_figure(sweep: pd.DataFrame, ablation: pd.DataFrame | None = None):
     """
     fig, ax = new_figure(figsize=(6, 3.4))
     ax.axhline(0.0, color="0.5", lw=0.8)
-    series = [(sweep, method_color("IMMPFOR"), "o-", "IMMPFOR (eq 23: parents of all modes)")]
+    series = [(sweep, method_color("IMMPFOR"), "o-", "IMMPFOR (eq 23)")]
     if ablation is not None:
-        series.append((ablation, SERIES_COLORS[2], "s--", "ablation: own parent only"))
+        series.append((ablation, SERIES_COLORS[2], "s--", "own parent only"))
     for df, col, st, lab in series:
         d = np.asarray(df.index, float)
         ax.errorbar(d, df["diff"], yerr=df["se"], fmt=st, color=col, ms=4, lw=1, capsize=3, label=lab)
     ax.set_xscale("log")
-    ax.set_xlabel("step coefficient d [neighbour spacings]")
+    ax.set_xlabel("step coefficient $d$")   # in neighbour spacings (the caption)
     ax.set_ylabel("IMMPF − IMMPFOR [m]")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    legend_below(fig, ax, ncol=2)
     return fig
 
 
@@ -195,14 +197,15 @@ def readings_table(results) -> pd.DataFrame:
     from ..claims import ordering_holds
     from ..verdicts.immpfor_zhou2017 import WORD
 
+    from ..verdicts.immpfor_zhou2017 import reading_words
+
     ST, ROB = results.stats, results.rob
-    out = pd.DataFrame({t: {"runs": ROB[t]["runs"], "RMS diff [m]": ST[t]["rms"][0], "se": ST[t]["rms"][1],
-                            "ordering": WORD[ordering_holds(*ST[t]["rms"])],
-                            "median [m]": ROB[t]["median"], "95 % interval": f"[{ROB[t]['lo']:.1f}, {ROB[t]['hi']:.1f}]",
-                            "IMMPFOR better in": ROB[t]["b_better"],
-                            "lost IMMPF": ROB[t]["lost_a"], "lost IMMPFOR": ROB[t]["lost_b"]} for t in ST}).T
-    out.index.name = "reading"
-    return out
+    return pd.DataFrame([{"reading": reading_words(t), "runs": ROB[t]["runs"],
+                          "IMMPF − IMMPFOR [m]": f"{ST[t]['rms'][0]:.1f} ± {ST[t]['rms'][1]:.1f}",
+                          "ordering": WORD[ordering_holds(*ST[t]["rms"])],
+                          "median [m] (95 % interval)": f"{ROB[t]['median']:.1f} [{ROB[t]['lo']:.1f}, {ROB[t]['hi']:.1f}]",
+                          "IMMPFOR better in": f"{ROB[t]['b_better']} of {ROB[t]['runs']}",
+                          "lost IMMPF / IMMPFOR": f"{ROB[t]['lost_a']} / {ROB[t]['lost_b']}"} for t in ST])
 
 
 def robustness_table(results) -> pd.DataFrame:
@@ -213,13 +216,15 @@ def robustness_table(results) -> pd.DataFrame:
     rows = []
     for label, r in results.scenarios.items():
         rb, rf = r["rb"], r["fav"]
-        rows.append({"scenario": label, "IMMPF mean": r["IMMPF mean"], "IMMPFOR mean": r["IMMPFOR mean"],
-                     "gain (RMS)": r["gain"][0], "se": r["gain"][1], "median gain": rb["median"],
-                     "95 % interval": f"[{rb['lo']:.1f}, {rb['hi']:.1f}]",
-                     "IMMPFOR better in": f"{rb['b_better']} of {rb['runs']}", "lost IMMPF": rb["lost_a"],
-                     "lost IMMPFOR": rb["lost_b"], "robust (d = 1)": WORD[rb["holds"]],
-                     f"robust (d = {E.D_FAVOURABLE:g})": WORD[rf["holds"]]})
-    return pd.DataFrame(rows).set_index("scenario")
+        rows.append({"scenario": label,
+                     "mean RMSE [m], IMMPF / IMMPFOR": f"{r['IMMPF mean']:.1f} / {r['IMMPFOR mean']:.1f}",
+                     "gain (RMS) [m]": f"{r['gain'][0]:.1f} ± {r['gain'][1]:.1f}",
+                     "median gain [m] (95 % interval)": f"{rb['median']:.1f} [{rb['lo']:.1f}, {rb['hi']:.1f}]",
+                     "IMMPFOR better in": f"{rb['b_better']} of {rb['runs']}",
+                     "lost IMMPF / IMMPFOR": f"{rb['lost_a']} / {rb['lost_b']}",
+                     f"median rule, d = {E.SCENARIO['d']:g}": WORD[rb["holds"]],
+                     f"median rule, d = {E.D_FAVOURABLE:g}": WORD[rf["holds"]]})
+    return pd.DataFrame(rows)
 
 
 def equal_compute_table(results) -> pd.DataFrame:
@@ -243,19 +248,68 @@ def modes_table(results) -> pd.DataFrame:
 def fig_modes(results):
     """Mean model probabilities over the runs against time (CV, CT, CA in the first three
     :data:`~pfrepro.plotting.SERIES_COLORS`), turns shaded; the paper has no such plot."""
-    import matplotlib.pyplot as plt
-
     kk = np.arange(1, E.SCENARIO["duration"] + 1)
-    fig, axs = plt.subplots(1, 3, figsize=(10, 3), sharey=True)
-    for ax, n in zip(axs, MODE_FILTERS[:3]):
+    fig, axs = new_figure(1, 3, figsize=(10, 3), sharey=True)
+    for i, (ax, n) in enumerate(zip(axs, MODE_FILTERS[:3])):
         shade_turns(ax)
         mp = results.main.results[n].diagnostics["mode_probs"].mean(axis=0)
         for j, lab in enumerate(("CV", "CT", "CA")):   # model series: the book's series palette
             ax.plot(kk, mp[:, j], "-", color=SERIES_COLORS[j], lw=1, label=lab)
-        ax.set_title(n, fontsize=9); ax.set_xlabel("time [s]")
-    axs[0].set_ylabel("mean model probability"); axs[0].legend(fontsize=8)
-    fig.tight_layout()
+        ax.set_title(f"({'abc'[i]}) {n}"); ax.set_xlabel("time [s]"); ax.set_ylabel("mean probability")
+    legend_below(fig, axs, ncol=3)
     return fig
+
+
+#: the text alternative of every figure of the chapter, by its glue key
+CHAPTER_FIGURE_ALTS = {
+    "imm_fig1": "Map of one run in kilometres: the true trajectory with two turns and the IMMPF and IMMPFOR "
+                "estimates, which follow it closely.",
+    "imm_fig2": "Two panels against time: position and velocity RMSE over the runs of the IMMPF and IMMPFOR, "
+                "with the two turns shaded.",
+    "imm_fig3": "Two panels against time: x and y position RMSE over the runs of the IMMPF and IMMPFOR, with "
+                "the two turns shaded.",
+    "imm_fig4": "Two panels against time: x and y velocity RMSE over the runs of the IMMPF and IMMPFOR, with "
+                "the two turns shaded.",
+    "imm_fig5": "Two panels against time: position and velocity RMSE with 2000 particles per model for the "
+                "IMMPF and IMMPFOR, with the two turns shaded.",
+    "imm_fig_modes": "Three panels against time: the mean probabilities of the CV, CT and CA models for the "
+                     "IMMPF, IMMPFOR and IMM-EKF, with the two turns shaded.",
+    "imm_fig_dsweep": "IMMPF minus IMMPFOR error with error bars against the step coefficient d on a log "
+                      "axis, for IMMPFOR as reconstructed and for the own-parent ablation.",
+}
+
+
+def chapter_figures(results) -> dict:
+    """Every figure of the chapter by its glue key, as a function of no argument that draws it (the
+    book draws each for the laptop and for the phone, ``pfrepro.prose.glue_figure``; text alternatives
+    in :data:`CHAPTER_FIGURE_ALTS`)."""
+    R = results
+    return {"imm_fig1": lambda: fig1(R.main), "imm_fig2": lambda: fig2(R.main), "imm_fig3": lambda: fig3(R.main),
+            "imm_fig4": lambda: fig4(R.main), "imm_fig5": lambda: fig5(R.fig5),
+            "imm_fig_modes": lambda: fig_modes(R), "imm_fig_dsweep": lambda: fig_dsweep(R)}
+
+
+def held_table() -> pd.DataFrame:
+    """The settings held fixed (``pfrepro.experiments.immpfor_zhou2017.HELD``) as shown: a dict value
+    (the seeds) written as "name value" pairs, not as Python."""
+    import ast
+
+    def value(v):
+        try:
+            d = ast.literal_eval(v)
+        except (ValueError, SyntaxError):
+            return v
+        return ", ".join(f"{k} {x}" for k, x in d.items()) if isinstance(d, dict) else v
+
+    return pd.DataFrame([(a, value(b), c, d) for a, b, c, d in E.HELD],
+                        columns=["setting", "value", "reason", "in the paper"])
+
+
+def plan_label(name: str) -> str:
+    """A power-plan row of ``pfrepro.experiments.immpfor_zhou2017.plan_choices`` in words
+    ("plan_3" -> "power plan 3", "plan_readings" -> "runs of the readings")."""
+    rest = name[5:] if name.startswith("plan_") else name
+    return f"power plan {rest}" if rest.isdigit() else f"runs of the {rest.replace('_', ' ')}"
 
 
 def sweep_frames(results):

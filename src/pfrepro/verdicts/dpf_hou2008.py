@@ -29,7 +29,9 @@ __all__ = ["MAIN_CLAIMS", "NO_CAP", "LOG_SIM", "N52", "MARGINS", "EXCLUDED", "ef
            "relative", "stability_51", "record_claims", "takeaway", "prose", "z_of", "one_run",
            "published_51", "s51_stats", "readings_51", "published_percentiles", "guess_spread", "guess_spread_at",
            "dpf_vs_exact", "liu_west_vs_dpf", "impoverishment", "cap_coverage", "liu_west_readings_51",
-           "beta_vs_gaussian", "similar", "s52_stats", "readings_52", "tagged", "not_held_51", "stability_51"]
+           "beta_vs_gaussian", "similar", "s52_stats", "readings_52", "tagged", "not_held_51", "stability_51",
+           "READING_WORDS_51", "reading_label_51", "not_held_sentence_51",
+           "lw_theta_phrase"]
 
 #: the paper's main claims (abstract — no parameter impoverishment, sampling efficiency of the Beta
 #: law, better accuracy and lower initial sensitivity than the DEKF; secs 5.1 and 5.2)
@@ -188,6 +190,50 @@ def not_held_51(R51: dict, lab: str) -> str:
            for (ch, val), st in R51.items()
            if (ch, val) not in EXCLUDED and ordering_holds(*st[("order", lab)]) is not True]
     return ", ".join(bad) if bad else "none"
+
+
+#: the sec 5.1 free choices in words, for the readings table and the prose ("cap = none" reads "no cap")
+READING_WORDS_51 = {"T51": "horizon T", "theta51": "true θ", "range51": "range [rₗ, rᵤ]", "cap": "cap on α + β",
+                    "resampling": "resampling", "weight": "parameter weight", "dekf": "DEKF"}
+
+
+def reading_label_51(choice: str, value) -> str:
+    """A sec 5.1 reading of :func:`readings_51` in words: ``("cap", "none")`` -> "no cap", ``("T51", 50)`` ->
+    "horizon T = 50", ``("dekf", "q0=0.01")`` -> "DEKF q₀ = 0.01 P_θ0", ``("main", ...)`` -> "the main reading"."""
+    if choice == "main":
+        return "the main reading"
+    if choice == "cap" and str(value) == "none":
+        return "no cap"
+    if choice == "dekf":
+        v = str(value)
+        return f"DEKF q₀ = {v[3:]} P_θ0" if v.startswith("q0=") else f"DEKF, θ̂ {v.replace('unprojected', 'not projected')}"
+    return f"{READING_WORDS_51.get(choice, str(choice).replace('_', ' '))} = {value}"
+
+
+def not_held_sentence_51(R51: dict) -> str:
+    """The sentence on the orderings DPF-better-than-DEKF under the counted sec 5.1 readings (paired
+    difference of the usual RMSE; shown at z > 2): under which rows each of x and θ is not shown, in words
+    (:func:`reading_label_51`), or that it is shown under every one."""
+    from ..prose import join_and
+
+    parts = []
+    for lab, sym in (("x", "$x$"), ("theta", "$\\theta$")):
+        bad = [f"{reading_label_51(ch, val)} ($z$ = {z_of(st[('order', lab)]):.1f})"
+               for (ch, val), st in R51.items()
+               if (ch, val) not in EXCLUDED and ordering_holds(*st[("order", lab)]) is not True]
+        parts.append(f"for {sym} it is not shown under {join_and(bad)}" if bad
+                     else f"for {sym} it is shown under every counted row")
+    return ("The ordering the paper prints (DPF better than DEKF, shown when $z > 2$ on the paired difference of "
+            f"the usual RMSE): {parts[0]}; {parts[1]}.")
+
+
+def lw_theta_phrase(diff) -> str:
+    """How Liu–West compares with the DPF in θ, from the paired difference (Liu–West minus DPF in the
+    θ RMSE, its standard error): "is the more accurate of the two in θ" when it is shown lower (z < -2),
+    "is the less accurate of the two in θ" when shown higher, else "is not distinguishable from it in θ"."""
+    holds = ordering_holds(-diff[0], diff[1])   # DPF minus Liu-West > 0: Liu-West better
+    return {True: "is the more accurate of the two in $\\theta$", False: "is the less accurate of the two in $\\theta$",
+            None: "is not distinguishable from it in $\\theta$"}[holds]
 
 
 def published_percentiles(R) -> dict:
@@ -723,6 +769,7 @@ def prose(reg: ClaimsRegistry, results) -> dict:
     R51 = readings_51(R)
     out["dpf_T50_growth"] = R51[("T51", 50)][("DPF", "x")][0] / R51[("main", "T=100, θ=0.5")][("DPF", "x")][0]
     out["dpf_r51_notheld_x"], out["dpf_r51_notheld_theta"] = not_held_51(R51, "x"), not_held_51(R51, "theta")
+    out["dpf_r51_notheld_sentence"] = Md(not_held_sentence_51(R51))
     eff = effects_51(R)
     out["dpf_eff_x"], out["dpf_eff_theta"] = eff["x"], eff["theta"]
 
@@ -768,7 +815,8 @@ def prose(reg: ClaimsRegistry, results) -> dict:
                                                      / exd["theta_var"][:, -1])))
     lw_vs = liu_west_vs_dpf(R)
     out.update({"dpf_lw_dx": lw_vs["x"][0], "dpf_lw_dx_se": lw_vs["x"][1], "dpf_lw_dth": lw_vs["θ"][0],
-                "dpf_lw_dth_se": lw_vs["θ"][1], "dpf_lw_dth_z": z_of(lw_vs["θ"])})
+                "dpf_lw_dth_se": lw_vs["θ"][1], "dpf_lw_dth_z": z_of(lw_vs["θ"]),
+                "dpf_lw_theta_phrase": Md(lw_theta_phrase(lw_vs["θ"]))})
 
     # sec 5.2: the truth, the bound, the integration
     from ..models.reentry import FT   # metres per foot: only to convert the literal (metric) reading
@@ -781,6 +829,8 @@ def prose(reg: ClaimsRegistry, results) -> dict:
     k_ground = int(np.argmax(tr_lit[:, 0] < 0))
     out["dpf_lit_ground_t"], out["dpf_lit_ground_v"] = k_ground, float(tr_lit[k_ground, 1] / FT / 1e3)
     out["dpf_integ4"] = float(R.integ.loc[S52["filter_substeps"]].iloc[0])
+    out["dpf_integ_truth"] = float(R.integ.loc[S52["truth_substeps"]].iloc[0])   # the truth's own integration error
+    out["dpf_truth_substeps"] = S52["truth_substeps"]
     out["dpf_substeps"] = S52["filter_substeps"]
 
     # sec 5.2: the runs and every reading
