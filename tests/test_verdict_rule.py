@@ -197,6 +197,12 @@ def test_causes_on_the_page_and_in_the_scorecard():
     assert cause_text(by["runs"]) == f"too few runs (12 runs, {by['runs'].runs_needed} would decide)"
     assert cause_text(by["read"]) == "depends on the reading: holds under (a=1, b=1); fails under (a=2, b=1)"
     assert cause_text(by["ok"]) == ""
+    # in HTML (the findings' running text) reading names are code, the main reading stays words
+    assert cause_text(by["read"], as_html=True) == (
+        'depends on the reading: holds under <code class="pf-reading">(a=1, b=1)</code>; '
+        'fails under <code class="pf-reading">(a=2, b=1)</code>')
+    assert "the main reading" in cause_text(by["num"], as_html=True)
+    assert "<code" not in cause_text(by["runs"], as_html=True).split("under")[0]
     # too few runs under one reading: its own runs, not the main reading's
     c = reg.add("und", "A beats E", diff=1.0, diff_se=0.1, runs=100, margin=0.5,
                 reading_diffs={"a=1": (1.0, 0.1, 100), "a=2": (0.3, 0.3, 25)})

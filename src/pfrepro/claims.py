@@ -660,19 +660,27 @@ def as_claims(claims) -> list:
     return list(claims)
 
 
-def cause_text(c: Claim) -> str:
+def cause_text(c: Claim, *, as_html: bool = False) -> str:
     """Why ``c`` is inconclusive, for a reader: the cause and what it means for this claim.
 
     *depends on the reading*: the readings under which it holds and those under which it fails
     (or ties); *too few runs*: the runs it had and the runs a plan says would decide it; the
-    other causes as they are. ``""`` for a claim that is not inconclusive.
+    other causes as they are. ``""`` for a claim that is not inconclusive. With ``as_html`` the
+    text is HTML and each reading's name (a setting such as ``p_stay=0.98``, defined in the
+    chapter's assumptions table) is set as code, so running text does not read it as a word.
     """
+    import html as _html
+
     j = c.judgement
     if j.verdict != "inconclusive":
         return ""
 
     def names(rs):  # a joint reading "a=1, b=2" in parentheses, so the list stays readable
-        return ", ".join(f"({r})" if "," in r else r for r in rs)
+        shown = [f"({r})" if "," in r else r for r in rs]
+        if as_html:
+            shown = [_html.escape(r) if r == MAIN_READING else f'<code class="pf-reading">{_html.escape(r)}</code>'
+                     for r in shown]
+        return ", ".join(shown)
 
     if j.cause == CAUSE_READING:
         number = any(r == MAIN_READING for r, _, _ in j.per_reading)

@@ -38,9 +38,9 @@ def _claim_line(paper: str, c: Claim) -> str:
     from .bookinfo import claim_anchor
 
     parts = [f"{html.escape(c.text)}: {verdict_link(c.verdict)}"]
-    why = cause_text(c)
+    why = cause_text(c, as_html=True)   # reading names as code, the rest escaped
     if why:
-        parts.append(f" ({html.escape(why)})")
+        parts.append(f" ({why})")
     if c.published_text or c.published is not None:
         printed = c.published_text or _pm(c.published, c.published_se)
         if c.reproduced is not None:
