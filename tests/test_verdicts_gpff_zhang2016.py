@@ -555,7 +555,7 @@ def test_the_pages_tables_name_claims_and_readings_in_words(base):
     assert list(rt.columns) == ["entry", "published", "ours, under each reading", "verdict"]
     assert set(rt["entry"]) <= texts and len(rt) == len(V.reading_table(reg))
     assert not any(_ID.search(v) for v in rt["ours, under each reading"])
-    assert all(v.startswith("the main reading: ") for v in rt["ours, under each reading"])
+    assert all(v.startswith("main reading: ") for v in rt["ours, under each reading"])
     rd = V.readings_disagree_shown(reg)
     assert set(rd["claim"]) <= texts and rd.shape[1] <= 6
     assert not any(_ID.search(str(v)) for col in rd.columns.drop(["claim", "cause"]) for v in rd[col])

@@ -39,6 +39,10 @@ def _legend_below(fig, handles, labels, *, max_ncol: int = 3) -> None:
     # an entry: the handle (2 em), a gap and the label at ~0.55 em per character, in inches
     entry = max((2.8 + 0.55 * len(str(t))) * pt / 72 for t in labels)
     ncol = int(max(1, min(max_ncol, len(labels), (0.95 * width_in) // entry)))
+    # the legend's rows are added to the figure's height, so the panels keep theirs
+    rows = -(-len(labels) // ncol)
+    w, h = fig.get_size_inches()
+    fig.set_size_inches(w, h + rows * 1.45 * pt / 72 + 0.15)
     fig.legend(handles, labels, loc="outside lower center", ncol=ncol, frameon=False)
 
 
@@ -205,7 +209,7 @@ def fig_bot_bound(results, components=("y", "ydot"), dt: float = 0.1):
             ax.semilogy(tt, curves[name][:, j], ls, color=f"C{i}", lw=1.6 if name == f"PF({refs.big_n})" else 1.0,
                         label=name)
         ax.semilogy(tt, refs.pcrb_fixed[:, j], "k-", lw=2, label="PCRB, $x_0$ known")
-        ax.semilogy(tt, refs.pcrb_prior[:, j], "k:", lw=1.5, label="PCRB, $x_0\\sim$ prior (not a bound here)")
+        ax.semilogy(tt, refs.pcrb_prior[:, j], "k:", lw=1.5, label="PCRB, $x_0\\sim$ prior")
         ax.set_xlabel("time (s)"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]}")
         ax.grid(alpha=0.3, which="both")
         ax.set_title(f"{COMPONENT_LABELS[comp]} against the bound")
