@@ -12,7 +12,7 @@ import pandas as pd
 
 from ..experiments import gpff_zhang2016 as E
 from ..metrics import mc_summary, mse_per_component, mse_per_component_over_time
-from ..plotting import REFERENCE_COLOR, current_layout, method_color
+from ..plotting import REFERENCE_COLOR, SERIES_COLORS, current_layout, method_color
 from . import new_figure
 
 __all__ = ["fig1", "fig2", "fig3", "fig4", "fig5", "tables", "figures", "TABLES", "FIGURES", "N_STEPS",
@@ -162,7 +162,7 @@ def fig_convergence_dlambda(conv: pd.DataFrame):
     fig, axes = new_figure(1, 2, figsize=(10.2, 4), sharey=True, layout="constrained")
     styles = {"euler": "o-", "midpoint": "s-", "rk4": "^-"}
     for ax, sched, panel in zip(axes, ("uniform", "exponential"), "ab"):
-        for meth, color in zip(("euler", "midpoint", "rk4"), ("C0", "C2", "C4")):
+        for meth, color in zip(("euler", "midpoint", "rk4"), SERIES_COLORS):
             c = conv[(conv.schedule == sched) & (conv.integrator == meth)]
             ax.loglog(c["dlambda"], c["mean error"], styles[meth], color=color, label=f"{meth}, mean")
             ax.loglog(c["dlambda"], c["cov error"], styles[meth], color=color, mfc="none", alpha=0.6,
@@ -180,7 +180,7 @@ def fig_convergence_n(conv_n: pd.DataFrame):
     """Error of the flowed cloud's mean and covariance against the true Kalman posterior as N grows,
     for the exact map and 20 Euler steps (:func:`~pfrepro.experiments.gpff_zhang2016.convergence_in_n`)."""
     fig, ax = new_figure(figsize=(6.5, 4), layout="constrained")
-    for (name, c), mk, color in zip(conv_n.groupby("integrator", sort=False), ("o-", "s-"), ("C0", "C3")):
+    for (name, c), mk, color in zip(conv_n.groupby("integrator", sort=False), ("o-", "s-"), SERIES_COLORS):
         ax.loglog(c["N"], c["mean error"], mk, color=color, label=f"{name}: mean")
         ax.loglog(c["N"], c["cov error"], mk, color=color, mfc="none", alpha=0.6, label=f"{name}: covariance")
     Ns = conv_n["N"].unique()
@@ -204,9 +204,11 @@ def fig_bot_bound(results, components=("y", "ydot"), dt: float = 0.1):
     fig, axes = new_figure(1, len(components), figsize=(10.2, 4.2), layout="constrained")
     for ax, comp in zip(np.atleast_1d(axes), components):
         j = E.COMPONENTS.index(comp)
-        for i, name in enumerate(names):
+        pf_colors = iter(SERIES_COLORS)   # the PFs of several sizes apart; the others in their method's colour
+        for name in names:
             ls = "--" if name.startswith("UKF, started") else "-"
-            ax.semilogy(tt, curves[name][:, j], ls, color=f"C{i}", lw=1.6 if name == f"PF({refs.big_n})" else 1.0,
+            color = next(pf_colors) if name.startswith("PF(") else _color(name)
+            ax.semilogy(tt, curves[name][:, j], ls, color=color, lw=1.6 if name == f"PF({refs.big_n})" else 1.0,
                         label=name)
         ax.semilogy(tt, refs.pcrb_fixed[:, j], "k-", lw=2, label="PCRB, $x_0$ known")
         ax.semilogy(tt, refs.pcrb_prior[:, j], "k:", lw=1.5, label="PCRB, $x_0\\sim$ prior")
