@@ -1060,6 +1060,7 @@ def choices_shown(choices, reg) -> pd.DataFrame:
     tab, text = choices_table(choices).reset_index(drop=True), _claim_texts(reg)
     tab["choice"] = [f"runs for “{text[n[5:]]}”" if n.startswith("runs_") and n[5:] in text else choice_words(n)
                      for n in tab["choice"]]
+    tab["reason"] = tab["reason"].str.replace("x0_hat", "x̂₀", regex=False)   # the filters' prior mean
     return tab
 
 
