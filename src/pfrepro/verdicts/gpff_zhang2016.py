@@ -1065,7 +1065,7 @@ def choices_shown(choices, reg) -> pd.DataFrame:
 
 
 def items_shown(reg) -> pd.DataFrame:
-    """:data:`ITEMS` as the page shows them: the paper's statement, its line and what judges it in words
+    """``ITEMS`` as the page shows them: the paper's statement, its line and what judges it in words
     (the claim's verdict in the verdict table, an equation check or an erratum), no ids."""
     v = {c.claim_id: c.verdict_text() for c in reg.claims}
     rows = []
