@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import NullFormatter
 
 from ..experiments import gpff_zhang2016 as E
 from ..metrics import mc_summary, mse_per_component, mse_per_component_over_time
@@ -112,6 +113,7 @@ def fig4(mc_bot, names=BOT_FIGURE_FILTERS, dt: float = 0.1):
             ax.semilogy(tt, curve, color=_color(name), label=name)
         ax.set_xlabel("time (s)"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]}"); ax.grid(alpha=0.3, which="both")
         ax.set_title(f"({'abcd'[j]}) {COMPONENT_LABELS[comp]}")
+        ax.yaxis.set_minor_formatter(NullFormatter())   # minor labels of a short log axis overlap
     _legend_below(fig, *_handles(axes[0, 0]), max_ncol=4)
     return fig
 
@@ -125,6 +127,7 @@ def fig5(mc_bot, names=BOT_FIGURE_FILTERS):
             ax.semilogy(np.arange(1, len(v) + 1), v, ".-", ms=3, lw=0.6, color=_color(name), label=name)
         ax.set_xlabel("Monte Carlo run"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]}")
         ax.set_title(f"({'abcd'[j]}) {COMPONENT_LABELS[comp]}"); ax.grid(alpha=0.3, which="both")
+        ax.yaxis.set_minor_formatter(NullFormatter())
     _legend_below(fig, *_handles(axes[0, 0]), max_ncol=4)
     return fig
 
