@@ -530,3 +530,78 @@ def test_reading_table_shows_printed_digits(base):
 def test_centred_start_exclusion_cites_the_paper():
     why = V.bot_centred_start_exclusion()
     assert "l.293" in why and "非理想初值" in why and "not a reading" in why
+
+
+# ---------------------------------------------------------------------------- the page: words, tables, figures
+#: a snake_case identifier (a claim id, a choice name) -- what a reader should not have to decode
+_ID = re.compile(r"(?<![\w./:@-])[a-z][a-z0-9]*(?:_[a-z0-9]+)+(?![\w(])")
+
+
+def test_readings_and_choices_in_words():
+    assert V.reading_words("pf_resampling=ESS<N/2, field=eq43") == "PF resampling ESS<N/2, flow field eq43"
+    assert V.reading_words("cost_basis=as printed") == "cost basis as printed"
+    assert V.reading_words("the main reading") == "the main reading"
+    assert V.reading_words("ut=alpha=0.5") == "UT parameters alpha=0.5"
+    assert V.choice_words("some_new_choice") == "some new choice"
+    assert all(not _ID.search(V.choice_words(c.name)) for c in E.CHOICES)
+
+
+def test_the_pages_tables_name_claims_and_readings_in_words(base):
+    """The tables the chapter shows about claims and readings: the claim's text, the readings in words,
+    no row numbers, at most 8 columns."""
+    reg, cl = decide(base)
+    texts = {c.text for c in reg.claims}
+    rt = V.reading_table_shown(reg)
+    assert list(rt.columns) == ["entry", "published", "ours, under each reading", "verdict"]
+    assert set(rt["entry"]) <= texts and len(rt) == len(V.reading_table(reg))
+    assert not any(_ID.search(v) for v in rt["ours, under each reading"])
+    assert all(v.startswith("main reading: ") for v in rt["ours, under each reading"])
+    rd = V.readings_disagree_shown(reg)
+    assert set(rd["claim"]) <= texts and rd.shape[1] <= 6
+    assert not any(_ID.search(str(v)) for col in rd.columns.drop(["claim", "cause"]) for v in rd[col])
+    pp = V.power_plans_shown(reg)
+    assert set(pp["claim"]) <= texts and set(pp["plan met"]) <= {"yes", "no"}
+    ch = V.choices_shown(list(E.CHOICES) + V.plan_choices(reg), reg)
+    assert not any(_ID.search(v) for v in ch["choice"]) and ch.shape[1] <= 8
+    assert any(v.startswith("runs for “") for v in ch["choice"])
+    it = V.items_shown(reg)
+    assert len(it) == len(V.ITEMS) and not any(_ID.search(v) for v in it["judged by"])
+    # the claim's verdict, in words, where a claim judges the statement
+    k = [i for i, (_, _, by) in enumerate(V.ITEMS) if by == "claim bot_pf_start_sensitive"][0]
+    assert it.loc[k, "judged by"].endswith(cl["bot_pf_start_sensitive"].verdict_text())
+
+
+def test_generated_sentences_name_claims_and_readings_in_words(base, monkeypatch):
+    """The plans sentence names an unmet plan's claim by its text and the best reading in words; with
+    every plan met it says so (the sentence follows the plans, not a typed count)."""
+    reg, cl = decide(base)
+    p = V.prose(reg, base)
+    plans = V.power_plans(reg)
+    unmet = plans[~plans["plan met"]]
+    assert len(unmet) > 0          # three runs: plans that ask for more are not met
+    s = str(p["plans_sentence"])
+    assert s.startswith(f"{len(unmet)} of {len(plans)} plans {'is' if len(unmet) == 1 else 'are'} not met")
+    assert all(f"“{cl[cid].text}”" in s for cid in unmet.index) and not any(f"`{cid}`" in s for cid in unmet.index)
+    assert not _ID.search(str(p["ptr_best"]).split(" (")[0])
+    met = plans.assign(**{"plan met": True, "runs per reading": plans["runs planned"].max()})
+    monkeypatch.setattr(V, "power_plans", lambda reg: met)      # every plan met: the other sentence
+    p2 = V.prose(reg, base)
+    assert str(p2["plans_sentence"]).startswith("Every plan is met")
+
+
+@pytest.mark.parametrize("name", ["fig1", "fig2", "fig3", "fig4", "fig5", "fig_convergence_dlambda",
+                                  "fig_convergence_n", "fig_bot_bound"])
+def test_every_figure_is_drawn_for_the_laptop_and_the_phone(base, name):
+    """Each figure of the chapter, drawn by :func:`pfrepro.plotting.responsive`: no text below the layout's
+    size (10.5 pt laptop, 12 pt phone) and the phone drawing no wider than the phone layout (a legend
+    outside the axes wider than the phone would shrink everything)."""
+    from pfrepro import plotting
+
+    args = {"fig1": (base.cwpa["gaussian"], base.cwpa["mixture"]), "fig2": (base.cwpa["mixture"],),
+            "fig3": (base.ung,), "fig4": (base.bot,), "fig5": (base.bot,),
+            "fig_convergence_dlambda": (base.checks["conv_dlambda"],),
+            "fig_convergence_n": (base.checks["conv_n"],), "fig_bot_bound": (base,)}[name]
+    r = plotting.responsive(getattr(F, name), *args, alt="a figure")
+    assert r.desktop_min_pt >= plotting.DESKTOP.min_pt and r.phone_min_pt >= plotting.PHONE.min_pt
+    assert int.from_bytes(r.phone_png[16:20], "big") <= plotting.PHONE.width_in * plotting.BOOK_DPI * 1.05
+    assert int.from_bytes(r.desktop_png[16:20], "big") <= plotting.DESKTOP.width_in * plotting.BOOK_DPI * 1.05

@@ -9,9 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from matplotlib.ticker import NullFormatter
 
 from ..experiments import gpff_zhang2016 as E
 from ..metrics import mc_summary, mse_per_component, mse_per_component_over_time
+from ..plotting import REFERENCE_COLOR, SERIES_COLORS, current_layout, method_color
 from . import new_figure
 
 __all__ = ["fig1", "fig2", "fig3", "fig4", "fig5", "tables", "figures", "TABLES", "FIGURES", "N_STEPS",
@@ -28,72 +30,105 @@ BOT_FIGURE_FILTERS = ("EKF", "UKF", "PF(500)", "GPFF(100)")
 COMPONENT_LABELS = {"x": "x", "y": "y", "xdot": "ẋ", "ydot": "ẏ"}  # plain Unicode: no TeX in labels or docs
 
 
+def _legend_below(fig, handles, labels, *, max_ncol: int = 3) -> None:
+    """One legend for the whole figure, below its panels, with as many columns as fit the width the
+    figure is drawn for (:func:`pfrepro.plotting.current_layout`): a legend inside a panel hides data,
+    and one wider than a phone's 3 in would make the whole drawing wider and its text smaller."""
+    layout = current_layout()
+    width_in = layout.width_in if layout is not None else fig.get_size_inches()[0]
+    pt = layout.min_pt if layout is not None else 10.0
+    # an entry: the handle (2 em), a gap and the label at ~0.55 em per character, in inches
+    entry = max((2.8 + 0.55 * len(str(t))) * pt / 72 for t in labels)
+    ncol = int(max(1, min(max_ncol, len(labels), (0.95 * width_in) // entry)))
+    # the legend's rows are added to the figure's height, so the panels keep theirs
+    rows = -(-len(labels) // ncol)
+    w, h = fig.get_size_inches()
+    fig.set_size_inches(w, h + rows * 1.45 * pt / 72 + 0.15)
+    fig.legend(handles, labels, loc="outside lower center", ncol=ncol, frameon=False)
+
+
+def _handles(ax):
+    h, lab = ax.get_legend_handles_labels()
+    return h, lab
+
+
+def _color(name: str):
+    """The book's colour of a filter of this chapter ("GPFF(100) eq41" is the GPFF's, "Grid (exact)" the
+    reference's)."""
+    if name.lower().startswith("grid"):
+        return REFERENCE_COLOR
+    base = name.split("(")[0].strip().split(",")[0].strip()
+    return method_color(base)
+
+
 def fig1(mc_gaussian, mc_mixture):
     """Fig. 1: per-run MSE (eq 56) of KF and GPFF on CWPA, (a) Gaussian and (b) mixture noise."""
-    fig, axes = new_figure(1, 2, figsize=(10.2, 4))
+    fig, axes = new_figure(1, 2, figsize=(10.2, 4), layout="constrained")
     for ax, (label, mc) in zip(axes, (("(a) Gaussian noise", mc_gaussian), ("(b) mixture noise", mc_mixture))):
         for name, mk in (("KF", "o-"), ("GPFF", "s--")):
             v = mc.mse(name)
-            ax.plot(np.arange(1, len(v) + 1), v, mk, ms=3, lw=0.8, label=name)
-        ax.set_xlabel("Monte Carlo run"); ax.set_ylabel("MSE (eq 56)"); ax.set_title(f"Fig. 1{label}")
-        ax.grid(alpha=0.3); ax.legend()
-    fig.tight_layout()
+            ax.plot(np.arange(1, len(v) + 1), v, mk, ms=3, lw=0.8, color=_color(name), label=name)
+        ax.set_xlabel("Monte Carlo run"); ax.set_ylabel("MSE (eq 56)"); ax.set_title(label)
+        ax.grid(alpha=0.3)
+    _legend_below(fig, *_handles(axes[0]))
     return fig
 
 
 def fig2(mc_mixture, run: int = 0):
     """Fig. 2: one CWPA run under mixture noise: truth, measurements, KF and GPFF positions."""
     sim = mc_mixture.sim
-    fig, ax = new_figure(figsize=(7, 5))
+    fig, ax = new_figure(figsize=(6.5, 4.6), layout="constrained")
     ax.plot(sim.x[run, :, 0], sim.x[run, :, 1], "k-", lw=2, label="truth")
     ax.plot(sim.y[run, :, 0], sim.y[run, :, 1], ".", color="0.6", ms=4, label="measurements")
-    ax.plot(mc_mixture.results["KF"].x[run, :, 0], mc_mixture.results["KF"].x[run, :, 1], "b-", label="KF")
-    ax.plot(mc_mixture.results["GPFF"].x[run, :, 0], mc_mixture.results["GPFF"].x[run, :, 1], "r--", label="GPFF")
-    ax.set_xlabel("x"); ax.set_ylabel("y"); ax.set_title(f"Fig. 2: CWPA tracking under mixture noise (run {run + 1})")
-    ax.legend(); ax.grid(alpha=0.3)
-    fig.tight_layout()
+    ax.plot(mc_mixture.results["KF"].x[run, :, 0], mc_mixture.results["KF"].x[run, :, 1], "-",
+            color=_color("KF"), label="KF")
+    ax.plot(mc_mixture.results["GPFF"].x[run, :, 0], mc_mixture.results["GPFF"].x[run, :, 1], "--",
+            color=_color("GPFF"), label="GPFF")
+    ax.set_xlabel("x"); ax.set_ylabel("y"); ax.set_title(f"run {run + 1}, mixture noise")
+    ax.grid(alpha=0.3)
+    _legend_below(fig, *_handles(ax), max_ncol=4)
     return fig
 
 
 def fig3(mc_ung):
     """Fig. 3: per-run RMSE of EKF, UKF, PF(100), GPFF(100) and the exact grid filter on UNG."""
-    fig, ax = new_figure(figsize=(10.2, 4.5))
-    for name, mk in (("EKF", "v-"), ("UKF", "^-"), ("PF(100)", "o-"), ("GPFF(100)", "s-"), ("Grid (exact)", "k-")):
+    fig, ax = new_figure(figsize=(6.5, 4), layout="constrained")
+    for name, mk in (("EKF", "v-"), ("UKF", "^-"), ("PF(100)", "o-"), ("GPFF(100)", "s-"), ("Grid (exact)", "-")):
         r = mc_ung.rmse(name)
-        ax.plot(np.arange(1, len(r) + 1), r, mk, ms=3, lw=0.8, label=name)
-    ax.set_yscale("log"); ax.set_xlabel("Monte Carlo run"); ax.set_ylabel(f"RMSE over the {mc_ung.sim.T} steps")
-    ax.set_title("Fig. 3: per-run RMSE on UNG (PF with N = 100)"); ax.grid(alpha=0.3, which="both"); ax.legend(ncol=5)
-    fig.tight_layout()
+        ax.plot(np.arange(1, len(r) + 1), r, mk, ms=3, lw=0.8, color=_color(name), label=name)
+    ax.set_yscale("log"); ax.set_xlabel("Monte Carlo run"); ax.set_ylabel(f"RMSE over {mc_ung.sim.T} steps")
+    ax.grid(alpha=0.3, which="both")
+    _legend_below(fig, *_handles(ax))
     return fig
 
 
 def fig4(mc_bot, names=BOT_FIGURE_FILTERS, dt: float = 0.1):
     """Fig. 4: per-component MSE at each time (eq 61) on BOT, over the runs that did not diverge."""
-    fig, axes = new_figure(2, 2, figsize=(10.2, 7))
+    fig, axes = new_figure(2, 2, figsize=(10.2, 7), layout="constrained")
     tt = np.arange(1, mc_bot.sim.T + 1) * dt
     for j, (ax, comp) in enumerate(zip(axes.ravel(), E.COMPONENTS)):
         for name in names:
             ok = np.all(np.isfinite(mc_bot.results[name].x), axis=(1, 2))
             curve = mse_per_component_over_time(mc_bot.x_true[ok], mc_bot.results[name].x[ok])[:, j]
-            ax.semilogy(tt, curve, label=name)
-        ax.set_xlabel("time (s)"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]} (eq 61)"); ax.grid(alpha=0.3, which="both")
-        ax.set_title(f"Fig. 4({'abcd'[j]}): {COMPONENT_LABELS[comp]}")
-    axes[0, 0].legend()
-    fig.tight_layout()
+            ax.semilogy(tt, curve, color=_color(name), label=name)
+        ax.set_xlabel("time (s)"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]}"); ax.grid(alpha=0.3, which="both")
+        ax.set_title(f"({'abcd'[j]}) {COMPONENT_LABELS[comp]}")
+        ax.yaxis.set_minor_formatter(NullFormatter())   # minor labels of a short log axis overlap
+    _legend_below(fig, *_handles(axes[0, 0]), max_ncol=4)
     return fig
 
 
 def fig5(mc_bot, names=BOT_FIGURE_FILTERS):
     """Fig. 5: time-averaged MSE of each component in each run on BOT."""
-    fig, axes = new_figure(2, 2, figsize=(10.2, 7))
+    fig, axes = new_figure(2, 2, figsize=(10.2, 7), layout="constrained")
     for j, (ax, comp) in enumerate(zip(axes.ravel(), E.COMPONENTS)):
         for name in names:
             v = mse_per_component(mc_bot.x_true, mc_bot.results[name].x)[:, j]
-            ax.semilogy(np.arange(1, len(v) + 1), v, ".-", ms=3, lw=0.6, label=name)
-        ax.set_xlabel("Monte Carlo run"); ax.set_ylabel(f"time-averaged MSE of {COMPONENT_LABELS[comp]}")
-        ax.set_title(f"Fig. 5({'abcd'[j]}): {COMPONENT_LABELS[comp]}"); ax.grid(alpha=0.3, which="both")
-    axes[0, 0].legend()
-    fig.tight_layout()
+            ax.semilogy(np.arange(1, len(v) + 1), v, ".-", ms=3, lw=0.6, color=_color(name), label=name)
+        ax.set_xlabel("Monte Carlo run"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]}")
+        ax.set_title(f"({'abcd'[j]}) {COMPONENT_LABELS[comp]}"); ax.grid(alpha=0.3, which="both")
+        ax.yaxis.set_minor_formatter(NullFormatter())
+    _legend_below(fig, *_handles(axes[0, 0]), max_ncol=4)
     return fig
 
 
@@ -127,36 +162,35 @@ def fig_convergence_dlambda(conv: pd.DataFrame):
     """Relative error of a cloud moved by the affine flow against the Kalman update of its moments,
     against the step size, per integrator, on the uniform and the exponential lambda grid
     (:func:`~pfrepro.experiments.gpff_zhang2016.convergence_in_dlambda`)."""
-    fig, axes = new_figure(1, 2, figsize=(10.2, 4), sharey=True)
+    fig, axes = new_figure(1, 2, figsize=(10.2, 4), sharey=True, layout="constrained")
     styles = {"euler": "o-", "midpoint": "s-", "rk4": "^-"}
-    for ax, sched in zip(axes, ("uniform", "exponential")):
-        for meth in ("euler", "midpoint", "rk4"):
+    for ax, sched, panel in zip(axes, ("uniform", "exponential"), "ab"):
+        for meth, color in zip(("euler", "midpoint", "rk4"), SERIES_COLORS):
             c = conv[(conv.schedule == sched) & (conv.integrator == meth)]
-            ax.loglog(c["dlambda"], c["mean error"], styles[meth], label=f"{meth}, mean")
-            ax.loglog(c["dlambda"], c["cov error"], styles[meth], mfc="none", alpha=0.6, label=f"{meth}, covariance")
+            ax.loglog(c["dlambda"], c["mean error"], styles[meth], color=color, label=f"{meth}, mean")
+            ax.loglog(c["dlambda"], c["cov error"], styles[meth], color=color, mfc="none", alpha=0.6,
+                      label=f"{meth}, covariance")
         ax.axvline(1 / E.N_LAMBDA, color="grey", lw=0.8, ls=":")
-        ax.set_xlabel(r"$1/n_\lambda$ (= $\Delta\lambda$ for the uniform grid)")
-        ax.set_title(f"{sched} λ grid")
+        ax.set_xlabel(r"$1/n_\lambda$ (uniform grid: $\Delta\lambda$)")
+        ax.set_title(f"({panel}) {sched} λ grid")
+        ax.set_ylabel("relative error")
         ax.grid(True, which="both", alpha=0.3)
-    axes[0].set_ylabel("relative error vs Kalman update")
-    axes[1].legend(fontsize=8, ncol=2)
-    fig.suptitle("Particle cloud moved by the affine flow: convergence in Δλ (dotted: the paper's Δλ = 0.05)")
-    fig.tight_layout()
+    _legend_below(fig, *_handles(axes[0]))
     return fig
 
 
 def fig_convergence_n(conv_n: pd.DataFrame):
     """Error of the flowed cloud's mean and covariance against the true Kalman posterior as N grows,
     for the exact map and 20 Euler steps (:func:`~pfrepro.experiments.gpff_zhang2016.convergence_in_n`)."""
-    fig, ax = new_figure(figsize=(6.5, 4))
-    for (name, c), mk in zip(conv_n.groupby("integrator", sort=False), ("o-", "s-")):
-        ax.loglog(c["N"], c["mean error"], mk, label=f"{name}: mean")
-        ax.loglog(c["N"], c["cov error"], mk, mfc="none", alpha=0.6, label=f"{name}: covariance")
+    fig, ax = new_figure(figsize=(6.5, 4), layout="constrained")
+    for (name, c), mk, color in zip(conv_n.groupby("integrator", sort=False), ("o-", "s-"), SERIES_COLORS):
+        ax.loglog(c["N"], c["mean error"], mk, color=color, label=f"{name}: mean")
+        ax.loglog(c["N"], c["cov error"], mk, color=color, mfc="none", alpha=0.6, label=f"{name}: covariance")
     Ns = conv_n["N"].unique()
     ax.loglog(Ns, conv_n["mean error"].iloc[0] * np.sqrt(Ns[0] / Ns), "k:", label=r"$\propto N^{-1/2}$")
-    ax.set_xlabel("particles N"); ax.set_ylabel("RMS relative error vs Kalman posterior")
-    ax.set_title("Convergence in N (200 clouds per N)"); ax.grid(True, which="both", alpha=0.3); ax.legend(fontsize=8)
-    fig.tight_layout()
+    ax.set_xlabel("particles N"); ax.set_ylabel("RMS relative error")
+    ax.grid(True, which="both", alpha=0.3)
+    _legend_below(fig, *_handles(ax), max_ncol=2)
     return fig
 
 
@@ -170,22 +204,24 @@ def fig_bot_bound(results, components=("y", "ydot"), dt: float = 0.1):
     _, _, curves = E.bot_reference_table(mc_b, refs)
     names = list(E.BOT_LABELS) + list(refs.filters)
     tt = np.arange(1, mc_b.sim.T + 1) * dt   # time (s), as in Fig. 4
-    fig, axes = new_figure(1, len(components), figsize=(10.2, 4.2))
+    fig, axes = new_figure(1, len(components), figsize=(10.2, 4.2), layout="constrained")
     for ax, comp in zip(np.atleast_1d(axes), components):
         j = E.COMPONENTS.index(comp)
+        pf_colors = iter(SERIES_COLORS)   # the PFs of several sizes apart; the others in their method's colour
         for name in names:
             ls = "--" if name.startswith("UKF, started") else "-"
-            ax.semilogy(tt, curves[name][:, j], ls, lw=1.6 if name == f"PF({refs.big_n})" else 1.0, label=name)
+            color = next(pf_colors) if name.startswith("PF(") else _color(name)
+            ax.semilogy(tt, curves[name][:, j], ls, color=color, lw=1.6 if name == f"PF({refs.big_n})" else 1.0,
+                        label=name)
         ax.semilogy(tt, refs.pcrb_fixed[:, j], "k-", lw=2, label="PCRB, $x_0$ known")
-        ax.semilogy(tt, refs.pcrb_prior[:, j], "k:", lw=1.5, label="PCRB, $x_0\\sim$ prior (not a bound here)")
-        ax.set_xlabel("time (s)"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]} (eq 61)")
+        ax.semilogy(tt, refs.pcrb_prior[:, j], "k:", lw=1.5, label="PCRB, $x_0\\sim$ prior")
+        ax.set_xlabel("time (s)"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]}")
         ax.grid(alpha=0.3, which="both")
-        ax.set_title(f"BOT: {COMPONENT_LABELS[comp]} against the bound")
+        ax.set_title(f"{COMPONENT_LABELS[comp]} against the bound")
         # the known-start bound and the UKF told x0 start near 0 and would stretch the axis over
         # decades no filter visits later
         log_ylim_from(ax, *[curves[name][tt > 1.0, j] for name in names], pad=1.5)
-    np.atleast_1d(axes)[0].legend(fontsize=8, ncol=2)
-    fig.tight_layout()
+    _legend_below(fig, *_handles(np.atleast_1d(axes)[0]))
     return fig
 
 

@@ -43,7 +43,8 @@ __all__ = ["PAPER", "MAIN_CLAIMS", "GROWTH_MARGIN", "KB_TOL_SOLVER", "KB_TOL_FD"
            "worst_pair", "power_plans", "final_position_error", "moment_cost_counts", "plan_choices", "items_table", "excluded_ut_reason", "record_claims",
            "takeaway", "prose", "pdiff", "cwpa_equivalence", "ung_choices", "ung_mse", "bot_reads",
            "bot_per_component", "t2_reading_values", "convergence_steps", "convergence_table", "reading_table",
-           "readings_disagree"]
+           "readings_disagree", "CHOICE_WORDS", "choice_words", "reading_words", "reading_table_shown",
+           "readings_disagree_shown", "power_plans_shown", "choices_shown", "items_shown"]
 
 PAPER = E.PAPER
 #: the paper's main claims (abstract) — the Kalman-Bucy form, non-Gaussian noise, more accurate
@@ -984,6 +985,101 @@ def items_table(reg) -> pd.DataFrame:
     return pd.DataFrame(rows).set_index("item")
 
 
+# ============================================================================ the tables as the page shows them
+#: the free choices (``pfrepro.experiments.gpff_zhang2016.CHOICES``) in the reader's words
+CHOICE_WORDS = {
+    "integrator": "flow integrator", "field": "flow field", "ut": "UT parameters",
+    "pf_resampling": "PF resampling", "r_mixture": "R under mixture noise", "cost_basis": "cost basis",
+    "statistic": "statistic", "conv_band": "convergence band", "r2_symmetric": "R2 off-diagonal",
+    "bot_bearing": "BOT bearing", "bot_p0": "BOT initial covariance", "mse_std": "MSE spread",
+    "truth_x0": "true start", "runs": "Monte Carlo runs", "reading_runs": "runs per reading",
+}
+
+
+def choice_words(name: str) -> str:
+    """A free choice's name as the page shows it ("pf_resampling" -> "PF resampling"); a name not in
+    :data:`CHOICE_WORDS` with its underscores as spaces."""
+    return CHOICE_WORDS.get(name, name.replace("_", " "))
+
+
+def reading_words(tag: str) -> str:
+    """A reading's tag as the page shows it: ``"pf_resampling=ESS<N/2, field=eq43"`` ->
+    ``"PF resampling ESS<N/2, flow field eq43"``; ``"the main reading"`` unchanged."""
+    parts = []
+    for part in str(tag).split(", "):
+        name, eq, value = part.partition("=")
+        parts.append(f"{choice_words(name)} {value}" if eq else part)
+    return ", ".join(parts)
+
+
+def _claim_texts(reg) -> dict:
+    return {c.claim_id: c.text for c in reg.claims}
+
+
+def reading_table_shown(reg) -> pd.DataFrame:
+    """:func:`reading_table` as the page shows it, in four columns: the entry in words (the claim's
+    text), the published value, ours under every reading (one "reading: ours ± SE" line each, the main
+    reading first) and the verdict."""
+    tab, text = reading_table(reg), _claim_texts(reg)
+    rows = []
+    for cid, r in tab.iterrows():
+        vals = [f"{reading_words(k)}: {r[k]}" for k in tab.columns.drop(["published", "verdict"]) if r[k]]
+        rows.append({"entry": text[cid], "published": r["published"], "ours, under each reading": "; ".join(vals),
+                     "verdict": r["verdict"]})
+    return pd.DataFrame(rows, columns=["entry", "published", "ours, under each reading", "verdict"])
+
+
+def readings_disagree_shown(reg) -> pd.DataFrame:
+    """:func:`readings_disagree` as the page shows it: one row per inconclusive claim (its text), its
+    cause, and the readings under which it holds, fails, ties or is undecided, in words."""
+    tab, text = readings_disagree(reg), _claim_texts(reg)
+    rows = {}
+    for (cid, kind), r in tab.iterrows():
+        row = rows.setdefault(cid, {"claim": text[cid], "cause": r["cause"]})
+        row[kind] = "; ".join(reading_words(t) for t in r["under"].split("; "))
+    cols = ["claim", "cause"] + [k for k in ("holds", "fails", "ties", "undecided") if k in tab.index.get_level_values(1)]
+    return pd.DataFrame(list(rows.values()), columns=cols).fillna("")
+
+
+def power_plans_shown(reg) -> pd.DataFrame:
+    """:func:`power_plans` as the page shows it: the claim in words instead of its id, "yes"/"no" for
+    whether the plan is met."""
+    tab, text = power_plans(reg), _claim_texts(reg)
+    out = tab.reset_index()
+    out["claim"] = [text[c] for c in out["claim"]]
+    out["plan met"] = ["yes" if m else "no" for m in out["plan met"]]
+    return out
+
+
+def choices_shown(choices, reg) -> pd.DataFrame:
+    """The assumptions table (:func:`pfrepro.choices.choices_table` of ``choices``) as the page shows it:
+    every choice named in words (:func:`choice_words`; a power plan's row ``runs_<claim>`` by the claim's
+    text), without the row numbers."""
+    from ..choices import choices_table
+
+    tab, text = choices_table(choices).reset_index(drop=True), _claim_texts(reg)
+    tab["choice"] = [f"runs for “{text[n[5:]]}”" if n.startswith("runs_") and n[5:] in text else choice_words(n)
+                     for n in tab["choice"]]
+    tab["reason"] = tab["reason"].str.replace("x0_hat", "x̂₀", regex=False)   # the filters' prior mean
+    return tab
+
+
+def items_shown(reg) -> pd.DataFrame:
+    """``ITEMS`` as the page shows them: the paper's statement, its line and what judges it in words
+    (the claim's verdict in the verdict table, an equation check or an erratum), no ids."""
+    v = {c.claim_id: c.verdict_text() for c in reg.claims}
+    rows = []
+    for item, line, by in ITEMS:
+        if by.startswith("claim "):
+            how = f"a claim of the verdict table: {v[by[6:]]}"
+        elif by.startswith("equation check"):
+            how = "an equation check (Derivation, eqs 14-15)"
+        else:
+            how = "an erratum (Errata)" + (" and its check (Derivation)" if "check" in by else "")
+        rows.append({"statement": item, "paper": line, "judged by": how})
+    return pd.DataFrame(rows)
+
+
 # ============================================================================ the chapter's glued values
 def _prose_checks(results) -> dict:
     """The derivation checks (secs 2-4), the errata's evidence and sec 5.1's Q."""
@@ -1215,7 +1311,7 @@ def _prose_verdicts(reg) -> dict:
     n_inc = int((point.verdict == "inconclusive").sum())
     out.update({"n_read_cells": len(point), "n_read_incon": n_inc,
                 "n_read_incon_phrase": Md(count_is(n_inc, "inconclusive")),
-                "ptr_best": Md(f"`{best}` ({ptr[best]} of {len(point)} entries matched, against "
+                "ptr_best": Md(f"{reading_words(best)} ({ptr[best]} of {len(point)} entries matched, against "
                                f"{ptr['main reading']} under the main reading)")})
     return out
 
@@ -1273,12 +1369,12 @@ def _prose_v3(reg, results) -> dict:
             und = c.judgement.under("undecided")
             what = (f"left *{c.verdict_text()}*" if und else
                     "decided anyway: every admissible reading is already beyond 2 SE or a tie")
-            parts.append(f"`{cid}` (plan {int(r['runs planned'])}; {what})")
+            parts.append(f"“{c.text}” (plan {int(r['runs planned'])}; {what})")
         ps = (f"{len(short)} of {len(plans)} plans {'is' if len(short) == 1 else 'are'} not met by the paper's "
               f"{int(plans['runs per reading'].min())} runs: " + "; ".join(parts) + ". A plan resolves the stated "
               "size; an effect much larger than it, or an interval already excluding it, is decided on fewer runs. "
               f"The runs a plan asks for are what `pfrepro run {PAPER} --runs R` would take; the per-run spreads "
-              "behind the large plans are heavy-tailed PF errors, where the median reading (`statistic=median`) "
+              "behind the large plans are heavy-tailed PF errors, where the median reading (statistic median) "
               "is the steadier measure.")
     fr = reg.to_frame()
     inc = fr[fr.verdict == "inconclusive"]
