@@ -200,7 +200,7 @@ def styled(out: dict):
                                               for d, s in zip(tab["minus paper"], tab["± SE"])]
     show["z of the difference"] = tab["z"].map(lambda v: f"{v:+.1f}" if np.isfinite(v) else "–")
     show["against the paper's method"] = tab["vs paper's (Holm)"]
-    return show.style.set_table_attributes('class="pf-text"').set_caption(
+    return show.style.set_table_attributes('class="pf-text pf-scroll-phone"').set_caption(
         f"{out['title']}: the paper's method (first row) and today's methods at the paper's N, on the first "
         f"{out['runs']} runs of this chapter's truths; model evaluations per step (pfrepro.cost), mean ± SE over "
         f"the runs, paired difference to the paper's method (negative: today's method better), Holm over today's methods.")
