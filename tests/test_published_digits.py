@@ -94,6 +94,7 @@ def _ekf_pf_table1():
 
     res = {w: E.run(w, 2, 7, ("EKF", "PF"), n_particles=50) for w in (1, 2)}
     shown = F.table1_shown(E.table1(res))
+    shown = getattr(shown, "data", shown)   # the chapter shows a Styler; its cells are its data
     return [(r["published"], r["filter"], r["model"]) for _, r in shown.iterrows()]
 
 
