@@ -635,7 +635,9 @@ PAGE_JS = r"""
     let text = '';
     for (let n = w3.nextNode(); n; n = w3.nextNode()) {
       if (!n.textContent.trim() || n.parentElement.closest('mjx-container, .math, script, style')) continue;
-      text += ' ' + n.textContent;
+      // text nodes joined as the reader sees them: a token split by <wbr> (a claim id that may wrap
+      // after its '_') is one word, not several
+      text += (n.previousSibling && n.previousSibling.nodeName === 'WBR' ? '' : ' ') + n.textContent;
       const rg = document.createRange();
       rg.selectNodeContents(n);
       rects.push(...rg.getClientRects());

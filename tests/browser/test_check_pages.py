@@ -275,6 +275,10 @@ def test_one_word_per_line_cell_fails(tmp_path):
             "one two six</td></tr></table>")
     got = _fails(tmp_path, _page(card), 400, kind="narrow")
     assert len(got) == 1 and "[judged]" in got[0]["what"], got
+    # a token split by <wbr> (a claim id that may wrap after its "_") is one word, not three
+    ids = ("<table class='pf-claims' style='table-layout:fixed;width:88px;font-size:12px'><tr>"
+           "<td style='width:88px'>or_<wbr>approximates_<wbr>posterior</td></tr></table>")
+    _only(_run(tmp_path, _page(ids)))
 
 
 INTERNAL = {

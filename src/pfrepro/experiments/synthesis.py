@@ -7,7 +7,7 @@ filter (PF) when both get the same budget, and how far is each from the best ach
 Benchmarks (each built from the paper chapters' own builders, not copies):
 
 =============== ======================================== =========== ==================================
-key             model (paper)                            T           reference (the "optimum")
+key             model (paper)                            T           reference               
 =============== ======================================== =========== ==================================
 ``ung_zhang``   UNGM, Q = R = 1 (Zhang 2016, sec 5.2)    500         exact grid posterior mean
 ``ung_li``      UNGM model 1, Q = 10 (Li 2012)           60          exact grid posterior mean
@@ -134,7 +134,7 @@ BOT_REF_CONV_RUNS = 10
 #: the reference counts as converged when its own Monte Carlo variance, d2(BOT_REF_N) / 2, is below this share of
 #: its MSE (fixed before the runs)
 BOT_REF_TOL = 0.05
-#: today's methods (issue 22) on the scalar and bearings-only benchmarks -- APF, RPF, EKF-proposal PF, PFPF-EDH --
+#: today's methods on the scalar and bearings-only benchmarks -- APF, RPF, EKF-proposal PF, PFPF-EDH --
 #: at the N of the papers' methods (GPFF's paper N), each with its defaults
 TODAY_N = METHOD_N
 #: PFPF-LEDH on the two short scalar benchmarks only, because it costs 61 N + 3 model evaluations per step (an h and a
@@ -251,7 +251,7 @@ class Method:
     paper: str | None = None  # the paper whose proposed method this is (None: a baseline)
     timed: bool = True
     bound: float | None = None  # a reference that is a bound (per-run MSE taken as this constant), not a filter
-    today: bool = False       # one of today's methods (issue 22): not a paper's, not the baseline
+    today: bool = False       # one of today's methods: not a paper's, not the baseline
 
 
 @dataclass
