@@ -302,7 +302,7 @@ def test_claims_table_says_what_was_judged():
     assert judged(diff=1.0, diff_se=0.1, readings={"a": True}) == "ordering under every reading"
     assert judged(readings={"a": True}) == "statement under every reading"
     assert judged(qualitative=True) == "statement"
-    assert judged(qualitative=True, reproduced=2.0) == "statement (number: context)"
+    assert judged(qualitative=True, reproduced=2.0) == "statement, the number as context"
     assert judged(published=1.0, reproduced=2.0, not_checkable="scenario unknown") == "not checkable"
     assert judged() == "–"
     # the row of the scorecard: the pair is shown, the verdict rests on the ordering, and the row says so

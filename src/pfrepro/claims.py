@@ -600,7 +600,7 @@ class Claim:
         if self.diff is not None or self.diff_se is not None:
             return "ordering and size (paired)" if _isnum(self.effect) else "ordering (paired)"
         if self.qualitative is not None:
-            return "statement" + (" (number: context)" if _isnum(self.reproduced) else "")
+            return "statement" + (", the number as context" if _isnum(self.reproduced) else "")
         return "–"
 
     def as_row(self) -> dict:

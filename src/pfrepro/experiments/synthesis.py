@@ -4,19 +4,18 @@ at equal cost, against a reference that knows the answer (paper key ``synthesis`
 Question: which of the papers' proposed improvements beats a well-made bootstrap particle
 filter (PF) when both get the same budget, and how far is each from the best achievable?
 
-Benchmarks (each built from the paper chapters' own builders, not copies):
+Benchmarks (each built from the paper chapters' own builders, not copies), as key: model (paper),
+T; reference:
 
-=============== ======================================== =========== ==================================
-key             model (paper)                            T           reference               
-=============== ======================================== =========== ==================================
-``ung_zhang``   UNGM, Q = R = 1 (Zhang 2016, sec 5.2)    500         exact grid posterior mean
-``ung_li``      UNGM model 1, Q = 10 (Li 2012)           60          exact grid posterior mean
-``ung_ning``    UNGM, sigma_w^2 = 1 (Ning 2011, eq 5)    50          exact grid posterior mean
-``theta_hou``   UNGM with unknown theta (Hou 2008, 5.1)  100         exact theta posterior mean (grid)
-``bot``         bearings-only tracking (Zhang 2016, 5.3) 200         least MSE: posterior mean given x0 (PF)
-``bot_centred`` the same, filters' prior mean at x0      200         the same (context, not a reading)
-``imm_zhou``    manoeuvring target, 3 modes (Zhou 2017)  300         large-N IMMPF (N = 2000 per mode)
-=============== ======================================== =========== ==================================
+- ``ung_zhang``: UNGM, Q = R = 1 (Zhang 2016, sec 5.2), T = 500; exact grid posterior mean.
+- ``ung_li``: UNGM model 1, Q = 10 (Li 2012), T = 60; exact grid posterior mean.
+- ``ung_ning``: UNGM, sigma_w^2 = 1 (Ning 2011, eq 5), T = 50; exact grid posterior mean.
+- ``theta_hou``: UNGM with unknown theta (Hou 2008, 5.1), T = 100; exact theta posterior mean (grid).
+- ``bot``: bearings-only tracking (Zhang 2016, 5.3), T = 200; least MSE, the posterior mean given
+  x0 (a PF).
+- ``bot_centred``: the same with the filters' prior mean at x0, T = 200; the same reference
+  (context, not a reading).
+- ``imm_zhou``: manoeuvring target, 3 modes (Zhou 2017), T = 300; large-N IMMPF (N = 2000 per mode).
 
 The manoeuvring target's per-run errors are the IMM chapter's own paper-scale runs of the same
 build (:func:`run_imm`): its IMM particle filters cost more CPU time than this chapter's budget
