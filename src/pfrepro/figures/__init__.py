@@ -53,9 +53,8 @@ def new_figure(nrows: int = 1, ncols: int = 1, *, figsize=None, sharex=False, sh
     cols = ncols if ncols <= layout.max_cols else layout.max_cols
     rows = math.ceil(n / cols)
     aspect = (h0 / nrows) / (w0 / ncols)  # panel height / width as the caller drew it
+    # a phone layout always takes its full width; a laptop one at most its width
     width = min(w0 * cols / ncols, layout.width_in) if layout.max_cols > 1 else layout.width_in
-    if layout.max_cols == 1:
-        width = layout.width_in
     lo, hi = _PANEL_ASPECT
     panel_w = width / cols
     panel_h = panel_w * min(max(aspect, lo), hi) if cols < ncols or layout.max_cols == 1 else panel_w * aspect
