@@ -266,36 +266,45 @@ def recount(df: pd.DataFrame, T: int, seed: int = 2026) -> pd.DataFrame:
             sims[key] = (m, m.simulate(T, 1, truth_streams(seed, 1)))
         m, sim = sims[key]
         out.loc[name, "count per step"] = count_model_calls(build(m), sim.y[:1])["model_evaluations"] / T
-    return annotate(derive(out.drop(columns=["why"], errors="ignore")))
+    return annotate(derive(out.drop(columns=["why", "particle filter"], errors="ignore")))
 
 
-#: Why an evaluation of the bearings-only or IMM model costs more than one of the UNGM (measured,
-#: profiled on the loaded 2-core machine of the table): what every filter on that model pays.
-MODEL_COST = ("an evaluation of this model costs more than one of the UNGM: a 4-D state whose transition "
-              "noise is drawn by one BLAS product over all runs x N rows (threaded: on a machine whose cores "
-              "other processes hold it waits for its threads, and the wait is CPU time too; with one BLAS "
-              "thread the bearings-only PF took 144 instead of 533 ns of CPU per particle-step), plus two "
-              "arctan2 and an angle wrap a particle (bearings-only); against the bootstrap PF on the same "
-              "model (the same-model column) the filter is within 2x of its count")
+#: Why an evaluation of the bearings-only or IMM model costs more than one of the UNGM: what every
+#: filter on that model pays, and why the same-model column is the count's yardstick.
+MODEL_COST = ("an evaluation of this model costs more than one of the scalar growth model's, which the count "
+              "(one evaluation either way) does not see: a 4-D (bearings-only) or 6-D (manoeuvring target) "
+              "state whose transition draws correlated noise through a matrix product, and a measurement with "
+              "an arctan2 and an angle wrap (and, for the manoeuvring target, a range and a range rate); "
+              "against the bootstrap PF on its own model the filter is within 2x of its count")
+#: why a filter within its count batched is not within it on one run
+SINGLE = ("one run alone pays numpy's fixed cost per call at every step, which a batch of runs shares; "
+          "batched, the filter is within 2x of its count")
 
 
 def annotate(df: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
-    """Add the ``why`` column where a time/count ratio exceeds ``limit``: :data:`WHY` of the family,
-    and :data:`MODEL_COST` where the filter is within ``limit`` of the bootstrap PF on its own model
-    but not of the UNGM's."""
+    """Add the ``particle filter`` and ``why`` columns.
+
+    ``particle filter``: the rows :func:`pfrepro.cost.count_predicted` counts (particles, not the
+    Kalman family, not the IMM scenario's reference PF). ``why`` says, for a ratio above ``limit``,
+    what the count does not see: :data:`WHY` of the family where the filter exceeds it against the
+    bootstrap PF on its own model (the yardstick); :data:`MODEL_COST` where it is within it there but
+    not against the growth-model PF; :data:`SINGLE` where only one run alone exceeds it."""
     out = df.copy()
-    worst = out[["time/count vs PF (single)", "time/count vs PF (batched)"]].max(axis=1)
-    same = out["time/count vs same-model PF (batched)"] if "time/count vs same-model PF (batched)" in out \
-        else pd.Series(np.nan, index=out.index)
+    out["particle filter"] = (out["particles"].notna() & (out["family"] != "Kalman")
+                              & ~out.index.str.contains("IMM, CV mode", regex=False))
+    nan = pd.Series(np.nan, index=out.index)
+    same = out.get("time/count vs same-model PF (batched)", nan)
     whys = []
-    for name, fam, w, sm in zip(out.index, out["family"], worst, same):
-        if not w > limit:
-            whys.append("")
-        elif sm <= limit and out.loc[name, "model"] in ("bot", "imm"):
-            single = out.loc[name, "time/count vs PF (single)"]
-            whys.append(MODEL_COST + ("" if not single > limit or fam == "PF" else "; single runs: " + WHY.get(fam, "")))
+    for name, fam, sm, b, one in zip(out.index, out["family"], same, out["time/count vs PF (batched)"],
+                                     out["time/count vs PF (single)"]):
+        if fam == "Kalman" or sm > limit:
+            whys.append(WHY.get(fam, "") if max(sm, b, one) > limit else "")
+        elif b > limit and out.loc[name, "model"] in ("bot", "imm"):
+            whys.append(MODEL_COST)
+        elif one > limit:
+            whys.append(SINGLE)
         else:
-            whys.append(WHY.get(fam, ""))
+            whys.append("")
     out["why"] = whys
     return out
 

@@ -274,3 +274,54 @@ def test_imm_filters_count_through_their_system_and_mode_filters():
     from pfrepro.cost import _with_model
     b = _with_model(f, CountingModel(f.system)).filter(y, np.random.default_rng(3)).x
     np.testing.assert_array_equal(a, b)
+
+
+def _bench_table():
+    from pfrepro.cost import SAME_MODEL_RATIO, UNGM_RATIO
+
+    return pd.DataFrame({"particles": [1000, 1000, 100, np.nan, 1500],
+                         SAME_MODEL_RATIO: [1.0, 1.9, 2.1, 9.0, 1.0],
+                         UNGM_RATIO: [1.0, 6.0, 1.5, 30.0, 3.5],
+                         "particle filter": [True, True, True, False, False]},
+                        index=["PF", "PF on a 4-D model's", "flow", "EKF", "reference PF"])
+
+
+def test_count_predicted_judges_on_the_same_model_ratio():
+    from pfrepro.cost import count_predicted
+
+    out = count_predicted(_bench_table())
+    assert list(out.index) == ["PF", "PF on a 4-D model's", "flow"]     # not the EKF, not the reference row
+    assert list(out["within"]) == [True, True, False]                   # 1.9 is within 2, 2.1 is not
+    assert list(out["within vs UNGM"]) == [True, False, True]
+    assert int(count_predicted(_bench_table(), limit=2.2)["within"].sum()) == 3
+    # without the marker column every row with particles counts (the reference row too)
+    assert len(count_predicted(_bench_table().drop(columns=["particle filter"]))) == 4
+
+
+def test_count_predicted_refuses_bad_tables():
+    from pfrepro.cost import SAME_MODEL_RATIO, count_predicted
+
+    with pytest.raises(ValueError, match="no column"):
+        count_predicted(_bench_table().drop(columns=[SAME_MODEL_RATIO]))
+    bad = _bench_table()
+    bad.loc["flow", SAME_MODEL_RATIO] = np.nan
+    with pytest.raises(ValueError, match="without a same-model ratio.*flow"):
+        count_predicted(bad)
+    for limit in (0, -1.0, float("nan"), "2"):
+        with pytest.raises(ValueError, match="limit"):
+            count_predicted(_bench_table(), limit=limit)
+
+
+def test_the_book_bench_table_marks_its_particle_filters():
+    """The saved table (benchmarks/bench_all.py --book) says which rows are particle filters:
+    the 28 of the package, not the Kalman family, not the IMM scenario's reference PF."""
+    from pathlib import Path
+
+    from pfrepro.cost import count_predicted
+
+    bench = pd.read_csv(Path(__file__).resolve().parent.parent / "book" / "data" / "bench_all.csv",
+                        index_col="filter")
+    assert "particle filter" in bench.columns
+    pfs = count_predicted(bench)
+    assert len(pfs) == 28
+    assert not pfs.index.str.contains("CV mode").any() and "EKF (BOT)" not in pfs.index

@@ -66,7 +66,8 @@ from . import flow as _flow
 from .montecarlo import time_filter_repeats
 
 __all__ = ["COUNTED", "COUNT_COLUMNS", "PRINTED_COLUMNS", "CountingModel", "count_model_calls", "cost_counts",
-           "time_repeats", "time_summary", "median_interval", "imm_evaluations", "smc2_evaluations"]
+           "time_repeats", "time_summary", "median_interval", "imm_evaluations", "smc2_evaluations",
+           "count_predicted", "SAME_MODEL_RATIO", "UNGM_RATIO"]
 
 #: counted model method -> column name
 COUNTED = {"sample_transition": "transitions", "log_likelihood": "likelihoods", "f": "f", "h": "h",
@@ -286,6 +287,62 @@ def time_summary(times: pd.DataFrame, reference: str | None = None) -> pd.DataFr
     df = pd.DataFrame(rows).T
     df.index.name = "filter"
     return df
+
+
+#: column of a ``benchmarks/bench_all.py`` table: a filter's batched ns per counted model
+#: evaluation divided by the bootstrap PF's on the filter's own model
+SAME_MODEL_RATIO = "time/count vs same-model PF (batched)"
+#: the same ratio against the bootstrap PF on the scalar growth model (UNGM)
+UNGM_RATIO = "time/count vs PF (batched)"
+
+
+def count_predicted(bench: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
+    """The particle filters of a benchmark table and whether each costs what its count predicts.
+
+    The count (:func:`count_model_calls`) is a unit-cost model: every state passed through the
+    model costs one evaluation. What one evaluation costs depends on the model (a bearings-only
+    evaluation is a 4-D state with two ``arctan2`` and an angle wrap, a growth-model one is a
+    scalar and a cosine), so a filter's count predicts its time relative to the bootstrap PF on
+    the *same* model: the ratio :data:`SAME_MODEL_RATIO`, batched over runs as every experiment
+    runs. A filter is within its count when that ratio is at most ``limit``; the ratio against
+    the growth-model PF (:data:`UNGM_RATIO`) is returned beside it.
+
+    Parameters
+    ----------
+    bench : pandas.DataFrame
+        A table written by ``benchmarks/bench_all.py``: one row per filter (index), with the
+        columns ``particles``, :data:`SAME_MODEL_RATIO` and :data:`UNGM_RATIO`, and optionally
+        ``particle filter`` (a boolean that leaves out reference rows); without it, every row
+        with a particle count is a particle filter.
+    limit : float, optional
+        The largest ratio that counts as within (2: the issue's and the chapter's rule).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per particle filter: ``same model`` and ``UNGM`` (the two ratios), ``within``
+        (same-model ratio <= ``limit``) and ``within vs UNGM``.
+
+    Raises
+    ------
+    ValueError
+        If a column is missing, ``limit`` is not a positive number, or a particle filter has
+        no same-model ratio.
+    """
+    if not (isinstance(limit, (int, float)) and math.isfinite(limit) and limit > 0):
+        raise ValueError(f"limit must be a positive number, got {limit!r}")
+    missing = [c for c in ("particles", SAME_MODEL_RATIO, UNGM_RATIO) if c not in bench.columns]
+    if missing:
+        raise ValueError(f"the benchmark table has no column(s) {missing}")
+    is_pf = (bench["particle filter"].astype(bool) if "particle filter" in bench.columns
+             else bench["particles"].notna())
+    rows = bench.loc[is_pf]
+    same = rows[SAME_MODEL_RATIO].astype(float)
+    if same.isna().any():
+        raise ValueError(f"particle filters without a same-model ratio: {list(same.index[same.isna()])}")
+    ungm = rows[UNGM_RATIO].astype(float)
+    return pd.DataFrame({"same model": same, "UNGM": ungm, "within": same <= limit, "within vs UNGM": ungm <= limit},
+                        index=rows.index)
 
 
 def imm_evaluations(result, n_particles: int, r: int = 3) -> np.ndarray:
