@@ -101,6 +101,25 @@ def test_pfpf_with_flow_is_nearly_exact_on_a_linear_model():
     assert np.sqrt(np.mean((fl.x - kf.x) ** 2)) < 0.85 * np.sqrt(np.mean((pf.x - kf.x) ** 2))
 
 
+def test_pfpf_weights_collapse_where_the_transition_is_nearly_deterministic():
+    """The documented limit of the flow proposal: on CWPA (Q's smallest eigenvalue ~1e-9) the
+    flow moves each particle far off its own transition density, so every weight is tiny and
+    one particle carries the step (ESS ~ 1), and the log-evidence is millions below the
+    Kalman filter's; the same filter on a well-conditioned model keeps its ESS."""
+    from pfrepro.models import CWPA
+
+    model = CWPA()
+    sim = model.simulate(10, 3, RunStreams.from_entropy(1, 3))
+    kf = KalmanFilter(model).filter(sim.y)
+    fl = ParticleFlowParticleFilter(model, 200).filter(sim.y, RunStreams.from_entropy(2, 3))
+    assert fl.diagnostics["ess"][:, 1:].mean() < 2.0
+    assert np.all(fl.diagnostics["log_evidence"] < kf.diagnostics["log_evidence"] - 1e5)
+    ok = small_model()
+    sim = ok.simulate(10, 3, RunStreams.from_entropy(1, 3))
+    assert ParticleFlowParticleFilter(ok, 200).filter(sim.y, RunStreams.from_entropy(2, 3)
+                                                      ).diagnostics["ess"].mean() > 50
+
+
 @pytest.mark.parametrize("make", [
     lambda m: AuxiliaryParticleFilter(m, 30),
     lambda m: RegularizedParticleFilter(m, 30),

@@ -27,6 +27,17 @@ estimate; update with the Jacobian of h at the prediction), as in their Algorith
 
 Because the weights are proper importance weights, the evidence estimate
 prod_k sum_i w_{k-1}^i w_k^i(unnormalised) is unbiased (tested against the Kalman evidence).
+
+A nearly deterministic transition defeats the proposal. The flow moves every particle of a
+run by one map built from the predictive covariance P, not from the transition's Q; where Q
+is nearly singular, eta_1 lands many of Q's standard deviations away from its own
+transition mean, and p(eta_1 | x_{k-1}) is astronomically small for every particle. The
+weights stay proper (the evidence estimate is still unbiased in expectation) but collapse:
+on the CWPA tracking model (Q's smallest eigenvalue 1.4e-9), with N = 1000 over 20 runs of
+30 steps, the mean effective sample size was 1.01, the log-evidence about -5e7 against the
+Kalman filter's +18 to +40, and the position-velocity-acceleration MSE 0.134 against the
+Kalman filter's 0.046 and a bootstrap PF(1000)'s 0.070 (a test keeps the collapse visible).
+Use it where Q is well conditioned.
 """
 from __future__ import annotations
 
