@@ -118,13 +118,16 @@ def models():
 
 
 def _particle_count(filt, N):
-    """Particles per step the count is spread over (DPF: n_x · n_theta; IMM: N per mode · modes)."""
+    """Particles per step the count is spread over (DPF: its n_x state and n_theta parameter
+    particles; IMM: N per mode · modes)."""
     if N is not None:
         r = getattr(getattr(filt, "system", None), "r", None)
         return N * (r if r and type(filt).__name__.startswith("IMM") else 1)
-    for a, b in (("n_x", "n_theta"),):
-        if hasattr(filt, a) and hasattr(filt, b):
-            return getattr(filt, a) * getattr(filt, b)
+    if hasattr(filt, "n_x") and hasattr(filt, "n_theta"):
+        # SMC2: an x-filter of n_x particles per parameter particle; the dual PF: two sets side by side
+        if type(filt).__name__ == "SMC2":
+            return filt.n_x * filt.n_theta
+        return filt.n_x + filt.n_theta
     return getattr(filt, "n_particles", None)
 
 
