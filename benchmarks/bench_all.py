@@ -187,6 +187,52 @@ def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
     return derive(pd.DataFrame(rows).set_index("filter"))
 
 
+#: the models whose evaluation cost :func:`measure_models` compares (key, label)
+MODEL_ROWS = (("ung", "scalar growth model (UNGM)"), ("ung_ning", "scalar growth model, Ning's noise"),
+              ("bot", "bearings-only (4-D)"), ("imm", "manoeuvring target, CV mode (6-D)"))
+#: where ``--book`` saves the per-model table
+BOOK_MODELS_CSV = ROOT / "book" / "data" / "bench_models.csv"
+
+
+def measure_models(runs: int = 100, N: int = 1000, repeats: int = 5, seed: int = 2026) -> pd.DataFrame:
+    """What one model evaluation costs, model by model: CPU ns per state of a transition draw
+    (``sample_transition`` on a ``(runs, N)`` cloud) and of a likelihood evaluation (``log_likelihood``), the median of ``repeats`` interleaved repeats.
+    The count of :func:`pfrepro.cost.count_model_calls` counts each as one evaluation whatever the
+    model; this table is what that unit costs, and why a filter's count is compared with the
+    bootstrap PF on the filter's own model."""
+    mk = models()
+    rows, calls = {}, {}
+    for key, label in MODEL_ROWS:
+        m = mk[key]()
+        if key == "imm":
+            m = m.models[0]
+        rng = filter_streams(seed, key, runs)
+        x = m.sample_initial(rng, (runs, N))
+        y = m.simulate(2, runs, truth_streams(seed, runs)).y[:, 0]
+        calls[label] = {
+            "transition": lambda m=m, x=x, rng=rng: m.sample_transition(x, 1, rng),
+            "likelihood": lambda m=m, x=x, y=y: m.log_likelihood(y, x),
+        }
+        rows[label] = {"key": key, "state dimension": m.dim_x}
+    times = {(lab, op): [] for lab in calls for op in calls[lab]}
+    for _ in range(repeats + 1):                       # the first round warms up
+        for lab, ops in calls.items():
+            for op, f in ops.items():
+                gc.collect()
+                c0 = time.process_time()
+                f()
+                times[lab, op].append(time.process_time() - c0)
+    for (lab, op), t in times.items():
+        rows[lab][f"{op} ns/state"] = 1e9 * float(np.median(t[1:])) / (runs * N)
+    df = pd.DataFrame(rows).T
+    df = df.astype({c: int if c == "state dimension" else float for c in df.columns if c != "key"})
+    df.index.name = "model"
+    base = df.iloc[0]
+    df["evaluation ns/state"] = (df["transition ns/state"] + df["likelihood ns/state"]) / 2
+    df["vs growth model"] = df["evaluation ns/state"] / float(base["transition ns/state"] + base["likelihood ns/state"]) * 2
+    return df
+
+
 def derive(df: pd.DataFrame) -> pd.DataFrame:
     """The columns computed from the measured times and the counts: ns per evaluation and the
     time/count ratios against the bootstrap PF."""
@@ -371,11 +417,14 @@ def main(argv=None):
                  f"T = {T} steps, single run and {runs} runs batched, median of {repeats} interleaved repeats.\n\n")
         fh.write(df.round(3).to_markdown())
         fh.write("\n")
+    per_model = measure_models(runs, 1000, max(repeats, 5))
+    per_model.to_csv(out.with_name(out.name + "_models.csv"), float_format="%.6g")
     if a.book:
         if a.only or a.quick:
             ap.error("--book saves the full table only (no --only, no --quick)")
         BOOK_CSV.parent.mkdir(parents=True, exist_ok=True)
         df.to_csv(BOOK_CSV, float_format="%.6g")
+        per_model.to_csv(BOOK_MODELS_CSV, float_format="%.6g")
         BOOK_CSV.with_suffix(".json").write_text(json.dumps(
             {"machine": info, "T": T, "runs": runs, "repeats": repeats, "blas_threads": a.blas_threads,
              "script": "benchmarks/bench_all.py"}, indent=1) + "\n", encoding="utf-8")
@@ -383,6 +432,7 @@ def main(argv=None):
     cols = ["count per step", "single ns/particle-step", "batched ns/particle-step",
             "time/count vs PF (single)", "time/count vs PF (batched)", "time/count vs PF (batched, CPU)"]
     print(df[[c for c in cols if c in df]].round(2).to_string())
+    print(per_model.round(2).to_string())
     return 0
 
 

@@ -325,3 +325,15 @@ def test_the_book_bench_table_marks_its_particle_filters():
     pfs = count_predicted(bench)
     assert len(pfs) == 28
     assert not pfs.index.str.contains("CV mode").any() and "EKF (BOT)" not in pfs.index
+
+
+def test_the_book_model_cost_table_has_every_model_of_the_bench():
+    """book/data/bench_models.csv (benchmarks/bench_all.py --book): what one evaluation costs per
+    model, the growth model first (the unit), each model of the same-model yardstick present."""
+    from pathlib import Path
+
+    per_model = pd.read_csv(Path(__file__).resolve().parent.parent / "book" / "data" / "bench_models.csv",
+                            index_col="model")
+    assert list(per_model["key"]) == ["ung", "ung_ning", "bot", "imm"]
+    assert per_model["vs growth model"].iloc[0] == 1.0
+    assert (per_model[["transition ns/state", "likelihood ns/state"]] > 0).all().all()
