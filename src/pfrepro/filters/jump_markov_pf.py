@@ -123,32 +123,6 @@ class JumpMarkovParticleFilter(ParticleLoop):
         state["mode"], state["carried"] = mode, (mode,)
         return nxt, sysm.log_likelihood(yk, nxt)
 
-    def _move_reference(self, k, x, logw, yk, rng, state):
-        """The move step as it was first written (fancy-index gathers, (runs, N, r) mode draw):
-        the reference the tests hold :meth:`_move` to, bit for bit."""
-        # self.model (the system): a cost count's proxy sees the mode models' and the likelihood's calls
-        sysm = self.model
-        runs, N, n = x.shape
-        mode = self._draw_modes(self._cum_Pi[state["mode"]], rng.random((runs, N)))
-        z = rng.standard_normal((runs, N, n))
-        # the particles grouped by mode once (a stable sort keeps each mode's particles in their
-        # order: the rows each mode's f sees are those a boolean mask would select, so the numbers
-        # are the same), each mode's block moved, the blocks put back in one scatter
-        flat = mode.ravel().astype(np.int8 if len(sysm.models) < 128 else np.int64)
-        order = np.argsort(flat, kind="stable")          # a radix sort for 8-bit keys
-        bounds = np.searchsorted(flat[order], np.arange(len(sysm.models) + 1))
-        xo, zo = x.reshape(-1, n)[order], z.reshape(-1, n)[order]
-        moved = np.empty_like(xo)
-        for j, m in enumerate(sysm.models):
-            a, b = bounds[j], bounds[j + 1]
-            if b > a:
-                # einsum on the mode's rows: row i's arithmetic does not depend on the batch
-                moved[a:b] = m.f(xo[a:b], k) + np.einsum("ij,pj->pi", self._roots[j], zo[a:b])
-        nxt = np.empty_like(x)
-        nxt.reshape(-1, n)[order] = moved
-        state["mode"], state["carried"] = mode, (mode,)
-        return nxt, sysm.log_likelihood(yk, nxt)
-
     def _after_weight(self, k, w, x, x_hat, state):
         mode = state["mode"]
         out = state["diag"]["mode_probs"][:, k - 1]
