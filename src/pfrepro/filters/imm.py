@@ -689,9 +689,9 @@ class IMMPFOR(IMMParticleFilter):
         bounds = np.searchsorted(A, np.arange(R_ + 1))
         Lz = np.empty((f.size, n))
         for a in np.flatnonzero(bounds[1:] > bounds[:-1]):
-            lo, hi = bounds[a], bounds[a + 1]
-            np.einsum("ij,kj->ki", L[a], new[lo:hi], out=Lz[lo:hi])
-        Lz += np.take(m, A, axis=0)                                               # m + L z (addition commutes)
+            part = Lz[bounds[a]:bounds[a + 1]]
+            np.einsum("ij,kj->ki", L[a], new[bounds[a]:bounds[a + 1]], out=part)
+            part += m[a]                                                          # m + L z (addition commutes)
         _put_rows(out.reshape(-1, n), f, Lz)
         return out, n_disc
 

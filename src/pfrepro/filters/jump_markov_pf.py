@@ -112,11 +112,8 @@ class JumpMarkovParticleFilter(ParticleLoop):
         for j, m in enumerate(sysm.models):
             a, b = bounds[j], bounds[j + 1]
             if b > a:
-                # einsum on the mode's rows: row i's arithmetic does not depend on the batch;
-                # noise + f(x), the same sum as f(x) + noise (IEEE addition commutes)
-                out = moved[a:b]
-                np.einsum("ij,pj->pi", self._roots[j], zo[a:b], out=out)
-                out += m.f(xo[a:b], k)
+                # einsum on the mode's rows: row i's arithmetic does not depend on the batch
+                np.add(m.f(xo[a:b], k), np.einsum("ij,pj->pi", self._roots[j], zo[a:b]), out=moved[a:b])
         inv = np.empty_like(order)
         inv[order] = np.arange(order.size)
         nxt = _take_rows(moved, inv).reshape(x.shape)
