@@ -21,18 +21,10 @@ import numpy as np
 
 from ..validation import check_positive_int, check_probability
 from .resampling import check_scheme
+from .imm import _take_rows
 from .smc_steps import ParticleLoop
 
 __all__ = ["JumpMarkovParticleFilter"]
-
-
-def _take_rows(a, rows):
-    """``a.reshape(-1, n)[rows]`` (2-D, C order) for a float array ``a`` (..., n): each row moved as
-    one opaque record (``np.take`` on a void view, a byte copy per row)."""
-    n = a.shape[-1]
-    a2 = np.ascontiguousarray(a).reshape(-1, n)
-    rec = np.dtype((np.void, n * a2.itemsize))
-    return np.take(a2.view(rec)[:, 0], rows).view(a2.dtype).reshape(-1, n)
 
 
 class JumpMarkovParticleFilter(ParticleLoop):
