@@ -149,21 +149,6 @@ def _put_rows(a, rows, values):
     a.view(rec)[:, 0][rows] = np.ascontiguousarray(values, dtype=a.dtype).view(rec)[:, 0]
 
 
-def _take_rows(a, rows):
-    """``a.reshape(-1, n)[rows]`` (shape ``rows.shape + (n,)``) for a float array ``a`` (..., n): each
-    row moved as one opaque record (``np.take`` on a void view, a byte copy per row, several times
-    faster than a float row gather). The result is allocated as a float array and filled in place:
-    a void array of numpy's own would be zero-filled fresh memory (calloc), a page fault per 4 kB
-    on every call. ``rows`` must be valid row indices (they are not checked)."""
-    n = a.shape[-1]
-    a2 = np.ascontiguousarray(a).reshape(-1, n)
-    rec = np.dtype((np.void, n * a2.itemsize))
-    out = np.empty(np.shape(rows) + (n,), dtype=a2.dtype)
-    # mode="clip": no bounds check, so numpy takes straight into ``out`` (mode="raise" buffers it)
-    np.take(a2.view(rec)[:, 0], rows, out=out.reshape(-1, n).view(rec)[:, 0].reshape(np.shape(rows)), mode="clip")
-    return out
-
-
 def _var_axis1(a):
     """``np.var(a, axis=1)`` of ``a`` (R, K, n), bit for bit, faster when R > 1.
 
@@ -366,7 +351,7 @@ class IMMParticleFilter(Filter):
         # (runs, r, N) flat particle indices: the run's offset plus the atom among its r N particles
         base = np.repeat(np.arange(runs) * (r * N), r)
         idx = systematic_indices(W.reshape(runs, r, r * N), u, N, overwrite=True, base=base)
-        return _take_rows(x, idx), M                                             # (rows as records: a fast gather)
+        return np.take(x.reshape(-1, n), idx, axis=0), M                         # (take: a fast row gather)
 
     def model_log_likelihood(self, eps, logw, loglik):
         """Eqs 11-15: log Lambda_j (runs, r) from residuals ``eps`` (runs, r, N, m), previous log-weights.
@@ -419,11 +404,9 @@ class IMMParticleFilter(Filter):
         # only the (run, mode) rows that resample: each row's counts use its own weights and offset
         a, j = np.nonzero(do)
         if a.size:
-            x = np.ascontiguousarray(x)                # (a no-op here: the reshapes below are views)
             flat = x.reshape(-1, n)
             anc = systematic_indices(w[a, j], uu[np.searchsorted(sel, a), j], N, overwrite=True, base=(a * r + j) * N)
-            # x[a, j] = flat[anc], each (run, mode) particle set moved as one record
-            _put_rows(x.reshape(runs * r, N * n), a * r + j, _take_rows(flat, anc).reshape(a.size, N * n))
+            x[a, j] = np.take(flat, anc, axis=0)
         w = w.copy()
         w[do] = 1.0 / N
         return x, w, np.zeros((runs, r), dtype=np.intp)
@@ -643,7 +626,7 @@ class IMMPFOR(IMMParticleFilter):
         rowbase = (np.arange(R_)[:, None] * r + np.arange(r)) * N                 # (R, r) flat row offsets
         # the standard resampled sets of the modes in do, the others unchanged: one row gather
         src = np.where(do[..., None], idx, np.arange(N)) + rowbase[..., None]
-        out = _take_rows(x, src)                                                  # (R, r, N, n), C order
+        out = np.take(x.reshape(-1, n), src, axis=0)                              # (R, r, N, n), C order
         is_disc = counts == 0
         n_disc = is_disc.sum(axis=-1)                                             # |S^j| = number of extra copies
         is_dup = np.zeros((R_, r, N), dtype=bool)
@@ -656,25 +639,21 @@ class IMMPFOR(IMMParticleFilter):
         # m-th extra copy (slot order) <-> m-th discarded particle (index order): a row has as many
         # extra copies as discarded particles, so the two flat C-order lists pair up one to one
         is_disc &= do[..., None]
-        z_s = _take_rows(z, np.flatnonzero(is_disc))                               # (K, n)
+        z_flat = z.reshape(-1, n)
+        z_s = np.take(z_flat, np.flatnonzero(is_disc), axis=0)                                 # (K, n)
         row = f // N                                                              # flat (run, mode) row
-        A, J = np.divmod(row, r)
-        Sl = f - row * N                                                          # f % N
+        A, J, Sl = row // r, row % r, f % N
         idx_flat = idx.reshape(-1)
         logstep_flat = logstep.reshape(-1)
-        other_flat = np.take(other_slots.reshape(-1), f)
-        Ar = A * r
+        other_flat = other_slots.reshape(-1)[f]
         new = np.zeros((f.size, n))
-        dv = np.empty((f.size, n))
         for i in range(r):
             # parent from mode i: the slot's own copy (i == j) or a uniformly drawn slot of mode i
-            base = (Ar + i) * N                                                   # = rowbase[A, i]
+            base = np.take(rowbase[:, i], A)
             slot = np.where(J == i, Sl, other_flat)
-            slot += base
-            par = np.take(idx_flat, slot)
-            par += base                                                           # flat index of x_a^i
-            z_a = _take_rows(z, par)
-            np.subtract(z_s, z_a, out=dv)
+            par = np.take(idx_flat, base + slot) + base                                   # flat index of x_a^i
+            z_a = np.take(z_flat, par, axis=0)
+            dv = z_s - z_a
             dist = np.sqrt(np.einsum("ki,ki->k", dv, dv))
             # fraction of the way to x_s: d L / ||z_s - z_a||, capped at 1 (never past x_s)
             with np.errstate(divide="ignore", over="ignore"):
@@ -685,19 +664,11 @@ class IMMPFOR(IMMParticleFilter):
             dv *= lam[:, None]                                                    # (23): in place,
             dv += z_a                                                             # M (z_a + lam dv)
             if self.mix_modes:
-                dv *= np.take(M.reshape(-1), (Ar + i) * r + J)[:, None]           # mu_{i|j}
+                dv *= np.take(M.reshape(-1), (A * r + i) * r + J)[:, None]        # mu_{i|j}
             else:                                                                 # ablation: own parent only
                 dv *= (J == i)[:, None]
             new += dv
-        # x = m + L z per extra slot, run by run (A is non-decreasing: f is in C order): the same
-        # einsum kernel as over a (K, n, n) gather of L, without that large temporary
-        bounds = np.searchsorted(A, np.arange(R_ + 1))
-        Lz = np.empty((f.size, n))
-        for a in np.flatnonzero(bounds[1:] > bounds[:-1]):
-            part = Lz[bounds[a]:bounds[a + 1]]
-            np.einsum("ij,kj->ki", L[a], new[bounds[a]:bounds[a + 1]], out=part)
-            part += m[a]                                                          # m + L z (addition commutes)
-        _put_rows(out.reshape(-1, n), f, Lz)
+        _put_rows(out.reshape(-1, n), f, np.take(m, A, axis=0) + np.einsum("kij,kj->ki", np.take(L, A, axis=0), new))
         return out, n_disc
 
     def _resample(self, x, w, do, u_next, M_next, rng, k, cost):
@@ -709,20 +680,14 @@ class IMMPFOR(IMMParticleFilter):
         rs = take_runs(rng, sel)
         uu = rs.random((sel.size, r))
         other = rs.integers(0, N, size=(sel.size, r, N))
-        every = sel.size == runs
-        ws = w if every else np.take(w, sel, axis=0)                             # (read only below)
+        ws = np.take(w, sel, axis=0)
         below = _systematic_below(ws, uu, N)
         counts = _counts_from_below(below)                                        # = systematic_counts(ws, uu, N)
         idx = _indices_from_below(below, N)
         dsel = do[sel]
-        new, n_disc = self.replacement(x if every else np.take(x, sel, axis=0), ws, u_next[sel], M_next[sel],
-                                       counts, other, dsel, idx=idx)
+        new, n_disc = self.replacement(np.take(x, sel, axis=0), ws, u_next[sel], M_next[sel], counts, other, dsel, idx=idx)
         cost["density"][sel] += r * N
-        if every:
-            x = new                                    # every run's sets are new: no copy back
-        else:
-            x = np.ascontiguousarray(x)                # (a no-op here: the reshape below is a view)
-            _put_rows(x.reshape(runs, r * N * n), sel, new.reshape(sel.size, r * N * n))
+        x[sel] = new
         replaced[sel] = np.where(dsel, n_disc, 0)
         w = w.copy()
         w[do] = 1.0 / N
