@@ -1,12 +1,15 @@
-"""The IMM-scenario particle filters after their cost work: the same numbers, bit for bit.
+"""The IMM-scenario particle filters and their cost work: the same numbers, bit for bit.
 
-IMMPF, IMMPFOR (Zhou et al. 2017) and the jump-Markov PF were made cheaper by moving data
-differently (rows gathered and scattered as opaque records, no (runs, N, r) gather in the mode
-draw, no (K, n, n) gather of the Cholesky factors, no copies when every run resamples); the
-arithmetic is meant to be the same, in the same order. The first implementations are kept here,
-verbatim, as private references, and every output of the filters (estimates and diagnostics) is
-held to theirs with ``np.array_equal`` on the chapter's tracking scenario, in every reading of
-IMMPFOR and with partial resampling (some runs, some modes).
+The jump-Markov PF was made cheaper by moving data differently (rows gathered and scattered as
+opaque records, no (runs, N, r) gather in the mode draw, no gather or scatter of the runs when
+every run resamples); the arithmetic is the same, in the same order. The first implementations
+of its move step and of the resampling of :mod:`pfrepro.filters.smc_steps` are kept here,
+verbatim, as private references, and every output of the filter (estimates and diagnostics) is
+held to theirs with ``np.array_equal`` on the IMM chapter's tracking models. IMMPF and IMMPFOR
+(Zhou et al. 2017) are held the same way to their present implementation (interaction,
+resampling and IMMPFOR's replacement, eqs 6-7, 19, 22-25, kept here verbatim), in every reading
+of IMMPFOR and with partial resampling, so that a later rewrite of their data movement has to
+keep their numbers.
 """
 import math
 
