@@ -35,9 +35,16 @@ def resample_runs(do, w, logw, rng, counts_of, *arrays):
     """
     sel = np.flatnonzero(do)
     if sel.size:
-        counts = counts_of(w[sel], rng if sel.size == len(do) else take_runs(rng, sel))
-        for a, new in zip(arrays, repeat_rows(counts, *(a[sel] for a in arrays))):
-            a[sel] = new
+        every = sel.size == len(do)
+        counts = counts_of(w[sel], rng if every else take_runs(rng, sel))
+        if every:
+            # every run resamples: the arrays themselves, no gather of their rows and a plain
+            # copy back instead of a fancy-index scatter (the same numbers)
+            for a, new in zip(arrays, repeat_rows(counts, *arrays)):
+                a[...] = new
+        else:
+            for a, new in zip(arrays, repeat_rows(counts, *(a[sel] for a in arrays))):
+                a[sel] = new
         logw[sel] = -np.log(w.shape[1])
     return sel
 
