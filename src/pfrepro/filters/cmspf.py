@@ -45,7 +45,7 @@ from ..rng import take_runs
 from ..validation import as_finite_float, check_positive_int, check_probability
 from .base import Filter, FilterDivergenceError, FilterResult
 from .particle import normalize_log_weights, warn_collapse
-from .resampling import check_scheme, resample_counts
+from .resampling import check_scheme, resampling_counts_function
 
 __all__ = ["CMSParticleFilter", "OracleCMSParticleFilter", "CMSStep", "map_particles",
            "select_top_likelihood"]
@@ -107,14 +107,16 @@ def map_particles(x_pred, lw_pred, logw_prev, r, eta: float, n_big: int, centre=
     """
     runs, N, d = x_pred.shape
     M = r.shape[1]
-    big = select_top_likelihood(lw_pred, n_big)                      # largest first
-    small = select_top_likelihood(-np.where(np.isnan(lw_pred), -np.inf, lw_pred), n_big)  # smallest first
-    xb = np.take_along_axis(x_pred, big[..., None], axis=1)          # (runs, B, d)
-    xs = np.take_along_axis(x_pred, small[..., None], axis=1)
+    big, small = _big_small(lw_pred, n_big)
+    off = (np.arange(runs) * N)[:, None]
+    flat_x = x_pred.reshape(runs * N, d)
+    bi = big + off
+    xb = np.take(flat_x, bi, axis=0)                                  # (runs, B, d)
+    xs = np.take(flat_x, small + off, axis=0)
     spread = xb - xs                                                  # (runs, B, d)
-    lwb = np.take_along_axis(logw_prev, big, axis=1)                  # (runs, B)
+    lwb = np.take(logw_prev.reshape(-1), bi)                          # (runs, B)
     if centre is None:
-        w, _, _ = normalize_log_weights(lw_pred)
+        w, _, _ = _normalize(lw_pred)
         xhat = (w[:, None, :] @ x_pred)                               # (runs, 1, d)
         centres = np.concatenate([xhat, xb], axis=1)                  # (runs, B+1, d)
         spreads = np.concatenate([spread[:, :1], spread], axis=1)
@@ -123,8 +125,46 @@ def map_particles(x_pred, lw_pred, logw_prev, r, eta: float, n_big: int, centre=
         centres = np.broadcast_to(np.asarray(centre, float)[:, None, :], xb.shape)
         spreads, lwc = spread, lwb
     idx = np.arange(M) % centres.shape[1]
-    x2 = centres[:, idx] + eta * r * spreads[:, idx]
-    return x2, lwc[:, idx], idx
+    # x2 = c + (eta r) s, computed in that order (the products and the sum of the printed form)
+    x2 = eta * r
+    x2 *= np.take(spreads, idx, axis=1)
+    x2 += np.take(centres, idx, axis=1)
+    return x2, np.take(lwc, idx, axis=1), idx
+
+
+def _big_small(lw, n_big: int):
+    """``(select_top_likelihood(lw, n_big), select_top_likelihood(-lw, n_big))`` -- the big particles
+    largest first, the small ones smallest first -- from one ``argsort`` of ``lw``.
+
+    Where the ``n_big + 1`` smallest and the ``n_big + 1`` largest values of every row are all
+    distinct, both answers are unique (no tie at the boundary of the set, none inside it), so
+    any exact method gives them; otherwise (a tie, or NaN) it falls back to the two selections.
+    """
+    if np.isnan(lw).any():
+        return (select_top_likelihood(lw, n_big),
+                select_top_likelihood(-np.where(np.isnan(lw), -np.inf, lw), n_big))
+    M = lw.shape[1]
+    order = np.argsort(lw, axis=1)                                    # increasing
+    lo = order[:, :n_big + 1]
+    hi = order[:, M - n_big - 1:]
+    vlo = np.take_along_axis(lw, lo, axis=1)
+    vhi = np.take_along_axis(lw, hi, axis=1)
+    if not ((vlo[:, 1:] > vlo[:, :-1]).all() and (vhi[:, 1:] > vhi[:, :-1]).all()):
+        return select_top_likelihood(lw, n_big), select_top_likelihood(-lw, n_big)
+    return hi[:, :0:-1], lo[:, :n_big]
+
+
+def _normalize(lw):
+    """:func:`~pfrepro.filters.particle.normalize_log_weights` (the same numbers), with a lean
+    path when every row has a finite maximum."""
+    m = lw.max(axis=1, keepdims=True)
+    if not np.isfinite(m).all():
+        return normalize_log_weights(lw)
+    w = lw - m
+    np.exp(w, out=w)
+    s = w.sum(axis=1, keepdims=True)
+    w /= s
+    return w, (m + np.log(s))[:, 0], np.zeros(lw.shape[0], dtype=bool)
 
 
 @dataclass
@@ -233,9 +273,11 @@ class CMSParticleFilter(Filter):
         llc = np.concatenate([ll1, ll2], axis=1)
         lwc_prev = np.concatenate([logw_prev, lw2_prev], axis=1)
         sel = select_top_likelihood(llc, N, sort=False)
-        x = np.take_along_axis(xc, sel[..., None], axis=1)
-        lw = np.take_along_axis(lwc_prev, sel, axis=1) + np.take_along_axis(llc, sel, axis=1)
-        w, _, coll = normalize_log_weights(lw)
+        runs, M = llc.shape
+        flat = sel + (np.arange(runs) * M)[:, None]          # one gather, not take_along_axis's
+        x = np.take(xc.reshape(runs * M, -1), flat, axis=0)
+        lw = np.take(lwc_prev.reshape(-1), flat) + np.take(llc.reshape(-1), flat)
+        w, _, coll = _normalize(lw)
         with np.errstate(divide="ignore"):
             logw = np.log(w)
         est = (w[:, None, :] @ x)[:, 0]
@@ -276,6 +318,7 @@ class CMSParticleFilter(Filter):
     def _loop(self, y, rng, x_true, carrier, x, logw, xs, Ps, ess, resampled, map_share, collapsed):
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
+        counts_of = resampling_counts_function(self.resampling)
         for k in range(1, T + 1):
             if not np.all(np.isfinite(x)):
                 raise FilterDivergenceError(f"{self.name} particles became non-finite at step {k}")
@@ -287,13 +330,21 @@ class CMSParticleFilter(Filter):
             xs[:, k - 1] = st.estimate
             d = x - st.estimate[:, None, :]
             Ps[:, k - 1] = np.einsum("rn,rni,rnj->rij", w, d, d)
-            map_share[:, k - 1] = np.mean(st.selected >= N, axis=1)
+            # the mean of a boolean row is its count over N: the same number, without a float copy
+            map_share[:, k - 1] = np.count_nonzero(st.selected >= N, axis=1) / N
             neff = np.round(1.0 / np.sum(w * w, axis=1))              # Step 3
             ess[:, k - 1] = neff
             do = neff < self.n_th * N
-            if do.any():
+            if do.all():
+                # every run resamples: the streams of all runs (what take_runs would select), and
+                # the weights normalised as resample_counts does (w is finite and positive here)
+                counts = counts_of(w / w.sum(axis=1, keepdims=True), rng)
+                x = np.repeat(x.reshape(-1, n), counts.ravel(), axis=0).reshape(runs, N, n)
+                logw = np.full((runs, N), -np.log(N))
+            elif do.any():
                 sel = np.flatnonzero(do)
-                counts = resample_counts(w[sel], take_runs(rng, sel), self.resampling)
+                ws = w[sel]
+                counts = counts_of(ws / ws.sum(axis=1, keepdims=True), take_runs(rng, sel))
                 x = x.copy()
                 x[sel] = np.repeat(x[sel].reshape(-1, n), counts.ravel(), axis=0).reshape(len(sel), N, n)
                 logw = logw.copy()
