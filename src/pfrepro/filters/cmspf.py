@@ -107,8 +107,8 @@ def map_particles(x_pred, lw_pred, logw_prev, r, eta: float, n_big: int, centre=
     """
     runs, N, d = x_pred.shape
     M = r.shape[1]
-    big, small = _big_small(lw_pred, n_big)
     off = (np.arange(runs) * N)[:, None]
+    big, small = _big_small(lw_pred, n_big, off)
     flat_x = x_pred.reshape(runs * N, d)
     bi = big + off
     xb = np.take(flat_x, bi, axis=0)                                  # (runs, B, d)
@@ -132,26 +132,36 @@ def map_particles(x_pred, lw_pred, logw_prev, r, eta: float, n_big: int, centre=
     return x2, np.take(lwc, idx, axis=1), idx
 
 
-def _big_small(lw, n_big: int):
+def _big_small(lw, n_big: int, off=None):
     """``(select_top_likelihood(lw, n_big), select_top_likelihood(-lw, n_big))`` -- the big particles
     largest first, the small ones smallest first -- from one ``argsort`` of ``lw``.
 
     Where the ``n_big + 1`` smallest and the ``n_big + 1`` largest values of every row are all
-    distinct, both answers are unique (no tie at the boundary of the set, none inside it), so
+    distinct, both answers are unique (no tie at the boundary of either set, none inside), so
     any exact method gives them; otherwise (a tie, or NaN) it falls back to the two selections.
+    ``off``: the row offsets ``M * arange(runs)[:, None]`` of the flattened ``lw``, if at hand.
     """
-    if np.isnan(lw).any():
-        return (select_top_likelihood(lw, n_big),
-                select_top_likelihood(-np.where(np.isnan(lw), -np.inf, lw), n_big))
-    M = lw.shape[1]
-    order = np.argsort(lw, axis=1)                                    # increasing
-    lo = order[:, :n_big + 1]
-    hi = order[:, M - n_big - 1:]
-    vlo = np.take_along_axis(lw, lo, axis=1)
-    vhi = np.take_along_axis(lw, hi, axis=1)
-    if not ((vlo[:, 1:] > vlo[:, :-1]).all() and (vhi[:, 1:] > vhi[:, :-1]).all()):
-        return select_top_likelihood(lw, n_big), select_top_likelihood(-lw, n_big)
-    return hi[:, :0:-1], lo[:, :n_big]
+    runs, M = lw.shape
+    if not np.isnan(lw).any():
+        order = np.argsort(lw, axis=1)                                # increasing
+        if off is None:
+            off = (np.arange(runs) * M)[:, None]
+        flat = lw.reshape(-1)
+        lo = order[:, :n_big + 1]
+        hi = order[:, M - n_big - 1:]
+        vlo = np.take(flat, lo + off)
+        vhi = np.take(flat, hi + off)
+        if (vlo[:, 1:] > vlo[:, :-1]).all() and (vhi[:, 1:] > vhi[:, :-1]).all():
+            return hi[:, :0:-1], lo[:, :n_big]
+    return (select_top_likelihood(lw, n_big),
+            select_top_likelihood(-np.where(np.isnan(lw), -np.inf, lw), n_big))
+
+
+def _top_unsorted(ll, n_keep: int):
+    """``select_top_likelihood(ll, n_keep, sort=False)`` for ``n_keep < M`` without its checks and,
+    when ``ll`` has no NaN, without the copy that turns NaN into -inf (the same array then)."""
+    key = np.where(np.isnan(ll), -np.inf, ll) if np.isnan(ll).any() else ll
+    return np.argpartition(-key, n_keep - 1, axis=1)[:, :n_keep]
 
 
 def _normalize(lw):
@@ -267,16 +277,19 @@ class CMSParticleFilter(Filter):
             return CMSStep(x1, ll1, x1[:, :0], ll1[:, :0], np.broadcast_to(np.arange(N), ll1.shape),
                            x1, logw, est, coll)
         centre = None if x_true_k is None else x_true_k
-        x2, lw2_prev, _ = map_particles(x1, logw_prev + ll1, logw_prev, r, self.eta, self.n_big, centre)
+        lw1 = logw_prev + ll1
+        x2, lw2_prev, _ = map_particles(x1, lw1, logw_prev, r, self.eta, self.n_big, centre)
         ll2 = self.model.log_likelihood(y_k, x2)
         xc = np.concatenate([x1, x2], axis=1)
         llc = np.concatenate([ll1, ll2], axis=1)
-        lwc_prev = np.concatenate([logw_prev, lw2_prev], axis=1)
-        sel = select_top_likelihood(llc, N, sort=False)
+        sel = _top_unsorted(llc, N)
         runs, M = llc.shape
+        # w_{k-1} p(z_k | x) of the pool, added before the selection's gather (the same sums)
+        lw2_prev += ll2
+        lwc = np.concatenate([lw1, lw2_prev], axis=1)
         flat = sel + (np.arange(runs) * M)[:, None]          # one gather, not take_along_axis's
         x = np.take(xc.reshape(runs * M, -1), flat, axis=0)
-        lw = np.take(lwc_prev.reshape(-1), flat) + np.take(llc.reshape(-1), flat)
+        lw = np.take(lwc.reshape(-1), flat)
         w, _, coll = _normalize(lw)
         with np.errstate(divide="ignore"):
             logw = np.log(w)
