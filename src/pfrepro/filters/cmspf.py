@@ -116,7 +116,7 @@ def map_particles(x_pred, lw_pred, logw_prev, r, eta: float, n_big: int, centre=
     spread = xb - xs                                                  # (runs, B, d)
     lwb = np.take(logw_prev.reshape(-1), bi)                          # (runs, B)
     if centre is None:
-        w, _, _ = _normalize(lw_pred)
+        w, _ = _normalize(lw_pred)
         xhat = (w[:, None, :] @ x_pred)                               # (runs, 1, d)
         centres = np.concatenate([xhat, xb], axis=1)                  # (runs, B+1, d)
         spreads = np.concatenate([spread[:, :1], spread], axis=1)
@@ -165,16 +165,16 @@ def _top_unsorted(ll, n_keep: int):
 
 
 def _normalize(lw):
-    """:func:`~pfrepro.filters.particle.normalize_log_weights` (the same numbers), with a lean
-    path when every row has a finite maximum."""
+    """``w, collapsed`` of :func:`~pfrepro.filters.particle.normalize_log_weights` (the same numbers),
+    with a lean path when every row has a finite maximum (and no log-normaliser)."""
     m = lw.max(axis=1, keepdims=True)
     if not np.isfinite(m).all():
-        return normalize_log_weights(lw)
+        w, _, collapsed = normalize_log_weights(lw)
+        return w, collapsed
     w = lw - m
     np.exp(w, out=w)
-    s = w.sum(axis=1, keepdims=True)
-    w /= s
-    return w, (m + np.log(s))[:, 0], np.zeros(lw.shape[0], dtype=bool)
+    w /= w.sum(axis=1, keepdims=True)
+    return w, np.zeros(lw.shape[0], dtype=bool)
 
 
 @dataclass
@@ -290,7 +290,7 @@ class CMSParticleFilter(Filter):
         flat = sel + (np.arange(runs) * M)[:, None]          # one gather, not take_along_axis's
         x = np.take(xc.reshape(runs * M, -1), flat, axis=0)
         lw = np.take(lwc.reshape(-1), flat)
-        w, _, coll = _normalize(lw)
+        w, coll = _normalize(lw)
         with np.errstate(divide="ignore"):
             logw = np.log(w)
         est = (w[:, None, :] @ x)[:, 0]
@@ -357,11 +357,10 @@ class CMSParticleFilter(Filter):
             elif do.any():
                 sel = np.flatnonzero(do)
                 ws = w[sel]
-                counts = counts_of(ws / ws.sum(axis=1, keepdims=True), take_runs(rng, sel))
-                x = x.copy()
-                x[sel] = np.repeat(x[sel].reshape(-1, n), counts.ravel(), axis=0).reshape(len(sel), N, n)
-                logw = logw.copy()
-                logw[sel] = -np.log(N)
+                full = np.ones((runs, N), dtype=np.intp)    # one copy of each particle elsewhere
+                full[sel] = counts_of(ws / ws.sum(axis=1, keepdims=True), take_runs(rng, sel))
+                x = np.repeat(x.reshape(-1, n), full.ravel(), axis=0).reshape(runs, N, n)
+                logw = np.where(do[:, None], -np.log(N), logw)
             resampled[:, k - 1] = do
 
     def filter(self, y, rng: np.random.Generator | None = None, *, r=None) -> FilterResult:

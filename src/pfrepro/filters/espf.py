@@ -185,7 +185,7 @@ class EvolutionSamplingParticleFilter(Filter):
             m = self.model.f(x, k)                                       # predicted means
             xp = m + rng.standard_normal((runs, N, n)) @ Lq.T
             ll = self.model.log_likelihood(yk, xp)
-            w, _, collapsed[:, k - 1] = _normalize(ll)
+            w, collapsed[:, k - 1] = _normalize(ll)
             # resample: offspring counts of the normalised weights, as ``resample`` draws them
             c = counts_of(w / w.sum(axis=1, keepdims=True), rng).ravel()
             xr = np.repeat(xp.reshape(-1, n), c, axis=0).reshape(runs, N, n)
