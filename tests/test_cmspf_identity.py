@@ -135,6 +135,12 @@ def test_logistic_sequence_bit_identical_to_the_plain_map(u):
     assert same(logistic_sequence(300, x0, u, 200), logistic_ref(300, x0, u, 200))
 
 
+@pytest.mark.parametrize("u", [4.0, 3.7])
+def test_logistic_sequence_scalar_start(u):
+    assert same(logistic_sequence(50, 0.3, u, 100), logistic_ref(50, 0.3, u, 100))
+    assert same(chebyshev_sequence(50, 0.3, 100), chebyshev_ref(50, 0.3, 100))
+
+
 def test_chebyshev_sequence_bit_identical_to_the_plain_map():
     x0 = np.random.default_rng(2).uniform(-0.99, 0.99, 3000)
     x0[:2] = [1e-9, 0.5 + 1e-12]

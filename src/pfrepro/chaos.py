@@ -117,7 +117,7 @@ def logistic_sequence(n: int, x0=0.3, u: float = 4.0, burn_in: int = DEFAULT_BUR
             t *= x
             _clip(t, 4.0 * lo, 4.0 * hi, out=x)
             if i >= burn_in:
-                np.multiply(x, 0.25, out=out[i - burn_in])
+                np.multiply(x, 0.25, out=out[i - burn_in, ...])   # a view also for a scalar x0
     else:
         for i in range(burn_in + n):
             np.subtract(1.0, x, out=t)
