@@ -142,17 +142,17 @@ def _big_small(lw, n_big: int, off=None):
     ``off``: the row offsets ``M * arange(runs)[:, None]`` of the flattened ``lw``, if at hand.
     """
     runs, M = lw.shape
-    if not np.isnan(lw).any():
-        order = np.argsort(lw, axis=1)                                # increasing
-        if off is None:
-            off = (np.arange(runs) * M)[:, None]
-        flat = lw.reshape(-1)
-        lo = order[:, :n_big + 1]
-        hi = order[:, M - n_big - 1:]
-        vlo = np.take(flat, lo + off)
-        vhi = np.take(flat, hi + off)
-        if (vlo[:, 1:] > vlo[:, :-1]).all() and (vhi[:, 1:] > vhi[:, :-1]).all():
-            return hi[:, :0:-1], lo[:, :n_big]
+    # argsort puts NaN last, where the check below fails on it (NaN > v is False): no NaN pass
+    order = np.argsort(lw, axis=1)                                    # increasing
+    if off is None:
+        off = (np.arange(runs) * M)[:, None]
+    flat = lw.reshape(-1)
+    lo = order[:, :n_big + 1]
+    hi = order[:, M - n_big - 1:]
+    vlo = np.take(flat, lo + off)
+    vhi = np.take(flat, hi + off)
+    if (vlo[:, 1:] > vlo[:, :-1]).all() and (vhi[:, 1:] > vhi[:, :-1]).all():
+        return hi[:, :0:-1], lo[:, :n_big]
     return (select_top_likelihood(lw, n_big),
             select_top_likelihood(-np.where(np.isnan(lw), -np.inf, lw), n_big))
 
