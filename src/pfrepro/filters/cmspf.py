@@ -64,7 +64,8 @@ def select_top_likelihood(loglik, n_keep: int, sort: bool = True) -> np.ndarray:
     n_keep = check_positive_int(n_keep, "n_keep")
     if n_keep > ll.shape[1]:
         raise ValueError(f"cannot keep {n_keep} of {ll.shape[1]} candidates")
-    key = np.where(np.isnan(ll), -np.inf, ll)
+    # NaN counts as -inf; without NaN the key is ``ll`` itself (no copy: the same numbers)
+    key = np.where(np.isnan(ll), -np.inf, ll) if np.isnan(ll).any() else ll
     if n_keep < ll.shape[1]:
         part = np.argpartition(-key, n_keep - 1, axis=1)[:, :n_keep]
     else:
@@ -155,13 +156,6 @@ def _big_small(lw, n_big: int, off=None):
         return hi[:, :0:-1], lo[:, :n_big]
     return (select_top_likelihood(lw, n_big),
             select_top_likelihood(-np.where(np.isnan(lw), -np.inf, lw), n_big))
-
-
-def _top_unsorted(ll, n_keep: int):
-    """``select_top_likelihood(ll, n_keep, sort=False)`` for ``n_keep < M`` without its checks and,
-    when ``ll`` has no NaN, without the copy that turns NaN into -inf (the same array then)."""
-    key = np.where(np.isnan(ll), -np.inf, ll) if np.isnan(ll).any() else ll
-    return np.argpartition(-key, n_keep - 1, axis=1)[:, :n_keep]
 
 
 def _normalize(lw):
@@ -282,7 +276,7 @@ class CMSParticleFilter(Filter):
         ll2 = self.model.log_likelihood(y_k, x2)
         xc = np.concatenate([x1, x2], axis=1)
         llc = np.concatenate([ll1, ll2], axis=1)
-        sel = _top_unsorted(llc, N)
+        sel = select_top_likelihood(llc, N, sort=False)
         runs, M = llc.shape
         # w_{k-1} p(z_k | x) of the pool, added before the selection's gather (the same sums)
         lw2_prev += ll2

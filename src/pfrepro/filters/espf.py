@@ -33,7 +33,7 @@ import numpy as np
 
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
-from .cmspf import _normalize, _top_unsorted, select_top_likelihood
+from .cmspf import _normalize, select_top_likelihood
 from .particle import normalize_log_weights, warn_collapse
 from .resampling import check_scheme, resample, resampling_counts_function
 
@@ -221,7 +221,7 @@ class EvolutionSamplingParticleFilter(Filter):
             # pool and select by fitness
             pool_x = np.concatenate([xr, xm, xc], axis=1)
             pool_ll = np.concatenate([llr, llm, llc], axis=1)
-            sel = _top_unsorted(pool_ll, N)
+            sel = select_top_likelihood(pool_ll, N, sort=False)
             x = np.take(pool_x.reshape(-1, n), sel + off3, axis=0)
             xs[:, k - 1] = x.mean(axis=1)
             n_res = np.count_nonzero(sel < N, axis=1)
