@@ -245,3 +245,25 @@ def test_uniform_is_low_plus_span_times_random():
         got += eps
         assert same(got, want)
         assert same(a.random((4, 3)), b.random((4, 3)))    # the streams stay in step
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_weight_collapse_path_bit_identical(monkeypatch):
+    """A run whose every likelihood underflows (y = 1e200) takes the normalisation's collapse path:
+    CMS-PF and ESPF still give the reference's numbers and flags."""
+    m = _ning()
+    y = m.simulate(12, 4, np.random.default_rng(3)).y.copy()
+    y[1, 4:7] = 1e200
+    new = CMSParticleFilter(m, 30).filter(y, np.random.default_rng(2))
+    old = CMSParticleFilter(m, 30)
+    monkeypatch.setattr(old, "_loop", loop_ref.__get__(old))
+    monkeypatch.setattr(old.carrier, "generate", old_carrier(old.carrier))
+    ref = old.filter(y, np.random.default_rng(2))
+    assert new.diagnostics["n_collapsed"] > 0
+    assert same(new.x, ref.x) and same(new.diagnostics["collapsed"], ref.diagnostics["collapsed"])
+    e_new = EvolutionSamplingParticleFilter(m, 30).filter(y, np.random.default_rng(2))
+    e_old = EvolutionSamplingParticleFilter(m, 30)
+    monkeypatch.setattr(e_old, "_loop", e_old._loop_reference)
+    e_ref = e_old.filter(y, np.random.default_rng(2))
+    assert e_new.diagnostics["n_collapsed"] > 0
+    assert same(e_new.x, e_ref.x) and same(e_new.diagnostics["collapsed"], e_ref.diagnostics["collapsed"])
