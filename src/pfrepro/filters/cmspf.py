@@ -45,7 +45,7 @@ from ..rng import take_runs
 from ..validation import as_finite_float, check_positive_int, check_probability
 from .base import Filter, FilterDivergenceError, FilterResult
 from .particle import normalize_log_weights, warn_collapse
-from .resampling import check_scheme, resample_counts
+from .resampling import check_scheme, resampling_counts_function
 
 __all__ = ["CMSParticleFilter", "OracleCMSParticleFilter", "CMSStep", "map_particles",
            "select_top_likelihood"]
@@ -64,7 +64,8 @@ def select_top_likelihood(loglik, n_keep: int, sort: bool = True) -> np.ndarray:
     n_keep = check_positive_int(n_keep, "n_keep")
     if n_keep > ll.shape[1]:
         raise ValueError(f"cannot keep {n_keep} of {ll.shape[1]} candidates")
-    key = np.where(np.isnan(ll), -np.inf, ll)
+    # NaN counts as -inf; without NaN the key is ``ll`` itself (no copy: the same numbers)
+    key = np.where(np.isnan(ll), -np.inf, ll) if np.isnan(ll).any() else ll
     if n_keep < ll.shape[1]:
         part = np.argpartition(-key, n_keep - 1, axis=1)[:, :n_keep]
     else:
@@ -107,14 +108,16 @@ def map_particles(x_pred, lw_pred, logw_prev, r, eta: float, n_big: int, centre=
     """
     runs, N, d = x_pred.shape
     M = r.shape[1]
-    big = select_top_likelihood(lw_pred, n_big)                      # largest first
-    small = select_top_likelihood(-np.where(np.isnan(lw_pred), -np.inf, lw_pred), n_big)  # smallest first
-    xb = np.take_along_axis(x_pred, big[..., None], axis=1)          # (runs, B, d)
-    xs = np.take_along_axis(x_pred, small[..., None], axis=1)
+    off = (np.arange(runs) * N)[:, None]
+    big, small = _big_small(lw_pred, n_big, off)
+    flat_x = x_pred.reshape(runs * N, d)
+    bi = big + off
+    xb = np.take(flat_x, bi, axis=0)                                  # (runs, B, d)
+    xs = np.take(flat_x, small + off, axis=0)
     spread = xb - xs                                                  # (runs, B, d)
-    lwb = np.take_along_axis(logw_prev, big, axis=1)                  # (runs, B)
+    lwb = np.take(logw_prev.reshape(-1), bi)                          # (runs, B)
     if centre is None:
-        w, _, _ = normalize_log_weights(lw_pred)
+        w, _ = _normalize(lw_pred)
         xhat = (w[:, None, :] @ x_pred)                               # (runs, 1, d)
         centres = np.concatenate([xhat, xb], axis=1)                  # (runs, B+1, d)
         spreads = np.concatenate([spread[:, :1], spread], axis=1)
@@ -123,8 +126,49 @@ def map_particles(x_pred, lw_pred, logw_prev, r, eta: float, n_big: int, centre=
         centres = np.broadcast_to(np.asarray(centre, float)[:, None, :], xb.shape)
         spreads, lwc = spread, lwb
     idx = np.arange(M) % centres.shape[1]
-    x2 = centres[:, idx] + eta * r * spreads[:, idx]
-    return x2, lwc[:, idx], idx
+    # x2 = c + (eta r) s, computed in that order (the products and the sum of the printed form)
+    x2 = eta * r
+    x2 *= np.take(spreads, idx, axis=1)
+    x2 += np.take(centres, idx, axis=1)
+    return x2, np.take(lwc, idx, axis=1), idx
+
+
+def _big_small(lw, n_big: int, off=None):
+    """``(select_top_likelihood(lw, n_big), select_top_likelihood(-lw, n_big))`` -- the big particles
+    largest first, the small ones smallest first -- from one ``argsort`` of ``lw``.
+
+    Where the ``n_big + 1`` smallest and the ``n_big + 1`` largest values of every row are all
+    distinct, both answers are unique (no tie at the boundary of either set, none inside), so
+    any exact method gives them; otherwise (a tie, or NaN) it falls back to the two selections.
+    ``off``: the row offsets ``M * arange(runs)[:, None]`` of the flattened ``lw``, if at hand.
+    """
+    runs, M = lw.shape
+    # argsort puts NaN last, where the check below fails on it (NaN > v is False): no NaN pass
+    order = np.argsort(lw, axis=1)                                    # increasing
+    if off is None:
+        off = (np.arange(runs) * M)[:, None]
+    flat = lw.reshape(-1)
+    lo = order[:, :n_big + 1]
+    hi = order[:, M - n_big - 1:]
+    vlo = np.take(flat, lo + off)
+    vhi = np.take(flat, hi + off)
+    if (vlo[:, 1:] > vlo[:, :-1]).all() and (vhi[:, 1:] > vhi[:, :-1]).all():
+        return hi[:, :0:-1], lo[:, :n_big]
+    return (select_top_likelihood(lw, n_big),
+            select_top_likelihood(-np.where(np.isnan(lw), -np.inf, lw), n_big))
+
+
+def _normalize(lw):
+    """``w, collapsed`` of :func:`~pfrepro.filters.particle.normalize_log_weights` (the same numbers),
+    with a lean path when every row has a finite maximum (and no log-normaliser)."""
+    m = lw.max(axis=1, keepdims=True)
+    if not np.isfinite(m).all():
+        w, _, collapsed = normalize_log_weights(lw)
+        return w, collapsed
+    w = lw - m
+    np.exp(w, out=w)
+    w /= w.sum(axis=1, keepdims=True)
+    return w, np.zeros(lw.shape[0], dtype=bool)
 
 
 @dataclass
@@ -227,15 +271,20 @@ class CMSParticleFilter(Filter):
             return CMSStep(x1, ll1, x1[:, :0], ll1[:, :0], np.broadcast_to(np.arange(N), ll1.shape),
                            x1, logw, est, coll)
         centre = None if x_true_k is None else x_true_k
-        x2, lw2_prev, _ = map_particles(x1, logw_prev + ll1, logw_prev, r, self.eta, self.n_big, centre)
+        lw1 = logw_prev + ll1
+        x2, lw2_prev, _ = map_particles(x1, lw1, logw_prev, r, self.eta, self.n_big, centre)
         ll2 = self.model.log_likelihood(y_k, x2)
         xc = np.concatenate([x1, x2], axis=1)
         llc = np.concatenate([ll1, ll2], axis=1)
-        lwc_prev = np.concatenate([logw_prev, lw2_prev], axis=1)
         sel = select_top_likelihood(llc, N, sort=False)
-        x = np.take_along_axis(xc, sel[..., None], axis=1)
-        lw = np.take_along_axis(lwc_prev, sel, axis=1) + np.take_along_axis(llc, sel, axis=1)
-        w, _, coll = normalize_log_weights(lw)
+        runs, M = llc.shape
+        # w_{k-1} p(z_k | x) of the pool, added before the selection's gather (the same sums)
+        lw2_prev += ll2
+        lwc = np.concatenate([lw1, lw2_prev], axis=1)
+        flat = sel + (np.arange(runs) * M)[:, None]          # one gather, not take_along_axis's
+        x = np.take(xc.reshape(runs * M, -1), flat, axis=0)
+        lw = np.take(lwc.reshape(-1), flat)
+        w, coll = _normalize(lw)
         with np.errstate(divide="ignore"):
             logw = np.log(w)
         est = (w[:, None, :] @ x)[:, 0]
@@ -276,6 +325,7 @@ class CMSParticleFilter(Filter):
     def _loop(self, y, rng, x_true, carrier, x, logw, xs, Ps, ess, resampled, map_share, collapsed):
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
+        counts_of = resampling_counts_function(self.resampling)
         for k in range(1, T + 1):
             if not np.all(np.isfinite(x)):
                 raise FilterDivergenceError(f"{self.name} particles became non-finite at step {k}")
@@ -287,17 +337,24 @@ class CMSParticleFilter(Filter):
             xs[:, k - 1] = st.estimate
             d = x - st.estimate[:, None, :]
             Ps[:, k - 1] = np.einsum("rn,rni,rnj->rij", w, d, d)
-            map_share[:, k - 1] = np.mean(st.selected >= N, axis=1)
+            # the mean of a boolean row is its count over N: the same number, without a float copy
+            map_share[:, k - 1] = np.count_nonzero(st.selected >= N, axis=1) / N
             neff = np.round(1.0 / np.sum(w * w, axis=1))              # Step 3
             ess[:, k - 1] = neff
             do = neff < self.n_th * N
-            if do.any():
+            if do.all():
+                # every run resamples: the streams of all runs (what take_runs would select), and
+                # the weights normalised as resample_counts does (w is finite and positive here)
+                counts = counts_of(w / w.sum(axis=1, keepdims=True), rng)
+                x = np.repeat(x.reshape(-1, n), counts.ravel(), axis=0).reshape(runs, N, n)
+                logw = np.full((runs, N), -np.log(N))
+            elif do.any():
                 sel = np.flatnonzero(do)
-                counts = resample_counts(w[sel], take_runs(rng, sel), self.resampling)
-                x = x.copy()
-                x[sel] = np.repeat(x[sel].reshape(-1, n), counts.ravel(), axis=0).reshape(len(sel), N, n)
-                logw = logw.copy()
-                logw[sel] = -np.log(N)
+                ws = w[sel]
+                full = np.ones((runs, N), dtype=np.intp)    # one copy of each particle elsewhere
+                full[sel] = counts_of(ws / ws.sum(axis=1, keepdims=True), take_runs(rng, sel))
+                x = np.repeat(x.reshape(-1, n), full.ravel(), axis=0).reshape(runs, N, n)
+                logw = np.where(do[:, None], -np.log(N), logw)
             resampled[:, k - 1] = do
 
     def filter(self, y, rng: np.random.Generator | None = None, *, r=None) -> FilterResult:

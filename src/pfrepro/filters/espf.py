@@ -33,9 +33,9 @@ import numpy as np
 
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
-from .cmspf import select_top_likelihood
+from .cmspf import _normalize, select_top_likelihood
 from .particle import normalize_log_weights, warn_collapse
-from .resampling import check_scheme, resample
+from .resampling import check_scheme, resample, resampling_counts_function
 
 __all__ = ["EvolutionSamplingParticleFilter", "sbx_children"]
 
@@ -58,6 +58,27 @@ def sbx_children(p1, p2, u, eta_c: float):
     b = np.where(u <= 0.5, (2.0 * u) ** e, (1.0 / (2.0 * (1.0 - u))) ** e)
     c1 = 0.5 * ((1.0 + b) * p1 + (1.0 - b) * p2)
     c2 = 0.5 * ((1.0 - b) * p1 + (1.0 + b) * p2)
+    return c1, c2
+
+
+def _sbx(p1, p2, u, eta_c: float):
+    """:func:`sbx_children` for the filter's own uniforms (in (0, 1) by construction, so unchecked),
+    with the same numbers in fewer passes: the power is taken once, of the base each entry's branch
+    selects (an elementwise power of the same base is the same number), and 1 +- b once."""
+    e = 1.0 / (float(eta_c) + 1.0)
+    hi = np.subtract(1.0, u)
+    hi *= 2.0
+    np.divide(1.0, hi, out=hi)                       # 1 / (2 (1 - u))
+    b = np.where(u <= 0.5, 2.0 * u, hi)
+    b **= e
+    bp = 1.0 + b
+    bm = 1.0 - b
+    c1 = bp * p1
+    c1 += bm * p2
+    c1 *= 0.5
+    c2 = bm * p1
+    c2 += bp * p2
+    c2 *= 0.5
     return c1, c2
 
 
@@ -147,6 +168,71 @@ class EvolutionSamplingParticleFilter(Filter):
                                                    "likelihood_evaluations": 3 * N * T})
 
     def _loop(self, y, rng, x, xs, acc_rate, origin, collapsed, log_trans, Lq):
+        # Every draw, every product and every sum is the one of the plain reading (kept as
+        # ``_loop_reference`` and pinned by the tests); what differs is how the arrays are moved:
+        # resampled arrays by one ``np.repeat`` of the offspring counts (the ancestors of
+        # ``resample`` are those counts spelled out), gathers as ``np.take`` of flat indices,
+        # the SBX uniforms as ``low + (high - low) u`` of ``random`` (what ``Generator.uniform``
+        # computes, without the per-run parameter handling of :class:`~pfrepro.rng.RunStreams`).
+        runs, T, _ = y.shape
+        N, n = self.n_particles, self.model.dim_x
+        npair = N // 2
+        counts_of = resampling_counts_function(self.resampling)
+        off = (np.arange(runs) * N)[:, None]
+        off3 = 3 * off
+        eps = np.finfo(float).eps
+        lo, span = eps, (1.0 - eps) - eps
+        for k in range(1, T + 1):
+            if not np.all(np.isfinite(x)):
+                raise FilterDivergenceError(f"ESPF particles became non-finite at step {k}")
+            yk = y[:, k - 1]
+            m = self.model.f(x, k)                                       # predicted means
+            xp = m + rng.standard_normal((runs, N, n)) @ Lq.T
+            ll = self.model.log_likelihood(yk, xp)
+            w, collapsed[:, k - 1] = _normalize(ll)
+            # resample: offspring counts of the normalised weights, as ``resample`` draws them
+            c = counts_of(w / w.sum(axis=1, keepdims=True), rng).ravel()
+            xr = np.repeat(xp.reshape(-1, n), c, axis=0).reshape(runs, N, n)
+            mr = np.repeat(m.reshape(-1, n), c, axis=0).reshape(runs, N, n)
+            llr = np.repeat(ll.reshape(-1), c).reshape(runs, N)
+            # MCMC move (random-walk MH, target p(z|x) N(x; m, Q))
+            prop = xr + self.mcmc_scale * (rng.standard_normal((runs, N, n)) @ Lq.T)
+            llp = self.model.log_likelihood(yk, prop)
+            log_alpha = llp + log_trans(prop, mr) - llr - log_trans(xr, mr)
+            accept = np.log(rng.random((runs, N))) < log_alpha
+            xm = np.where(accept[..., None], prop, xr)
+            llm = np.where(accept, llp, llr)
+            acc_rate[:, k - 1] = np.count_nonzero(accept, axis=1) / N   # the mean of the booleans
+            # SBX on random pairs
+            perm = rng.permuted(np.broadcast_to(np.arange(N), (runs, N)), axis=1)
+            pf = perm + off
+            xr_flat = xr.reshape(-1, n)
+            p1 = np.take(xr_flat, pf[:, :npair], axis=0)
+            p2 = np.take(xr_flat, pf[:, npair:2 * npair], axis=0)
+            u = rng.random(p1.shape)
+            u *= span
+            u += lo
+            c1, c2 = _sbx(p1, p2, u, self.sbx_eta)
+            parts = [c1, c2]
+            if N % 2:
+                parts.append(np.take(xr_flat, pf[:, -1:], axis=0))
+            xc = np.concatenate(parts, axis=1)
+            llc = self.model.log_likelihood(yk, xc)
+            # pool and select by fitness
+            pool_x = np.concatenate([xr, xm, xc], axis=1)
+            pool_ll = np.concatenate([llr, llm, llc], axis=1)
+            sel = select_top_likelihood(pool_ll, N, sort=False)
+            x = np.take(pool_x.reshape(-1, n), sel + off3, axis=0)
+            xs[:, k - 1] = x.mean(axis=1)
+            n_res = np.count_nonzero(sel < N, axis=1)
+            n_sbx = np.count_nonzero(sel >= 2 * N, axis=1)
+            origin[:, k - 1, 0] = n_res / N
+            origin[:, k - 1, 1] = (N - n_res - n_sbx) / N
+            origin[:, k - 1, 2] = n_sbx / N
+
+    def _loop_reference(self, y, rng, x, xs, acc_rate, origin, collapsed, log_trans, Lq):
+        """The loop as first written (fancy indexing, ``resample``, ``rng.uniform``): the reference
+        the tests hold :meth:`_loop` to, bit for bit."""
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
         npair = N // 2
@@ -161,7 +247,6 @@ class EvolutionSamplingParticleFilter(Filter):
             w, _, collapsed[:, k - 1] = normalize_log_weights(ll)
             a = resample(w, rng, self.resampling)                        # ancestors (runs, N)
             xr, mr, llr = xp[rows, a], m[rows, a], ll[rows, a]
-            # MCMC move (random-walk MH, target p(z|x) N(x; m, Q))
             prop = xr + self.mcmc_scale * (rng.standard_normal((runs, N, n)) @ Lq.T)
             llp = self.model.log_likelihood(yk, prop)
             log_alpha = llp + log_trans(prop, mr) - llr - log_trans(xr, mr)
@@ -169,7 +254,6 @@ class EvolutionSamplingParticleFilter(Filter):
             xm = np.where(accept[..., None], prop, xr)
             llm = np.where(accept, llp, llr)
             acc_rate[:, k - 1] = accept.mean(axis=1)
-            # SBX on random pairs
             perm = rng.permuted(np.broadcast_to(np.arange(N), (runs, N)), axis=1)
             p1 = xr[rows, perm[:, :npair]]
             p2 = xr[rows, perm[:, npair:2 * npair]]
@@ -180,7 +264,6 @@ class EvolutionSamplingParticleFilter(Filter):
                 parts.append(xr[rows, perm[:, -1:]])
             xc = np.concatenate(parts, axis=1)
             llc = self.model.log_likelihood(yk, xc)
-            # pool and select by fitness
             pool_x = np.concatenate([xr, xm, xc], axis=1)
             pool_ll = np.concatenate([llr, llm, llc], axis=1)
             sel = select_top_likelihood(pool_ll, N, sort=False)

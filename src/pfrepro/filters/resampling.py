@@ -95,6 +95,37 @@ def _multinomial_counts(w, rng):
 
 def _residual_counts(w, rng):
     runs, N = w.shape
+    Nw = N * w
+    counts = np.floor(Nw).astype(np.intp)
+    rest = N - counts.sum(axis=1)
+    rows = np.flatnonzero(rest > 0)
+    if not len(rows):
+        return counts
+    # the residual distributions of all drawing runs at once: a row's cumsum is a sequential
+    # accumulate (the same sums as the 1-D cumsum of that row), divided by its last entry
+    c = np.cumsum((Nw - counts)[rows], axis=1)
+    c /= c[:, -1:]
+    c[:, -1] = 1.0
+    # each run's uniforms from its own stream, in run order; searched sorted (the counts do not
+    # depend on the order of the draws, and sorted keys search several times faster: each search
+    # starts where the last one ended); one bincount over all runs
+    draws = np.empty(int(rest[rows].sum()), dtype=np.intp)
+    start = 0
+    for j, r in enumerate(rows.tolist()):
+        stop = start + int(rest[r])
+        u = run_stream(rng, r).random(stop - start)
+        u.sort()
+        draws[start:stop] = np.searchsorted(c[j], u, side="right")
+        start = stop
+    np.minimum(draws, N - 1, out=draws)
+    draws += np.repeat(rows * N, rest[rows])
+    counts += np.bincount(draws, minlength=runs * N).reshape(runs, N)
+    return counts
+
+
+def _residual_counts_reference(w, rng):
+    """The residual scheme as first written (a loop over runs): the tests' reference."""
+    runs, N = w.shape
     counts = np.floor(N * w).astype(np.intp)
     rest = N - counts.sum(axis=1)
     resid = N * w - counts
