@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import flow
-from ..models.base import require_capabilities
+from ..models.base import StateSpaceModel, require_capabilities
 from ..rng import take_runs
 import warnings
 
@@ -29,6 +29,19 @@ from .base import DIVERGENCE_POLICIES, Filter, FilterDivergenceError, FilterDive
 from .sigma_points import ScaledSigmaPoints, unscented_transform
 
 __all__ = ["GaussianParticleFlowFilter", "particle_moments"]
+
+
+def _posterior_moments(x, full_cov=True):
+    """``(m, P, var)``: :func:`particle_moments` and its covariance's diagonal, or with
+    ``full_cov=False`` the mean and the variances alone, ``P = None`` (the same numbers: the
+    diagonal of ``einsum("rni,rnj->rij")`` is ``einsum("rni,rni->ri")``, and halving
+    ``P + P^T`` leaves the diagonal as it is), at a cost of d instead of d^2 sums."""
+    if full_cov:
+        m, P = particle_moments(x)
+        return m, P, np.diagonal(P, axis1=-2, axis2=-1)
+    m = x.mean(axis=1)
+    dev = x - m[:, None, :]
+    return m, None, np.einsum("rni,rni->ri", dev, dev) / (x.shape[1] - 1)
 
 
 def particle_moments(x):
@@ -43,22 +56,6 @@ def particle_moments(x):
     d = x - m[:, None, :]
     P = np.einsum("rni,rnj->rij", d, d) / (N - 1)
     return m, 0.5 * (P + np.swapaxes(P, -1, -2))
-
-
-def _visited_lambdas(grid, integrator):
-    """The distinct pseudo-times at which :func:`pfrepro.flow.integrate_flow` evaluates the
-    field on ``grid``: the grid points and, for RK2/RK4, the midpoints ``l0 + 0.5 * h`` with the
-    integrator's own arithmetic (so that a float lookup finds them). Returns the array and a
-    ``{lambda: index}`` map."""
-    lams = []
-    for l0, l1 in zip(grid[:-1], grid[1:]):
-        lams.append(l0)
-        if integrator in ("midpoint", "rk4"):
-            lams.append(l0 + 0.5 * (l1 - l0))
-        if integrator == "rk4":
-            lams.append(l1)
-    lams = list(dict.fromkeys(lams))
-    return np.asarray(lams, float), {lam: i for i, lam in enumerate(lams)}
 
 
 class GaussianParticleFlowFilter(Filter):
@@ -166,8 +163,18 @@ class GaussianParticleFlowFilter(Filter):
         self.ratio = float(ratio)
         self.n_steps = check_positive_int(n_steps, "n_steps")
         self.grid = flow.lambda_schedule(self.n_steps, schedule, ratio)
-        self._lams, self._lam_index = _visited_lambdas(self.grid, integrator)
+        if integrator != "exact":
+            # the lambdas the integrator visits (grid points, RK midpoints computed as the
+            # integrator computes them) and each step's stages among them
+            self._stages = flow.stage_lambdas(self.grid, integrator)
+            self._lams = self._stages[0]
+            self._lam_index = {lam: i for i, lam in enumerate(self._lams.tolist())}
+        # a residual that is plain subtraction makes the eq-43 field affine in the state
+        # (an angle wrap is not: the bearings-only model keeps integrating probe points)
+        self._plain_residual = getattr(type(model), "residual_y", None) is StateSpaceModel.residual_y
         self.points = ScaledSigmaPoints(model.dim_x, alpha, beta, kappa)
+        # the eq-43 probes m + s * row: the mean, then one step of one prior sd along each axis
+        self._probe_pattern = np.concatenate([np.zeros((1, model.dim_x)), np.eye(model.dim_x)])[None]
         self.return_cov = bool(return_cov)
 
     def prior_statistics(self, x, moments=None):
@@ -188,6 +195,14 @@ class GaussianParticleFlowFilter(Filter):
 
         ``moments``: ``particle_moments(x)`` if the caller has it already (not recomputed).
         """
+        return self._update(x, y, moments, probes=not self._plain_residual)
+
+    def _update_probes(self, x, y, moments=None):
+        """:meth:`update` with the eq-43 map always found by integrating d + 1 probe points
+        (the reference for the closed form, and the path of a model whose residual wraps)."""
+        return self._update(x, y, moments, probes=True)
+
+    def _update(self, x, y, moments, probes):
         model = self.model
         if self.integrator == "exact":
             m, P = particle_moments(x) if moments is None else moments
@@ -212,12 +227,28 @@ class GaussianParticleFlowFilter(Filter):
             def field(z, lam):
                 i = at[lam]
                 return 0.5 * (r(yN, model.h(z)) + cN_all[i]) @ GT_all[i]
+
+            return flow.integrate_flow(x, field, self.grid, self.integrator)
+
+        # h(z) ~ y_hat + J (z - m), J = Pxy^T P^{-1}; innovations r(y, y_hat) - J (z - m)
+        mN = m[:, None, :]
+        if not probes:
+            # Plain residual: the field is (z - m) A(lam) + b(lam) with A = -1/2 J^T G^T,
+            # b = 1/2 [(y - y_hat) + c] G^T, and flow.integrate_flow computes the integrator's
+            # map over the whole grid in closed form for every lambda at once
+            # (flow.AffineField, flow.affine_flow_map) instead of stepping the probes through
+            # 20-80 stages. With a scalar measurement (m = 1) the products over m are products
+            # of scalars (the same numbers as a matmul with inner dimension 1); d = 1: P^{-1}
+            # is a division.
+            JT = flow._solve_sym(P, Pxy)                              # P^{-1} Pxy = J^T (runs, d, m)
+            mm_y = np.multiply if Pxy.shape[-1] == 1 else np.matmul
+            A_all = -0.5 * mm_y(JT, GT_all)                           # (L, runs, d, d)
+            b_all = (0.5 * mm_y((yN - y_hat[:, None, :]) + cN_all, GT_all))[..., 0, :]   # (L, runs, d)
+            field = flow.AffineField(A_all, b_all, m, self.grid, self.integrator, stages=self._stages)
         else:
-            # h(z) ~ y_hat + J (z - m), J = Pxy^T P^{-1}; innovations r(y, y_hat) - J (z - m)
             J = np.swapaxes(flow.solve_per_run(P, Pxy), -1, -2)       # (runs, m, d)
             JT = np.swapaxes(J, -1, -2)
             base = (y - model.residual_y(y, y_hat))[:, None, :]
-            mN = m[:, None, :]
 
             def field(z, lam):
                 i = at[lam]
@@ -225,21 +256,19 @@ class GaussianParticleFlowFilter(Filter):
                 # the model's residual (angles wrap) in every innovation term, as in eq 41
                 return 0.5 * (r(yN, hz) + cN_all[i]) @ GT_all[i]
 
-            # The field is affine in z, so the integrator's map over the whole grid is an
-            # affine map z -> c + M (z - m): integrate d + 1 probe points, not N particles
-            # (identical to stepping every particle, up to rounding).
-            s = np.sqrt(np.diagonal(P, axis1=-2, axis2=-1))               # (runs, d)
-            d = x.shape[-1]
-            probes = m[:, None, :] + np.concatenate(
-                [np.zeros((1, d)), np.eye(d)])[None] * s[:, None, :]     # (runs, d+1, d)
-            out = flow.integrate_flow(probes, field, self.grid, self.integrator)
-            c = out[:, 0]
-            M = np.swapaxes((out[:, 1:] - c[:, None, :]) / s[:, :, None], -1, -2)
-            return c[:, None, :] + (x - m[:, None, :]) @ np.swapaxes(M, -1, -2)
+        # The field is affine in z (where an angle wrap does not act), so the integrator's map
+        # over the whole grid is an affine map z -> c + M (z - m): move d + 1 probe points, not
+        # N particles (identical to stepping every particle, up to rounding), and read it off.
+        s = np.sqrt(np.diagonal(P, axis1=-2, axis2=-1))               # (runs, d)
+        probes = mN + self._probe_pattern * s[:, None, :]             # (runs, d+1, d)
+        out = flow.integrate_flow(probes, field, self.grid, self.integrator)
+        c = out[:, 0]
+        MT = (out[:, 1:] - c[:, None, :]) / s[:, :, None]             # M^T (runs, d, d)
+        u = x - mN
+        # d = 1: a product of scalars (numpy's multiply, the same number as the 1 x 1 matmul)
+        return c[:, None, :] + (u * MT if MT.shape[-1] == 1 else u @ MT)
 
-        return flow.integrate_flow(x, field, self.grid, self.integrator)
-
-    def _diverged(self, x, m_prior, P_prior):
+    def _diverged(self, x, m_prior, P_prior, full_cov=True):
         """Per-run divergence test on the flow's size (the one test, see the class docstring).
 
         A run has diverged when its moved particles are non-finite, when the flow grew a
@@ -253,13 +282,16 @@ class GaussianParticleFlowFilter(Filter):
         y = 1e200), which would otherwise pass on a huge finite estimate. In the GPFF
         chapter's configurations the largest values are a growth of 1.0 and a shift of
         about 11 standard deviations. Each run is judged on its own values. Returns the
-        per-run verdict and the moved particles' moments ``(m, P)`` computed on the way.
+        per-run verdict and the moved particles' moments ``(m, P)`` computed on the way
+        (``P`` is ``None`` unless ``full_cov``: the test needs only the variances).
         """
-        runs = x.shape[0]
-        ok = np.all(np.isfinite(x.reshape(runs, -1)), axis=1)
-        m, P = particle_moments(x)
+        m, P, var = _posterior_moments(x, full_cov)
+        # non-finite particles make the mean or a variance non-finite (NaN or inf in a sum), and
+        # finite particles whose mean or variance overflows are caught by the growth/shift tests
+        # anyway: the verdict is that of testing every particle, without a pass over them all
+        ok = np.all(np.isfinite(m), axis=1) & np.all(np.isfinite(var), axis=1)
         prior = np.maximum(np.diagonal(P_prior, axis1=-2, axis2=-1), np.finfo(float).tiny)
-        grown = np.any(np.diagonal(P, axis1=-2, axis2=-1) > self.max_growth * prior, axis=1)
+        grown = np.any(var > self.max_growth * prior, axis=1)
         shifted = np.any((m - m_prior) ** 2 > self.max_shift**2 * prior, axis=1)
         return ~ok | grown | shifted, (m, P)
 
@@ -289,7 +321,7 @@ class GaussianParticleFlowFilter(Filter):
                     x_new = np.full_like(x, np.nan)
                     if (~bad).any():
                         x_new[~bad] = self.update(x[~bad], y[alive[~bad], k - 1])
-                failed, post = self._diverged(x_new, m_prior, P_prior)
+                failed, post = self._diverged(x_new, m_prior, P_prior, full_cov=Ps is not None)
                 bad |= failed
                 x = x_new
                 if bad.any():
@@ -304,7 +336,7 @@ class GaussianParticleFlowFilter(Filter):
                     if alive.size == 0:
                         break
                 if bad.any():    # the survivors' moments, recomputed on their own array
-                    post = particle_moments(x)
+                    post = _posterior_moments(x, Ps is not None)[:2]
                 # (the mean of particle_moments is x.mean(axis=1), the same call on the same array)
                 xs[alive, k - 1] = post[0]
                 if Ps is not None:
