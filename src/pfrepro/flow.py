@@ -256,7 +256,9 @@ def flow_field_coefficients(lam, y, y_hat, Pxy, Pyy, R, residual=None):
     r = (lambda a, b: a - b) if residual is None else residual
     S = lam * Pyy + R
     G = _T(_solve_sym(S, _T(Pxy)))                      # Pxy C        (runs, d, m)
-    c = _mv(R, _solve_sym(S, r(y, y_hat)[..., None])[..., 0])  # R C r(y, y_hat) (runs, m)
+    z = _solve_sym(S, r(y, y_hat)[..., None])[..., 0]
+    # R z; a scalar measurement: one product (the same number as the 1 x 1 einsum)
+    c = R[..., 0, :] * z if R.shape[-1] == 1 else _mv(R, z)  # R C r(y, y_hat) (runs, m)
     return G, c
 
 
@@ -320,13 +322,13 @@ def integrate_flow(x, field, grid, method: str = "euler"):
     map up to rounding); any other callable, a wrapper around an :class:`AffineField`
     included, is stepped.
     """
+    if isinstance(field, AffineField):      # its own grid and integrator, checked there
+        return field.integrate(x, grid, method)
     if method not in INTEGRATORS:
         raise ValueError(f"unknown integrator {method!r}; choose from {sorted(INTEGRATORS)}")
     grid = np.asarray(grid, float)
     if grid.ndim != 1 or grid.size < 2 or np.any(np.diff(grid) <= 0):
         raise ValueError("grid must be an increasing 1-D array of at least two lambdas")
-    if isinstance(field, AffineField):
-        return field.integrate(x, grid, method)
     x = np.array(x, dtype=float)
     for l0, l1 in zip(grid[:-1], grid[1:]):
         h = l1 - l0
@@ -352,11 +354,27 @@ def stage_lambdas(grid, method: str = "euler"):
     grid points and, for "midpoint"/"rk4", the midpoints ``l0 + 0.5 * h`` with the
     integrator's own arithmetic), and ``index`` (n_steps, stages) the position in ``lams`` of
     each step's stage lambdas: (l0,) for "euler", (l0, l0 + h/2) for "midpoint",
-    (l0, l0 + h/2, l1) for "rk4" (RK4's two midpoint stages share one lambda).
+    (l0, l0 + h/2, l1) for "rk4" (RK4's two midpoint stages share one lambda). Both arrays
+    are read-only (computed once per grid and integrator).
     """
+    plan = _plan(grid, method)
+    return plan[0], plan[1]
+
+
+_PLANS: dict = {}
+
+
+def _plan(grid, method):
+    """``(lams, index, h, cols, at)`` of :func:`stage_lambdas` with the steps ``h`` (n_steps,),
+    each stage column of ``index`` as a slice where it is a progression (a view, not a copy)
+    and ``at`` = {lambda: position in lams}, cached by grid and integrator."""
     if method not in INTEGRATORS:
         raise ValueError(f"unknown integrator {method!r}; choose from {sorted(INTEGRATORS)}")
     grid = np.asarray(grid, float)
+    key = (method, grid.tobytes())
+    plan = _PLANS.get(key)
+    if plan is not None:
+        return plan
     if grid.ndim != 1 or grid.size < 2 or np.any(np.diff(grid) <= 0):
         raise ValueError("grid must be an increasing 1-D array of at least two lambdas")
     at, rows = {}, []
@@ -367,7 +385,18 @@ def stage_lambdas(grid, method: str = "euler"):
         if method == "rk4":
             stages.append(l1)
         rows.append([at.setdefault(float(lam), len(at)) for lam in stages])
-    return np.asarray(list(at), float), np.asarray(rows, dtype=np.intp)
+    lams, index = np.asarray(list(at), float), np.asarray(rows, dtype=np.intp)
+    cols = []
+    for col in index.T:
+        step = col[1] - col[0] if col.size > 1 else 1
+        prog = step > 0 and np.array_equal(col, col[0] + step * np.arange(col.size))
+        cols.append(slice(int(col[0]), int(col[-1]) + 1, int(step)) if prog else col)
+    for a in (lams, index):
+        a.setflags(write=False)
+    plan = (lams, index, np.diff(grid), tuple(cols), {lam: i for i, lam in enumerate(lams.tolist())})
+    if len(_PLANS) < 64:
+        _PLANS[key] = plan
+    return plan
 
 
 def affine_flow_map(A, b, grid, method: str = "euler", stages=None):
@@ -418,7 +447,10 @@ def affine_flow_map(A, b, grid, method: str = "euler", stages=None):
     Every product is a stacked matrix product over the batch axes, one small matrix at a
     time, so a run's map does not depend on the other runs of the batch.
     """
-    lams, index = stage_lambdas(grid, method) if stages is None else stages
+    lams, index, hs, cols, _ = _plan(grid, method)
+    if stages is not None and stages[1] is not index and (
+            len(stages[0]) != len(lams) or not np.array_equal(stages[1], index)):
+        raise ValueError("stages are not stage_lambdas(grid, method)")
     A = np.asarray(A, float)
     b = np.asarray(b, float)
     if A.ndim < 3 or A.shape[-1] != A.shape[-2] or A.shape[0] != lams.size:
@@ -426,33 +458,19 @@ def affine_flow_map(A, b, grid, method: str = "euler", stages=None):
     if b.shape != A.shape[:-1]:
         raise ValueError(f"b must be {A.shape[:-1]} (A's shape without the last axis), got {b.shape}")
     d = A.shape[-1]
-    grid = np.asarray(grid, float)
-    # stage k_i = u K_i + kappa_i (kappa a row, (..., 1, d)); for d = 1 every product is a
-    # product of scalars, and numpy's elementwise multiply is the same number as a 1 x 1 matmul
-    mm = np.multiply if d == 1 else np.matmul
-    I = np.eye(d)
-    h = np.diff(grid).reshape((-1,) + (1,) * (A.ndim - 1))            # (n, 1, ..., 1, 1)
-    b = b[..., None, :]
-    K1, k1 = A[index[:, 0]], b[index[:, 0]]                            # (n, ..., d, d), (n, ..., 1, d)
-    if method == "euler":
-        M, v = I + h * K1, h * k1
-    elif method == "midpoint":
-        Am, bm = A[index[:, 1]], b[index[:, 1]]
-        M = I + h * mm(I + (0.5 * h) * K1, Am)
-        v = h * (mm((0.5 * h) * k1, Am) + bm)
-    else:
-        Am, bm, A1, b1 = A[index[:, 1]], b[index[:, 1]], A[index[:, 2]], b[index[:, 2]]
-        K2, k2 = mm(I + (0.5 * h) * K1, Am), mm((0.5 * h) * k1, Am) + bm
-        K3, k3 = mm(I + (0.5 * h) * K2, Am), mm((0.5 * h) * k2, Am) + bm
-        K4, k4 = mm(I + h * K3, A1), mm(h * k3, A1) + b1
-        M = I + (h / 6.0) * (K1 + 2.0 * (K2 + K3) + K4)
-        v = (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
-    # compose u -> u M_1 + v_1 -> ... -> u M_1 ... M_n + v
     if d == 1:
-        # scalars: M = prod_j M_j, v = sum_j v_j prod_{k > j} M_k (suffix products by cumprod)
+        # scalars: the same formulas on (L, batch) arrays, products of scalars
+        lead = A.shape[1:-2]
+        M, v = _step_maps(A.reshape(lams.size, -1), b.reshape(lams.size, -1), hs[:, None], cols, method,
+                          np.multiply, 1.0)
+        # M = prod_j M_j, v = sum_j v_j prod_{k > j} M_k (suffix products by a cumulative product)
         S = np.cumprod(M[::-1], axis=0)[::-1]
-        return S[0], (v[:-1] * S[1:]).sum(axis=0)[..., 0, :] + v[-1, ..., 0, :]
-    # augmented matrices E = [[M, 0], [v, 1]] acting on [u, 1], multiplied in order by pairs
+        vt = (v[:-1] * S[1:]).sum(axis=0) + v[-1]
+        return S[0].reshape(lead + (1, 1)), vt.reshape(lead + (1,))
+    h = hs.reshape((-1,) + (1,) * (A.ndim - 1))                       # (n, 1, ..., 1, 1)
+    M, v = _step_maps(A, b[..., None, :], h, cols, method, np.matmul, np.eye(d))
+    # compose u -> u M_1 + v_1 -> ... -> u M_1 ... M_n + v: augmented matrices
+    # E = [[M, 0], [v, 1]] acting on [u, 1], multiplied in order by pairs
     E = np.zeros(M.shape[:-2] + (d + 1, d + 1))
     E[..., :d, :d] = M
     E[..., d:, :d] = v
@@ -462,6 +480,25 @@ def affine_flow_map(A, b, grid, method: str = "euler", stages=None):
         P = E[0:2 * k:2] @ E[1:2 * k:2]
         E = P if E.shape[0] == 2 * k else np.concatenate([P, E[-1:]])
     return E[0, ..., :d, :d], E[0, ..., d, :d]
+
+
+def _step_maps(A, b, h, cols, method, mm, I):
+    """Each step's map u -> u M_j + v_j of :func:`affine_flow_map` (see there), for all steps at
+    once: ``A`` (L, ..., d, d) / ``b`` (L, ..., 1, d) at the stage lambdas, ``cols`` the
+    stage columns, ``mm`` the product (matmul, or multiply for scalars), ``I`` the identity."""
+    K1, k1 = A[cols[0]], b[cols[0]]
+    if method == "euler":
+        return I + h * K1, h * k1
+    hh = 0.5 * h
+    Am, bm = A[cols[1]], b[cols[1]]
+    K2, k2 = mm(I + hh * K1, Am), mm(hh * k1, Am) + bm
+    if method == "midpoint":
+        return I + h * K2, h * k2
+    A1, b1 = A[cols[2]], b[cols[2]]
+    K3, k3 = mm(I + hh * K2, Am), mm(hh * k2, Am) + bm
+    K4, k4 = mm(I + h * K3, A1), mm(h * k3, A1) + b1
+    h6 = h / 6.0
+    return I + h6 * (K1 + 2.0 * (K2 + K3) + K4), h6 * (k1 + 2.0 * (k2 + k3) + k4)
 
 
 class AffineField:
@@ -492,9 +529,10 @@ class AffineField:
     def __init__(self, A, b, origin, grid, method="euler", stages=None):
         self.grid = np.asarray(grid, float)
         self.method = method
-        self.stages = stage_lambdas(self.grid, method) if stages is None else stages
+        plan = _plan(self.grid, method)
+        self.stages = plan[:2] if stages is None else stages
         self.A, self.b, self.origin = A, b, origin
-        self._at = {lam: i for i, lam in enumerate(self.stages[0].tolist())}
+        self._at = plan[4]
 
     def __call__(self, z, lam):
         i = self._at[float(lam)]
