@@ -288,8 +288,14 @@ class GaussianParticleFlowFilter(Filter):
         c = out[:, 0]
         MT = (out[:, 1:] - c[:, None, :]) / s[:, :, None]             # M^T (runs, d, d)
         u = x - mN
-        # d = 1: a product of scalars (numpy's multiply, the same number as the 1 x 1 matmul)
-        return c[:, None, :] + (u * MT if MT.shape[-1] == 1 else u @ MT)
+        if MT.shape[-1] == 1:
+            # d = 1: a product of scalars (numpy's multiply, the same number as the 1 x 1
+            # matmul), in place, as is the shift (the same sum c + u M^T)
+            u *= MT
+        else:
+            u = u @ MT
+        u += c[:, None, :]
+        return u
 
     def _diverged(self, x, m_prior, P_prior, full_cov=True):
         """Per-run divergence test on the flow's size (the one test, see the class docstring).
@@ -312,11 +318,14 @@ class GaussianParticleFlowFilter(Filter):
         # non-finite particles make the mean or a variance non-finite (NaN or inf in a sum), and
         # finite particles whose mean or variance overflows are caught by the growth/shift tests
         # anyway: the verdict is that of testing every particle, without a pass over them all
-        ok = np.all(np.isfinite(m), axis=1) & np.all(np.isfinite(var), axis=1)
+        bad = ~np.isfinite(m).all(axis=1)
+        bad |= ~np.isfinite(var).all(axis=1)
         prior = np.maximum(np.diagonal(P_prior, axis1=-2, axis2=-1), np.finfo(float).tiny)
-        grown = np.any(var > self.max_growth * prior, axis=1)
-        shifted = np.any((m - m_prior) ** 2 > self.max_shift**2 * prior, axis=1)
-        return ~ok | grown | shifted, (m, P)
+        bad |= (var > self.max_growth * prior).any(axis=1)
+        shift = m - m_prior
+        shift *= shift
+        bad |= (shift > self.max_shift**2 * prior).any(axis=1)
+        return bad, (m, P)
 
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
         y = self._prepare(y, rng)
@@ -337,7 +346,7 @@ class GaussianParticleFlowFilter(Filter):
                 # changes another run's numbers. A cloud whose covariance overflows cannot be
                 # moved (eq 52): diverged in the prediction; then the flow's growth test.
                 m_prior, P_prior = particle_moments(x)
-                bad = ~np.all(np.isfinite(P_prior.reshape(len(alive), -1)), axis=1)
+                bad = ~np.isfinite(P_prior.reshape(len(alive), -1)).all(axis=1)
                 if not bad.any():
                     x_new = self.update(x, y[alive, k - 1], moments=(m_prior, P_prior))
                 else:
