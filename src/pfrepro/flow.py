@@ -465,7 +465,10 @@ def affine_flow_map(A, b, grid, method: str = "euler", stages=None):
                           np.multiply, 1.0)
         # M = prod_j M_j, v = sum_j v_j prod_{k > j} M_k (suffix products by a cumulative product)
         S = np.cumprod(M[::-1], axis=0)[::-1]
-        vt = (v[:-1] * S[1:]).sum(axis=0) + v[-1]
+        # the sum over steps along a contiguous axis (numpy's pairwise sum) whatever the batch:
+        # a sum over axis 0 of (n, batch) would be pairwise for one run and sequential for
+        # several, and a run's numbers would depend on its batch
+        vt = np.ascontiguousarray((v[:-1] * S[1:]).T).sum(axis=-1) + v[-1]
         return S[0].reshape(lead + (1, 1)), vt.reshape(lead + (1,))
     h = hs.reshape((-1,) + (1,) * (A.ndim - 1))                       # (n, 1, ..., 1, 1)
     M, v = _step_maps(A, b[..., None, :], h, cols, method, np.matmul, np.eye(d))
