@@ -138,15 +138,35 @@ def test_the_closed_form_does_not_step(monkeypatch):
         assert np.all(np.isfinite(GaussianParticleFlowFilter(model, 30, integrator=integrator).update(x, y)))
 
 
-@pytest.mark.parametrize("integrator", ["euler", "rk4"])
-def test_bearings_only_keeps_the_probe_path_bit_for_bit(integrator):
-    """The angle wrap makes the field affine only piecewise: the bearings-only model keeps
-    integrating the probe points (the same function as the reference, bit for bit)."""
+def test_bearings_only_rk4_keeps_the_probe_path_bit_for_bit():
+    """The angle wrap makes the field affine only piecewise: with RK stages the bearings-only
+    model keeps integrating the probe points (the reference itself, bit for bit)."""
     model = BearingsOnly.zhang2016()
-    g = GaussianParticleFlowFilter(model, 30, integrator=integrator)
+    g = GaussianParticleFlowFilter(model, 30, integrator="rk4")
     assert not g._plain_residual
     x, y = _cloud(model, 3, 30, 2)
     assert np.array_equal(g.update(x, y), g._update_probes(x, y))
+
+
+def test_bearings_only_euler_checks_the_wrap():
+    """Euler on the bearings-only model: precomputed steps of the field with plain subtraction,
+    the stepped reference up to rounding where no angle wraps between the probes, and the
+    reference itself, bit for bit, in a run where one does (a bearing measured opposite to the
+    predicted one); the other runs keep the fast path."""
+    model = BearingsOnly.zhang2016()
+    g = GaussianParticleFlowFilter(model, 30)
+    x, y = _cloud(model, 4, 30, 2)
+    fast, slow = g.update(x, y), g._update_probes(x, y)
+    scale = np.max(np.abs(slow - slow.mean(axis=1, keepdims=True)))
+    np.testing.assert_allclose(fast, slow, rtol=0, atol=RTOL * scale)
+    assert not np.array_equal(fast, slow)
+    yw = y.copy()
+    yh = model.h(x[1].mean(axis=0))
+    yw[1] = np.pi - np.mod(np.pi - (yh + 0.999 * np.pi), 2 * np.pi)   # wrapped to (-pi, pi]
+    fast, slow = g.update(x, yw), g._update_probes(x, yw)
+    assert np.array_equal(fast[1], slow[1])
+    np.testing.assert_allclose(fast, slow, rtol=0, atol=RTOL * scale)
+    assert not np.array_equal(fast[0], slow[0])
 
 
 @pytest.mark.parametrize("integrator", INTEGRATORS)
@@ -183,16 +203,43 @@ def test_gpff_run_is_the_same_in_any_batch(name, integrator):
 
 @pytest.mark.parametrize("N", [2, 7, 100])
 @pytest.mark.parametrize("d", [1, 2, 3, 4, 6])
-def test_particle_moments_are_the_einsum_bit_for_bit(d, N):
+def test_particle_moments_are_eq52(d, N):
+    """d = 1: the einsum of before, bit for bit; d >= 2: one BLAS product per run, the same
+    sums in another order (1e-13 relative); the variances of the divergence test are the
+    einsum's diagonal, bit for bit."""
     x = np.random.default_rng(d * 1000 + N).normal(size=(5, N, d)) * 3 + 1
     m, P = particle_moments(x)
     dev = x - x.mean(axis=1)[:, None, :]
     ref = np.einsum("rni,rnj->rij", dev, dev) / (N - 1)
+    ref = 0.5 * (ref + np.swapaxes(ref, -1, -2))
     assert np.array_equal(m, x.mean(axis=1))
-    assert np.array_equal(P, 0.5 * (ref + np.swapaxes(ref, -1, -2)))
+    assert np.array_equal(P, np.swapaxes(P, -1, -2))
+    if d == 1:
+        assert np.array_equal(P, ref)
+    else:
+        np.testing.assert_allclose(P, ref, rtol=1e-13, atol=1e-13 * np.abs(ref).max())
     m2, none, var = _posterior_moments(x, full_cov=False)
     assert none is None and np.array_equal(m2, m)
-    assert np.array_equal(var, np.diagonal(P, axis1=-2, axis2=-1))
+    assert np.array_equal(var, np.diagonal(ref, axis1=-2, axis2=-1))
+    assert np.array_equal(_posterior_moments(x)[2], np.diagonal(P, axis1=-2, axis2=-1))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_two_by_two_solve_is_lapacks(seed):
+    """The 2 x 2 systems (lambda Pyy + R) X = B of the flow's coefficients by Cramer's rule:
+    LAPACK's solution to 1e-12 relative, singular matrices non-finite in their own run only."""
+    rng = np.random.default_rng(seed)
+    C = rng.standard_normal((20, 7, 2, 2))
+    S = C @ np.swapaxes(C, -1, -2) + 0.01 * np.eye(2)
+    B = rng.standard_normal((7, 2, 5))
+    np.testing.assert_allclose(flow._solve_sym(S, B), np.linalg.solve(S, B), rtol=1e-12, atol=1e-12)
+    S[3, 2] = [[1.0, 2.0], [2.0, 4.0]]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        X = flow._solve_sym(S, B)
+    assert not np.all(np.isfinite(X[3, 2]))
+    mask = np.ones((20, 7), bool)
+    mask[3, 2] = False
+    assert np.all(np.isfinite(X[mask]))
 
 
 def test_divergence_verdict_is_the_test_on_every_particle():

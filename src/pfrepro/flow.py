@@ -237,10 +237,21 @@ def solve_per_run(A, B):
 
 # ----------------------------------------------------------------------------- nonlinear case
 def _solve_sym(S, B):
+    """``S^{-1} B`` for a batch of small matrices ``S`` (..., n, n), ``B`` (..., n, k), each run
+    on its own (a singular ``S`` gives non-finite numbers in its own run only)."""
     if S.shape[-1] == 1:
         # scalar measurement: LAPACK's 1 x 1 solve is this division (bit-identical),
         # without np.linalg's per-call overhead (the flow calls it 2 x 20-80 times a step)
         return B / S
+    if S.shape[-1] == 2:
+        # 2 x 2 (e.g. two bearings): Cramer's rule, elementwise over the batch, instead of one
+        # LAPACK factorisation per matrix (the GPFF solves 2 x L x runs of them a time step);
+        # for the symmetric positive definite lambda Pyy + R its error is of the order of
+        # cond(S) times the rounding unit, as LU's
+        a, b, c, d = S[..., 0:1, 0:1], S[..., 0:1, 1:2], S[..., 1:2, 0:1], S[..., 1:2, 1:2]
+        det = a * d - b * c
+        B0, B1 = B[..., 0:1, :], B[..., 1:2, :]
+        return np.concatenate([(d * B0 - b * B1) / det, (a * B1 - c * B0) / det], axis=-2)
     return solve_per_run(S, B)
 
 

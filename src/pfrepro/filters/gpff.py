@@ -31,6 +31,15 @@ from .sigma_points import ScaledSigmaPoints, unscented_transform
 __all__ = ["GaussianParticleFlowFilter", "particle_moments"]
 
 
+def _particle_mean(x):
+    """``x.mean(axis=1)`` of particles (runs, N, d), bit for bit: for d >= 2 numpy sums the
+    strided particle axis one particle after the other, as ``einsum("rni->ri")`` does in a
+    quarter of the time (d = 1: the mean itself, a pairwise sum along a contiguous axis)."""
+    if x.shape[-1] == 1:
+        return x.mean(axis=1)
+    return np.einsum("rni->ri", x) / x.shape[1]
+
+
 def _posterior_moments(x, full_cov=True):
     """``(m, P, var)``: :func:`particle_moments` and its covariance's diagonal, or with
     ``full_cov=False`` the mean and the variances alone, ``P = None`` (the same numbers: the
@@ -39,7 +48,7 @@ def _posterior_moments(x, full_cov=True):
     if full_cov:
         m, P = particle_moments(x)
         return m, P, np.diagonal(P, axis1=-2, axis2=-1)
-    m = x.mean(axis=1)
+    m = _particle_mean(x)
     dev = x - m[:, None, :]
     return m, None, np.einsum("rni,rni->ri", dev, dev) / (x.shape[1] - 1)
 
@@ -52,24 +61,56 @@ def particle_moments(x):
     N = x.shape[1]
     if N < 2:
         raise ValueError("need at least 2 particles for a sample covariance")
-    m = x.mean(axis=1)
+    m = _particle_mean(x)
+    d = x - m[:, None, :]
     if x.shape[-1] == 1:
-        d = x - m[:, None, :]
         P = np.einsum("rni,rnj->rij", d, d) / (N - 1)
     else:
-        P = _scatter(x, m) / (N - 1)
+        # d >= 2: one BLAS product per run (einsum's sum over a strided particle axis costs
+        # ten times as much); stacked, so a run's numbers do not depend on the batch
+        P = (np.swapaxes(d, -1, -2) @ d) / (N - 1)
     S = P + np.swapaxes(P, -1, -2)
     S *= 0.5
     return m, S
 
 
-def _scatter(x, m):
-    """``einsum("rni,rnj->rij", d, d)`` with d = x - m, bit for bit, for d >= 2, in a third of
-    its time: einsum sums the products over the particles one after the other (the particle
-    axis is not contiguous when d >= 2), and so does ``add.reduce`` over the first axis of the
-    products laid out (N, d, d, runs), whose inner loops then run over all runs at once."""
-    dev = np.subtract(np.moveaxis(x, 0, -1), m.T, order="C")      # (N, d, runs)
-    return np.moveaxis(np.add.reduce(dev[:, :, None, :] * dev[:, None, :, :], axis=0), -1, 0)
+class _WrapCheckedEuler(flow.AffineField):
+    """The eq-43 field of a model whose residual may wrap (GPFF, Euler): called, it is the exact
+    field ``exact`` (what a counting wrapper of :func:`pfrepro.flow.integrate_flow` steps);
+    integrated, it takes Euler steps u -> u (I + h A_j) + h b_j of the field with plain
+    subtraction (precomputed maps, two calls a step instead of ten), records the points where
+    the field was evaluated and sets ``failed`` (per run) where the model's residual was not
+    plain subtraction at one of them (an angle wrapped), for the caller to redo those runs with
+    ``exact``. Where no angle wraps the two fields are the same function of the state, so the
+    result is the exact field's up to rounding."""
+
+    def __init__(self, A, b, origin, grid, stages, exact, base, JT, plain):
+        super().__init__(A, b, origin, grid, "euler", stages=stages)
+        self._exact, self._base, self._JT, self._plain = exact, base, JT, plain
+        self.failed = None
+
+    def __call__(self, z, lam):
+        return self._exact(z, lam)
+
+    def integrate(self, z, grid, method):
+        if method != "euler" or (grid is not self.grid and not np.array_equal(grid, self.grid)):
+            raise ValueError("this field is tabulated for Euler steps on its own grid")
+        lams, index, hs, cols, _ = flow._plan(self.grid, "euler")
+        d = self.A.shape[-1]
+        h = hs[:, None, None, None]
+        M = np.eye(d) + h * self.A[cols[0]]                     # (n, runs, d, d)
+        v = h[..., 0] * self.b[cols[0]]                          # (n, runs, d)
+        o = self.origin[:, None, :]
+        u = np.asarray(z, float) - o                             # (runs, K, d)
+        runs, K = u.shape[:2]
+        U = np.empty((runs, len(hs), K, d))                      # the points the field is evaluated at
+        for j in range(len(hs)):
+            U[:, j] = u
+            u = u @ M[j]
+            u += v[j][:, None, :]
+        hz = self._base[:, None] + (U.reshape(runs, -1, d) @ self._JT).reshape(runs, len(hs), K, -1)
+        self.failed = ~self._plain(hz)
+        return o + u
 
 
 class GaussianParticleFlowFilter(Filter):
@@ -218,14 +259,16 @@ class GaussianParticleFlowFilter(Filter):
 
         ``moments``: ``particle_moments(x)`` if the caller has it already (not recomputed).
         """
-        return self._update(x, y, moments, probes=not self._plain_residual)
+        if self._plain_residual:
+            return self._update(x, y, moments, "closed")
+        return self._update(x, y, moments, "checked" if self.integrator == "euler" else "probes")
 
     def _update_probes(self, x, y, moments=None):
         """:meth:`update` with the eq-43 map always found by integrating d + 1 probe points
         (the reference for the closed form, and the path of a model whose residual wraps)."""
-        return self._update(x, y, moments, probes=True)
+        return self._update(x, y, moments, "probes")
 
-    def _update(self, x, y, moments, probes):
+    def _update(self, x, y, moments, mode):
         model = self.model
         if self.integrator == "exact":
             m, P = particle_moments(x) if moments is None else moments
@@ -255,7 +298,7 @@ class GaussianParticleFlowFilter(Filter):
 
         # h(z) ~ y_hat + J (z - m), J = Pxy^T P^{-1}; innovations r(y, y_hat) - J (z - m)
         mN = m[:, None, :]
-        if not probes:
+        if mode == "closed":
             # Plain residual: the field is (z - m) A(lam) + b(lam) with A = -1/2 J^T G^T,
             # b = 1/2 [(y - y_hat) + c] G^T, and flow.integrate_flow computes the integrator's
             # map over the whole grid in closed form for every lambda at once
@@ -272,12 +315,28 @@ class GaussianParticleFlowFilter(Filter):
             J = np.swapaxes(flow.solve_per_run(P, Pxy), -1, -2)       # (runs, m, d)
             JT = np.swapaxes(J, -1, -2)
             base = (y - model.residual_y(y, y_hat))[:, None, :]
+            hGT_all = 0.5 * GT_all                                    # 1/2 G^T at every lambda
 
             def field(z, lam):
                 i = at[lam]
                 hz = base + (z - mN) @ JT
                 # the model's residual (angles wrap) in every innovation term, as in eq 41
-                return 0.5 * (r(yN, hz) + cN_all[i]) @ GT_all[i]
+                return (r(yN, hz) + cN_all[i]) @ hGT_all[i]
+
+            if mode == "checked":
+                # Euler steps of the field with plain subtraction in place of the residual, the
+                # steps' maps precomputed, then a check that the model's residual was plain
+                # subtraction at every point the field was evaluated (no angle wrapped between
+                # the probes); the runs where it was not are redone with ``field`` itself
+                A_all = -(JT @ hGT_all)                                # (L, runs, d, d)
+                b_all = (((yN - base) + cN_all) @ hGT_all)[..., 0, :]  # (L, runs, d)
+
+                def plain(hz):
+                    e = yN[:, None] - hz
+                    dev = np.abs(r(yN[:, None], hz) - e)
+                    return np.all(dev <= 1e-9 * (1.0 + np.abs(e)), axis=(1, 2, 3))
+
+                field = _WrapCheckedEuler(A_all, b_all, m, self.grid, self._stages, field, base, JT, plain)
 
         # The field is affine in z (where an angle wrap does not act), so the integrator's map
         # over the whole grid is an affine map z -> c + M (z - m): move d + 1 probe points, not
@@ -295,6 +354,9 @@ class GaussianParticleFlowFilter(Filter):
         else:
             u = u @ MT
         u += c[:, None, :]
+        redo = getattr(field, "failed", None)
+        if redo is not None and redo.any():    # an angle wrapped between the probes: exactly
+            u[redo] = self._update(x[redo], y[redo], (m[redo], P[redo]), "probes")
         return u
 
     def _diverged(self, x, m_prior, P_prior, full_cov=True):
