@@ -14,6 +14,15 @@ No weights, no resampling. The paper integrates with Euler steps Delta lambda = 
 ``schedule``/``n_steps``/``integrator`` make that a choice. For a linear model
 ``integrator="exact"`` applies the exact solution of the affine flow
 (:func:`pfrepro.flow.exact_affine_map`) instead of stepping.
+
+The eq-43 field is affine in the state, so the chosen integrator's map over the whole
+lambda grid is an affine map, fixed by d + 1 probe points and applied to all particles.
+With a plain measurement residual that map is computed in closed form for every lambda at
+once (:class:`pfrepro.flow.AffineField`, :func:`pfrepro.flow.affine_flow_map`); with a
+residual that wraps angles (bearings), Euler steps of the probes use precomputed step maps
+and a check that no angle wrapped between them (a run where one did is integrated with the
+wrapping field itself), and RK stages step the wrapping field. Each is the stepped probe
+integration up to rounding.
 """
 from __future__ import annotations
 
