@@ -28,7 +28,8 @@ import numpy as np
 __all__ = ["lambda_schedule", "homotopy_moments", "affine_flow_coefficients", "affine_flow_field",
            "flow_moment_rhs", "kalman_bucy_rhs", "exact_affine_map", "gaussian_flow_field",
            "flow_field_coefficients", "field_from_coefficients",
-           "nonlinear_coefficients", "integrate_flow", "solve_per_run", "INTEGRATORS", "SCHEDULES"]
+           "nonlinear_coefficients", "integrate_flow", "stage_lambdas", "affine_flow_map", "AffineField", "solve_per_run",
+           "INTEGRATORS", "SCHEDULES"]
 
 #: integrators of the flow ODE in lambda and their orders
 INTEGRATORS = {"euler": 1, "midpoint": 2, "rk4": 4}
@@ -236,10 +237,21 @@ def solve_per_run(A, B):
 
 # ----------------------------------------------------------------------------- nonlinear case
 def _solve_sym(S, B):
+    """``S^{-1} B`` for a batch of small matrices ``S`` (..., n, n), ``B`` (..., n, k), each run
+    on its own (a singular ``S`` gives non-finite numbers in its own run only)."""
     if S.shape[-1] == 1:
         # scalar measurement: LAPACK's 1 x 1 solve is this division (bit-identical),
         # without np.linalg's per-call overhead (the flow calls it 2 x 20-80 times a step)
         return B / S
+    if S.shape[-1] == 2:
+        # 2 x 2 (e.g. two bearings): Cramer's rule, elementwise over the batch, instead of one
+        # LAPACK factorisation per matrix (the GPFF solves 2 x L x runs of them a time step);
+        # for the symmetric positive definite lambda Pyy + R its error is of the order of
+        # cond(S) times the rounding unit, as LU's
+        a, b, c, d = S[..., 0:1, 0:1], S[..., 0:1, 1:2], S[..., 1:2, 0:1], S[..., 1:2, 1:2]
+        det = a * d - b * c
+        B0, B1 = B[..., 0:1, :], B[..., 1:2, :]
+        return np.concatenate([(d * B0 - b * B1) / det, (a * B1 - c * B0) / det], axis=-2)
     return solve_per_run(S, B)
 
 
@@ -255,7 +267,9 @@ def flow_field_coefficients(lam, y, y_hat, Pxy, Pyy, R, residual=None):
     r = (lambda a, b: a - b) if residual is None else residual
     S = lam * Pyy + R
     G = _T(_solve_sym(S, _T(Pxy)))                      # Pxy C        (runs, d, m)
-    c = _mv(R, _solve_sym(S, r(y, y_hat)[..., None])[..., 0])  # R C r(y, y_hat) (runs, m)
+    z = _solve_sym(S, r(y, y_hat)[..., None])[..., 0]
+    # R z; a scalar measurement: one product (the same number as the 1 x 1 einsum)
+    c = R[..., 0, :] * z if R.shape[-1] == 1 else _mv(R, z)  # R C r(y, y_hat) (runs, m)
     return G, c
 
 
@@ -315,7 +329,12 @@ def integrate_flow(x, field, grid, method: str = "euler"):
 
     ``grid`` is a lambda grid from :func:`lambda_schedule` (0 ... 1); ``method`` is
     "euler" (the paper), "midpoint" (RK2) or "rk4". Vectorised over every leading axis.
+    An :class:`AffineField` is integrated in closed form (:func:`affine_flow_map`, the same
+    map up to rounding); any other callable, a wrapper around an :class:`AffineField`
+    included, is stepped.
     """
+    if isinstance(field, AffineField):      # its own grid and integrator, checked there
+        return field.integrate(x, grid, method)
     if method not in INTEGRATORS:
         raise ValueError(f"unknown integrator {method!r}; choose from {sorted(INTEGRATORS)}")
     grid = np.asarray(grid, float)
@@ -336,3 +355,217 @@ def integrate_flow(x, field, grid, method: str = "euler"):
             k4 = field(x + h * k3, l1)
             x += (h / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
     return x
+
+
+# ----------------------------------------------------------------------------- affine fields in closed form
+def stage_lambdas(grid, method: str = "euler"):
+    """The pseudo-times at which :func:`integrate_flow` evaluates the field on ``grid``.
+
+    Returns ``(lams, index)``: ``lams`` the distinct lambdas in the order of first use (the
+    grid points and, for "midpoint"/"rk4", the midpoints ``l0 + 0.5 * h`` with the
+    integrator's own arithmetic), and ``index`` (n_steps, stages) the position in ``lams`` of
+    each step's stage lambdas: (l0,) for "euler", (l0, l0 + h/2) for "midpoint",
+    (l0, l0 + h/2, l1) for "rk4" (RK4's two midpoint stages share one lambda). Both arrays
+    are read-only (computed once per grid and integrator).
+    """
+    plan = _plan(grid, method)
+    return plan[0], plan[1]
+
+
+_PLANS: dict = {}
+
+
+def _plan(grid, method):
+    """``(lams, index, h, cols, at)`` of :func:`stage_lambdas` with the steps ``h`` (n_steps,),
+    each stage column of ``index`` as a slice where it is a progression (a view, not a copy)
+    and ``at`` = {lambda: position in lams}, cached by grid and integrator."""
+    if method not in INTEGRATORS:
+        raise ValueError(f"unknown integrator {method!r}; choose from {sorted(INTEGRATORS)}")
+    grid = np.asarray(grid, float)
+    key = (method, grid.tobytes())
+    plan = _PLANS.get(key)
+    if plan is not None:
+        return plan
+    if grid.ndim != 1 or grid.size < 2 or np.any(np.diff(grid) <= 0):
+        raise ValueError("grid must be an increasing 1-D array of at least two lambdas")
+    at, rows = {}, []
+    for l0, l1 in zip(grid[:-1], grid[1:]):
+        stages = [l0]
+        if method in ("midpoint", "rk4"):
+            stages.append(l0 + 0.5 * (l1 - l0))
+        if method == "rk4":
+            stages.append(l1)
+        rows.append([at.setdefault(float(lam), len(at)) for lam in stages])
+    lams, index = np.asarray(list(at), float), np.asarray(rows, dtype=np.intp)
+    cols = []
+    for col in index.T:
+        step = col[1] - col[0] if col.size > 1 else 1
+        prog = step > 0 and np.array_equal(col, col[0] + step * np.arange(col.size))
+        cols.append(slice(int(col[0]), int(col[-1]) + 1, int(step)) if prog else col)
+    for a in (lams, index):
+        a.setflags(write=False)
+    plan = (lams, index, np.diff(grid), tuple(cols), {lam: i for i, lam in enumerate(lams.tolist())})
+    if len(_PLANS) < 64:
+        _PLANS[key] = plan
+    return plan
+
+
+def affine_flow_map(A, b, grid, method: str = "euler", stages=None):
+    """The map of :func:`integrate_flow` over ``grid`` for an affine field, in closed form.
+
+    For a field affine in the state, f(u, lambda) = u A(lambda) + b(lambda) (row vectors u, b
+    of length d; the eq-43 field of the GPFF with a plain residual, and the linear-Gaussian
+    flow of eqs 24, 27, are of this form), every stage of an Euler, midpoint or RK4 step is
+    affine in the step's start u, k_i = u K_i + kappa_i, with (h the step, l0, lm = l0 + h/2,
+    l1 its stage lambdas)
+
+    * K1 = A(l0), kappa1 = b(l0);
+    * K2 = (I + h/2 K1) A(lm), kappa2 = h/2 kappa1 A(lm) + b(lm); K3 likewise from K2;
+    * K4 = (I + h K3) A(l1), kappa4 = h kappa3 A(l1) + b(l1);
+
+    so a step is u -> u M_j + v_j with M_j = I + h K1, v_j = h kappa1 (Euler),
+    M_j = I + h K2, v_j = h kappa2 (midpoint, from l0 and lm), or
+    M_j = I + h/6 (K1 + 2 K2 + 2 K3 + K4), v_j likewise (RK4), and the whole integration is
+    u(1) = u(0) M + v with M = M_1 M_2 ... M_n. Every step's map is built at once over all
+    steps (batched over the lambda axis), and the maps are composed by a pairwise tree of
+    stacked products of the augmented matrices [[M_j, 0], [v_j, 1]] (about log2(n) batched
+    calls; for d = 1 by a cumulative product), instead of n sequential steps of d + 1 probe
+    points. The result equals integrating with :func:`integrate_flow` up to rounding.
+
+    Parameters
+    ----------
+    A : ndarray
+        (L, ..., d, d): A(lambda) at the distinct stage lambdas ``lams`` of
+        :func:`stage_lambdas` ``(grid, method)``, leading axis in that order.
+    b : ndarray
+        (L, ..., d): b(lambda) at the same lambdas.
+    grid : array_like
+        The lambda grid (:func:`lambda_schedule`).
+    method : str
+        "euler", "midpoint" or "rk4".
+    stages : tuple, optional
+        ``stage_lambdas(grid, method)`` if the caller has it already (not recomputed).
+
+    Returns
+    -------
+    M : ndarray
+        (..., d, d), the linear part (acting on row vectors: u M).
+    v : ndarray
+        (..., d), the offset.
+
+    Notes
+    -----
+    Every product is a stacked matrix product over the batch axes, one small matrix at a
+    time, so a run's map does not depend on the other runs of the batch.
+    """
+    lams, index, hs, cols, _ = _plan(grid, method)
+    if stages is not None and stages[1] is not index and (
+            len(stages[0]) != len(lams) or not np.array_equal(stages[1], index)):
+        raise ValueError("stages are not stage_lambdas(grid, method)")
+    A = np.asarray(A, float)
+    b = np.asarray(b, float)
+    if A.ndim < 3 or A.shape[-1] != A.shape[-2] or A.shape[0] != lams.size:
+        raise ValueError(f"A must be (L, ..., d, d) with L = {lams.size} stage lambdas, got shape {A.shape}")
+    if b.shape != A.shape[:-1]:
+        raise ValueError(f"b must be {A.shape[:-1]} (A's shape without the last axis), got {b.shape}")
+    d = A.shape[-1]
+    if d == 1:
+        # scalars: the same formulas on (L, batch) arrays, products of scalars
+        lead = A.shape[1:-2]
+        M, v = _step_maps(A.reshape(lams.size, -1), b.reshape(lams.size, -1), hs[:, None], cols, method,
+                          np.multiply, 1.0)
+        # M = prod_j M_j, v = sum_j v_j prod_{k > j} M_k (suffix products by a cumulative product)
+        S = np.cumprod(M[::-1], axis=0)[::-1]
+        # the sum over steps along a contiguous axis (numpy's pairwise sum) whatever the batch:
+        # a sum over axis 0 of (n, batch) would be pairwise for one run and sequential for
+        # several, and a run's numbers would depend on its batch
+        vt = np.ascontiguousarray((v[:-1] * S[1:]).T).sum(axis=-1) + v[-1]
+        return S[0].reshape(lead + (1, 1)), vt.reshape(lead + (1,))
+    h = hs.reshape((-1,) + (1,) * (A.ndim - 1))                       # (n, 1, ..., 1, 1)
+    M, v = _step_maps(A, b[..., None, :], h, cols, method, np.matmul, np.eye(d))
+    # compose u -> u M_1 + v_1 -> ... -> u M_1 ... M_n + v: augmented matrices
+    # E = [[M, 0], [v, 1]] acting on [u, 1], multiplied in order by pairs
+    E = np.zeros(M.shape[:-2] + (d + 1, d + 1))
+    E[..., :d, :d] = M
+    E[..., d:, :d] = v
+    E[..., d, d] = 1.0
+    while E.shape[0] > 1:
+        k = E.shape[0] // 2
+        P = E[0:2 * k:2] @ E[1:2 * k:2]
+        E = P if E.shape[0] == 2 * k else np.concatenate([P, E[-1:]])
+    return E[0, ..., :d, :d], E[0, ..., d, :d]
+
+
+def _step_maps(A, b, h, cols, method, mm, I):
+    """Each step's map u -> u M_j + v_j of :func:`affine_flow_map` (see there), for all steps at
+    once: ``A`` (L, ..., d, d) / ``b`` (L, ..., 1, d) at the stage lambdas, ``cols`` the
+    stage columns, ``mm`` the product (matmul, or multiply for scalars), ``I`` the identity."""
+    K1, k1 = A[cols[0]], b[cols[0]]
+    if method == "euler":
+        return I + h * K1, h * k1
+    hh = 0.5 * h
+    Am, bm = A[cols[1]], b[cols[1]]
+    K2, k2 = mm(I + hh * K1, Am), mm(hh * k1, Am) + bm
+    if method == "midpoint":
+        return I + h * K2, h * k2
+    A1, b1 = A[cols[2]], b[cols[2]]
+    K3, k3 = mm(I + hh * K2, Am), mm(hh * k2, Am) + bm
+    K4, k4 = mm(I + h * K3, A1), mm(h * k3, A1) + b1
+    h6 = h / 6.0
+    return I + h6 * (K1 + 2.0 * (K2 + K3) + K4), h6 * (k1 + 2.0 * (k2 + k3) + k4)
+
+
+class AffineField:
+    """A flow field affine in the state, f(z, lambda) = (z - origin) A(lambda) + b(lambda),
+    tabulated at the stage lambdas of one grid and integrator (row vectors).
+
+    Called as ``field(z, lam)`` it is an ordinary field (``z`` (..., K, d) -> (..., K, d)) at
+    any of those lambdas; :func:`integrate_flow` recognises it and, instead of stepping,
+    applies the integrator's whole map over the grid in closed form (:func:`affine_flow_map`):
+    z(1) = origin + (z(0) - origin) M + v.
+
+    Parameters
+    ----------
+    A : ndarray
+        (L, ..., d, d), A(lambda) at ``stage_lambdas(grid, method)[0]``.
+    b : ndarray
+        (L, ..., d), b(lambda) at the same lambdas.
+    origin : ndarray
+        (..., d), the point about which the field is written (the GPFF: the prior mean).
+    grid : array_like
+        The lambda grid the field is tabulated for.
+    method : str
+        The integrator ("euler", "midpoint", "rk4").
+    stages : tuple, optional
+        ``stage_lambdas(grid, method)`` if the caller has it already (not recomputed).
+    """
+
+    def __init__(self, A, b, origin, grid, method="euler", stages=None):
+        self.grid = np.asarray(grid, float)
+        self.method = method
+        plan = _plan(self.grid, method)
+        self.stages = plan[:2] if stages is None else stages
+        self.A, self.b, self.origin = A, b, origin
+        self._at = plan[4]
+
+    def __call__(self, z, lam):
+        i = self._at[float(lam)]
+        return (z - self.origin[..., None, :]) @ self.A[i] + self.b[i][..., None, :]
+
+    def map(self):
+        """``(M, v)`` of :func:`affine_flow_map` over the field's grid and integrator."""
+        return affine_flow_map(self.A, self.b, self.grid, self.method, stages=self.stages)
+
+    def integrate(self, z, grid, method):
+        """``z`` (..., K, d) moved over ``grid`` with ``method`` in closed form (the tabulated grid
+        and integrator only: another raises ``ValueError``)."""
+        grid = np.asarray(grid, float)
+        if method != self.method or (grid is not self.grid and not (
+                grid.shape == self.grid.shape and np.array_equal(grid, self.grid))):
+            raise ValueError(f"this AffineField is tabulated for the {self.method!r} integrator on its own grid; "
+                             f"got {method!r} on another grid")
+        M, v = self.map()
+        o = self.origin[..., None, :]
+        u = np.asarray(z, float) - o
+        # d = 1: u M is a product of scalars (numpy's multiply, the same number as the 1 x 1 matmul)
+        return o + (u * M if M.shape[-1] == 1 else u @ M) + v[..., None, :]

@@ -14,13 +14,22 @@ No weights, no resampling. The paper integrates with Euler steps Delta lambda = 
 ``schedule``/``n_steps``/``integrator`` make that a choice. For a linear model
 ``integrator="exact"`` applies the exact solution of the affine flow
 (:func:`pfrepro.flow.exact_affine_map`) instead of stepping.
+
+The eq-43 field is affine in the state, so the chosen integrator's map over the whole
+lambda grid is an affine map, fixed by d + 1 probe points and applied to all particles.
+With a plain measurement residual that map is computed in closed form for every lambda at
+once (:class:`pfrepro.flow.AffineField`, :func:`pfrepro.flow.affine_flow_map`); with a
+residual that wraps angles (bearings), Euler steps of the probes use precomputed step maps
+and a check that no angle wrapped between them (a run where one did is integrated with the
+wrapping field itself), and RK stages step the wrapping field. Each is the stepped probe
+integration up to rounding.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from .. import flow
-from ..models.base import require_capabilities
+from ..models.base import StateSpaceModel, require_capabilities
 from ..rng import take_runs
 import warnings
 
@@ -31,6 +40,28 @@ from .sigma_points import ScaledSigmaPoints, unscented_transform
 __all__ = ["GaussianParticleFlowFilter", "particle_moments"]
 
 
+def _particle_mean(x):
+    """``x.mean(axis=1)`` of particles (runs, N, d), bit for bit: for d >= 2 numpy sums the
+    strided particle axis one particle after the other, as ``einsum("rni->ri")`` does in a
+    quarter of the time (d = 1: the mean itself, a pairwise sum along a contiguous axis)."""
+    if x.shape[-1] == 1:
+        return x.mean(axis=1)
+    return np.einsum("rni->ri", x) / x.shape[1]
+
+
+def _posterior_moments(x, full_cov=True):
+    """``(m, P, var)``: :func:`particle_moments` and its covariance's diagonal, or with
+    ``full_cov=False`` the mean and the variances alone, ``P = None`` (the same numbers: the
+    diagonal of ``einsum("rni,rnj->rij")`` is ``einsum("rni,rni->ri")``, and halving
+    ``P + P^T`` leaves the diagonal as it is), at a cost of d instead of d^2 sums."""
+    if full_cov:
+        m, P = particle_moments(x)
+        return m, P, np.diagonal(P, axis1=-2, axis2=-1)
+    m = _particle_mean(x)
+    dev = x - m[:, None, :]
+    return m, None, np.einsum("rni,rni->ri", dev, dev) / (x.shape[1] - 1)
+
+
 def particle_moments(x):
     """Sample mean and covariance (1/(N-1)) of particles ``(runs, N, d)`` (eqs 51, 52)."""
     x = np.asarray(x, float)
@@ -39,26 +70,56 @@ def particle_moments(x):
     N = x.shape[1]
     if N < 2:
         raise ValueError("need at least 2 particles for a sample covariance")
-    m = x.mean(axis=1)
+    m = _particle_mean(x)
     d = x - m[:, None, :]
-    P = np.einsum("rni,rnj->rij", d, d) / (N - 1)
-    return m, 0.5 * (P + np.swapaxes(P, -1, -2))
+    if x.shape[-1] == 1:
+        P = np.einsum("rni,rnj->rij", d, d) / (N - 1)
+    else:
+        # d >= 2: one BLAS product per run (einsum's sum over a strided particle axis costs
+        # ten times as much); stacked, so a run's numbers do not depend on the batch
+        P = (np.swapaxes(d, -1, -2) @ d) / (N - 1)
+    S = P + np.swapaxes(P, -1, -2)
+    S *= 0.5
+    return m, S
 
 
-def _visited_lambdas(grid, integrator):
-    """The distinct pseudo-times at which :func:`pfrepro.flow.integrate_flow` evaluates the
-    field on ``grid``: the grid points and, for RK2/RK4, the midpoints ``l0 + 0.5 * h`` with the
-    integrator's own arithmetic (so that a float lookup finds them). Returns the array and a
-    ``{lambda: index}`` map."""
-    lams = []
-    for l0, l1 in zip(grid[:-1], grid[1:]):
-        lams.append(l0)
-        if integrator in ("midpoint", "rk4"):
-            lams.append(l0 + 0.5 * (l1 - l0))
-        if integrator == "rk4":
-            lams.append(l1)
-    lams = list(dict.fromkeys(lams))
-    return np.asarray(lams, float), {lam: i for i, lam in enumerate(lams)}
+class _WrapCheckedEuler(flow.AffineField):
+    """The eq-43 field of a model whose residual may wrap (GPFF, Euler): called, it is the exact
+    field ``exact`` (what a counting wrapper of :func:`pfrepro.flow.integrate_flow` steps);
+    integrated, it takes Euler steps u -> u (I + h A_j) + h b_j of the field with plain
+    subtraction (precomputed maps, two calls a step instead of ten), records the points where
+    the field was evaluated and sets ``failed`` (per run) where the model's residual was not
+    plain subtraction at one of them (an angle wrapped), for the caller to redo those runs with
+    ``exact``. Where no angle wraps the two fields are the same function of the state, so the
+    result is the exact field's up to rounding."""
+
+    def __init__(self, A, b, origin, grid, stages, exact, base, JT, plain):
+        super().__init__(A, b, origin, grid, "euler", stages=stages)
+        self._exact, self._base, self._JT, self._plain = exact, base, JT, plain
+        self.failed = None
+
+    def __call__(self, z, lam):
+        return self._exact(z, lam)
+
+    def integrate(self, z, grid, method):
+        if method != "euler" or (grid is not self.grid and not np.array_equal(grid, self.grid)):
+            raise ValueError("this field is tabulated for Euler steps on its own grid")
+        lams, index, hs, cols, _ = flow._plan(self.grid, "euler")
+        d = self.A.shape[-1]
+        h = hs[:, None, None, None]
+        M = np.eye(d) + h * self.A[cols[0]]                     # (n, runs, d, d)
+        v = h[..., 0] * self.b[cols[0]]                          # (n, runs, d)
+        o = self.origin[:, None, :]
+        u = np.asarray(z, float) - o                             # (runs, K, d)
+        runs, K = u.shape[:2]
+        U = np.empty((runs, len(hs), K, d))                      # the points the field is evaluated at
+        for j in range(len(hs)):
+            U[:, j] = u
+            u = u @ M[j]
+            u += v[j][:, None, :]
+        hz = self._base[:, None] + (U.reshape(runs, -1, d) @ self._JT).reshape(runs, len(hs), K, -1)
+        self.failed = ~self._plain(hz)
+        return o + u
 
 
 class GaussianParticleFlowFilter(Filter):
@@ -166,8 +227,18 @@ class GaussianParticleFlowFilter(Filter):
         self.ratio = float(ratio)
         self.n_steps = check_positive_int(n_steps, "n_steps")
         self.grid = flow.lambda_schedule(self.n_steps, schedule, ratio)
-        self._lams, self._lam_index = _visited_lambdas(self.grid, integrator)
+        if integrator != "exact":
+            # the lambdas the integrator visits (grid points, RK midpoints computed as the
+            # integrator computes them) and each step's stages among them
+            self._stages = flow.stage_lambdas(self.grid, integrator)
+            self._lams = self._stages[0]
+            self._lam_index = flow._plan(self.grid, integrator)[4]
+        # a residual that is plain subtraction makes the eq-43 field affine in the state
+        # (an angle wrap is not: the bearings-only model keeps integrating probe points)
+        self._plain_residual = getattr(type(model), "residual_y", None) is StateSpaceModel.residual_y
         self.points = ScaledSigmaPoints(model.dim_x, alpha, beta, kappa)
+        # the eq-43 probes m + s * row: the mean, then one step of one prior sd along each axis
+        self._probe_pattern = np.concatenate([np.zeros((1, model.dim_x)), np.eye(model.dim_x)])[None]
         self.return_cov = bool(return_cov)
 
     def prior_statistics(self, x, moments=None):
@@ -176,7 +247,16 @@ class GaussianParticleFlowFilter(Filter):
         ``moments``: ``particle_moments(x)`` if the caller has it already (not recomputed).
         """
         m, P = particle_moments(x) if moments is None else moments
-        sig = self.points.sigma_points(m, P, on_error="nan")      # (runs, 2d+1, d)
+        if P.shape[-1] == 1:
+            # d = 1: the Cholesky factor of the symmetrised 1 x 1 (n + lambda) P is its square
+            # root (LAPACK's potrf takes the IEEE sqrt; zero, negative and NaN give 0, NaN and
+            # NaN as safe_cholesky(on_error="nan") does): the same points without the
+            # factorisation's per-call cost
+            a = (self.points.n + self.points.lam) * P
+            L = np.sqrt(0.5 * (a + a))
+            sig = np.concatenate([m[:, None, :], m[:, None, :] + L, m[:, None, :] - L], axis=-2)
+        else:
+            sig = self.points.sigma_points(m, P, on_error="nan")  # (runs, 2d+1, d)
         Y = self.model.h(sig)                                      # (runs, 2d+1, m)
         y_hat, Pyy, dy = unscented_transform(Y, self.points.Wm, self.points.Wc,
                                              residual=self.model.residual_y)
@@ -188,6 +268,16 @@ class GaussianParticleFlowFilter(Filter):
 
         ``moments``: ``particle_moments(x)`` if the caller has it already (not recomputed).
         """
+        if self._plain_residual:
+            return self._update(x, y, moments, "closed")
+        return self._update(x, y, moments, "checked" if self.integrator == "euler" else "probes")
+
+    def _update_probes(self, x, y, moments=None):
+        """:meth:`update` with the eq-43 map always found by integrating d + 1 probe points
+        (the reference for the closed form, and the path of a model whose residual wraps)."""
+        return self._update(x, y, moments, "probes")
+
+    def _update(self, x, y, moments, mode):
         model = self.model
         if self.integrator == "exact":
             m, P = particle_moments(x) if moments is None else moments
@@ -212,34 +302,73 @@ class GaussianParticleFlowFilter(Filter):
             def field(z, lam):
                 i = at[lam]
                 return 0.5 * (r(yN, model.h(z)) + cN_all[i]) @ GT_all[i]
+
+            return flow.integrate_flow(x, field, self.grid, self.integrator)
+
+        # h(z) ~ y_hat + J (z - m), J = Pxy^T P^{-1}; innovations r(y, y_hat) - J (z - m)
+        mN = m[:, None, :]
+        if mode == "closed":
+            # Plain residual: the field is (z - m) A(lam) + b(lam) with A = -1/2 J^T G^T,
+            # b = 1/2 [(y - y_hat) + c] G^T, and flow.integrate_flow computes the integrator's
+            # map over the whole grid in closed form for every lambda at once
+            # (flow.AffineField, flow.affine_flow_map) instead of stepping the probes through
+            # 20-80 stages. With a scalar measurement (m = 1) the products over m are products
+            # of scalars (the same numbers as a matmul with inner dimension 1); d = 1: P^{-1}
+            # is a division.
+            JT = flow._solve_sym(P, Pxy)                              # P^{-1} Pxy = J^T (runs, d, m)
+            mm_y = np.multiply if Pxy.shape[-1] == 1 else np.matmul
+            A_all = -0.5 * mm_y(JT, GT_all)                           # (L, runs, d, d)
+            b_all = (0.5 * mm_y((yN - y_hat[:, None, :]) + cN_all, GT_all))[..., 0, :]   # (L, runs, d)
+            field = flow.AffineField(A_all, b_all, m, self.grid, self.integrator, stages=self._stages)
         else:
-            # h(z) ~ y_hat + J (z - m), J = Pxy^T P^{-1}; innovations r(y, y_hat) - J (z - m)
             J = np.swapaxes(flow.solve_per_run(P, Pxy), -1, -2)       # (runs, m, d)
             JT = np.swapaxes(J, -1, -2)
             base = (y - model.residual_y(y, y_hat))[:, None, :]
-            mN = m[:, None, :]
+            hGT_all = 0.5 * GT_all                                    # 1/2 G^T at every lambda
 
             def field(z, lam):
                 i = at[lam]
                 hz = base + (z - mN) @ JT
                 # the model's residual (angles wrap) in every innovation term, as in eq 41
-                return 0.5 * (r(yN, hz) + cN_all[i]) @ GT_all[i]
+                return (r(yN, hz) + cN_all[i]) @ hGT_all[i]
 
-            # The field is affine in z, so the integrator's map over the whole grid is an
-            # affine map z -> c + M (z - m): integrate d + 1 probe points, not N particles
-            # (identical to stepping every particle, up to rounding).
-            s = np.sqrt(np.diagonal(P, axis1=-2, axis2=-1))               # (runs, d)
-            d = x.shape[-1]
-            probes = m[:, None, :] + np.concatenate(
-                [np.zeros((1, d)), np.eye(d)])[None] * s[:, None, :]     # (runs, d+1, d)
-            out = flow.integrate_flow(probes, field, self.grid, self.integrator)
-            c = out[:, 0]
-            M = np.swapaxes((out[:, 1:] - c[:, None, :]) / s[:, :, None], -1, -2)
-            return c[:, None, :] + (x - m[:, None, :]) @ np.swapaxes(M, -1, -2)
+            if mode == "checked":
+                # Euler steps of the field with plain subtraction in place of the residual, the
+                # steps' maps precomputed, then a check that the model's residual was plain
+                # subtraction at every point the field was evaluated (no angle wrapped between
+                # the probes); the runs where it was not are redone with ``field`` itself
+                A_all = -(JT @ hGT_all)                                # (L, runs, d, d)
+                b_all = (((yN - base) + cN_all) @ hGT_all)[..., 0, :]  # (L, runs, d)
 
-        return flow.integrate_flow(x, field, self.grid, self.integrator)
+                def plain(hz):
+                    e = yN[:, None] - hz
+                    dev = np.abs(r(yN[:, None], hz) - e)
+                    return np.all(dev <= 1e-9 * (1.0 + np.abs(e)), axis=(1, 2, 3))
 
-    def _diverged(self, x, m_prior, P_prior):
+                field = _WrapCheckedEuler(A_all, b_all, m, self.grid, self._stages, field, base, JT, plain)
+
+        # The field is affine in z (where an angle wrap does not act), so the integrator's map
+        # over the whole grid is an affine map z -> c + M (z - m): move d + 1 probe points, not
+        # N particles (identical to stepping every particle, up to rounding), and read it off.
+        s = np.sqrt(np.diagonal(P, axis1=-2, axis2=-1))               # (runs, d)
+        probes = mN + self._probe_pattern * s[:, None, :]             # (runs, d+1, d)
+        out = flow.integrate_flow(probes, field, self.grid, self.integrator)
+        c = out[:, 0]
+        MT = (out[:, 1:] - c[:, None, :]) / s[:, :, None]             # M^T (runs, d, d)
+        u = x - mN
+        if MT.shape[-1] == 1:
+            # d = 1: a product of scalars (numpy's multiply, the same number as the 1 x 1
+            # matmul), in place, as is the shift (the same sum c + u M^T)
+            u *= MT
+        else:
+            u = u @ MT
+        u += c[:, None, :]
+        redo = getattr(field, "failed", None)
+        if redo is not None and redo.any():    # an angle wrapped between the probes: exactly
+            u[redo] = self._update(x[redo], y[redo], (m[redo], P[redo]), "probes")
+        return u
+
+    def _diverged(self, x, m_prior, P_prior, full_cov=True):
         """Per-run divergence test on the flow's size (the one test, see the class docstring).
 
         A run has diverged when its moved particles are non-finite, when the flow grew a
@@ -253,15 +382,21 @@ class GaussianParticleFlowFilter(Filter):
         y = 1e200), which would otherwise pass on a huge finite estimate. In the GPFF
         chapter's configurations the largest values are a growth of 1.0 and a shift of
         about 11 standard deviations. Each run is judged on its own values. Returns the
-        per-run verdict and the moved particles' moments ``(m, P)`` computed on the way.
+        per-run verdict and the moved particles' moments ``(m, P)`` computed on the way
+        (``P`` is ``None`` unless ``full_cov``: the test needs only the variances).
         """
-        runs = x.shape[0]
-        ok = np.all(np.isfinite(x.reshape(runs, -1)), axis=1)
-        m, P = particle_moments(x)
+        m, P, var = _posterior_moments(x, full_cov)
+        # non-finite particles make the mean or a variance non-finite (NaN or inf in a sum), and
+        # finite particles whose mean or variance overflows are caught by the growth/shift tests
+        # anyway: the verdict is that of testing every particle, without a pass over them all
+        bad = ~np.isfinite(m).all(axis=1)
+        bad |= ~np.isfinite(var).all(axis=1)
         prior = np.maximum(np.diagonal(P_prior, axis1=-2, axis2=-1), np.finfo(float).tiny)
-        grown = np.any(np.diagonal(P, axis1=-2, axis2=-1) > self.max_growth * prior, axis=1)
-        shifted = np.any((m - m_prior) ** 2 > self.max_shift**2 * prior, axis=1)
-        return ~ok | grown | shifted, (m, P)
+        bad |= (var > self.max_growth * prior).any(axis=1)
+        shift = m - m_prior
+        shift *= shift
+        bad |= (shift > self.max_shift**2 * prior).any(axis=1)
+        return bad, (m, P)
 
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
         y = self._prepare(y, rng)
@@ -282,14 +417,14 @@ class GaussianParticleFlowFilter(Filter):
                 # changes another run's numbers. A cloud whose covariance overflows cannot be
                 # moved (eq 52): diverged in the prediction; then the flow's growth test.
                 m_prior, P_prior = particle_moments(x)
-                bad = ~np.all(np.isfinite(P_prior.reshape(len(alive), -1)), axis=1)
+                bad = ~np.isfinite(P_prior.reshape(len(alive), -1)).all(axis=1)
                 if not bad.any():
                     x_new = self.update(x, y[alive, k - 1], moments=(m_prior, P_prior))
                 else:
                     x_new = np.full_like(x, np.nan)
                     if (~bad).any():
                         x_new[~bad] = self.update(x[~bad], y[alive[~bad], k - 1])
-                failed, post = self._diverged(x_new, m_prior, P_prior)
+                failed, post = self._diverged(x_new, m_prior, P_prior, full_cov=Ps is not None)
                 bad |= failed
                 x = x_new
                 if bad.any():
@@ -304,7 +439,7 @@ class GaussianParticleFlowFilter(Filter):
                     if alive.size == 0:
                         break
                 if bad.any():    # the survivors' moments, recomputed on their own array
-                    post = particle_moments(x)
+                    post = _posterior_moments(x, Ps is not None)[:2]
                 # (the mean of particle_moments is x.mean(axis=1), the same call on the same array)
                 xs[alive, k - 1] = post[0]
                 if Ps is not None:
