@@ -308,9 +308,9 @@ WHY_FILTER = {
     "IMMPFOR": "the replacement step (eqs 22-25: the joint whitening, the parents' nearest-neighbour "
                "distances and steps, the new particles' L z; about 40 % of its time) is work outside "
                "the model calls",
-    "JMPF": "the transition drawn with the full 6 x 6 square root of the rank-2 Q (6 normals a particle, "
-            "where the mode model's own sampler draws 2) and 6 x 6 products a particle, written so that "
-            "a run's numbers do not depend on the batch",
+    "JMPF": "the mode draw, the sort of the particles by mode with its gathers and scatter, and the mode "
+            "models' f (an einsum, several times slower than a matrix product, which keeps a run's numbers "
+            "independent of the batch), outside the model calls",
 }
 
 

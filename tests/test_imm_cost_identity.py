@@ -19,7 +19,7 @@ import pytest
 from pfrepro.filters.imm import (IMMParticleFilter, IMMPFOR, _counts_from_below, _indices_from_below,
                                  _indices_from_counts, _put_rows, _systematic_below, mixing_probabilities,
                                  systematic_indices, unit_ball_volume)
-from pfrepro.filters.jump_markov_pf import JumpMarkovParticleFilter
+from pfrepro.filters.jump_markov_pf import JumpMarkovParticleFilter, noise_rows
 from pfrepro.filters.smc_steps import repeat_rows
 from pfrepro.models.jump_markov import JumpMarkovSystem
 from pfrepro.models.tracking import ca_model, ct_model, cv_model
@@ -164,16 +164,16 @@ class _OldJMPF(JumpMarkovParticleFilter):
         sysm = self.model
         runs, N, n = x.shape
         mode = self._draw_modes(self._cum_Pi[state["mode"]], rng.random((runs, N)))
-        z = rng.standard_normal((runs, N, n))
+        z = rng.standard_normal((runs, N, self._roots.shape[-1]))
         flat = mode.ravel().astype(np.int8 if len(sysm.models) < 128 else np.int64)
         order = np.argsort(flat, kind="stable")
         bounds = np.searchsorted(flat[order], np.arange(len(sysm.models) + 1))
-        xo, zo = x.reshape(-1, n)[order], z.reshape(-1, n)[order]
+        xo, zo = x.reshape(-1, n)[order], z.reshape(-1, z.shape[-1])[order]
         moved = np.empty_like(xo)
         for j, m in enumerate(sysm.models):
             a, b = bounds[j], bounds[j + 1]
             if b > a:
-                moved[a:b] = m.f(xo[a:b], k) + np.einsum("ij,pj->pi", self._roots[j], zo[a:b])
+                moved[a:b] = m.f(xo[a:b], k) + noise_rows(zo[a:b], self._roots[j])
         nxt = np.empty_like(x)
         nxt.reshape(-1, n)[order] = moved
         state["mode"], state["carried"] = mode, (mode,)

@@ -230,6 +230,55 @@ def test_jump_markov_pf_against_enumeration():
     assert np.all(np.abs(p_end.mean(axis=0) - pj) < 4 * se + 0.01), (p_end.mean(axis=0), pj)
 
 
+def test_jump_markov_pf_draws_the_mode_models_low_rank_noise():
+    """The manoeuvring-target modes give a factor B (6 x 2) with Q = B B^T: the JMPF draws 2
+    normals per particle (as the models' own samplers do), not 6 through a full root; a mode
+    without a factor gets its Cholesky root, padded to the widest factor; the moved particles
+    are f(x) + B z for the normals drawn."""
+    from pfrepro.experiments.immpfor_zhou2017 import filter_system
+    from pfrepro.filters.jump_markov_pf import JumpMarkovParticleFilter, noise_roots
+
+    sysm = filter_system()
+    roots = noise_roots(sysm.models)
+    assert roots.shape == (3, 6, 2)
+    for R, m in zip(roots, sysm.models):
+        np.testing.assert_allclose(R @ R.T, m.Q, atol=1e-12 * np.abs(m.Q).max())
+    import copy
+
+    no_factor = copy.copy(sysm.models[1])
+    no_factor.noise_factor = None                            # its (singular) Q's symmetric root, 6 x 6
+    mixed = noise_roots([sysm.models[0], no_factor])
+    assert mixed.shape == (2, 6, 6)
+    np.testing.assert_array_equal(mixed[0, :, :2], roots[0])
+    assert not mixed[0, :, 2:].any()                         # zero columns: the extra normals do nothing
+    np.testing.assert_array_equal(mixed[1], no_factor.process_noise._chol)
+    plain = _two_mode_system()
+    two = noise_roots(plain.models)
+    assert two.shape[-1] == plain.models[0].dim_x            # full-rank Q: the Cholesky root, q = n
+    np.testing.assert_array_equal(two[0], plain.models[0].process_noise._chol)
+    with pytest.raises(ValueError, match="rows"):
+        noise_roots([sysm.models[0], plain.models[0]])
+
+    drawn = []
+
+    class Recording(RunStreams):
+        def standard_normal(self, size=None, dtype=np.float64):
+            out = super().standard_normal(size, dtype)
+            drawn.append(out)
+            return out
+
+    f = JumpMarkovParticleFilter(sysm, 40)
+    truth = sysm.simulate(2, 2, RunStreams.from_entropy(3, 2))
+    rng = Recording(RunStreams.from_entropy(4, 2)._gens)
+    x0 = np.random.default_rng(0).standard_normal((2, 40, 6))
+    state = {"mode": np.zeros((2, 40), dtype=np.intp)}
+    nxt, _ = f._move(1, x0, np.zeros((2, 40)), truth.y[:, 0], rng, state)
+    assert drawn[-1].shape == (2, 40, 2)
+    for j, m in enumerate(sysm.models):
+        sel = state["mode"] == j
+        np.testing.assert_allclose(nxt[sel], m.f(x0[sel], 1) + drawn[-1][sel] @ roots[j].T, rtol=1e-12, atol=1e-12)
+
+
 def test_jump_markov_pf_batch_identity_and_input_checks():
     from pfrepro.filters.jump_markov_pf import JumpMarkovParticleFilter
 
@@ -334,3 +383,18 @@ def test_smc2_batch_identity_and_checks():
         SMC2(m, 1, 20)
     with pytest.raises(ValueError, match="rw_scale"):
         SMC2(m, 10, 20, rw_scale=0.0)
+
+
+def test_jump_markov_noise_rows_do_not_depend_on_how_many_share_a_mode():
+    """A particle's noise B z is the same bits whether its mode block holds 1, 2 or 5000 rows
+    (a lone row would otherwise take BLAS's matrix-vector kernel)."""
+    from pfrepro.filters.jump_markov_pf import noise_rows
+
+    rng = np.random.default_rng(5)
+    B = rng.standard_normal((6, 2))
+    z = rng.standard_normal((5000, 2))
+    big = noise_rows(z, B)
+    for i in (0, 1, 2500, 4999):
+        assert np.array_equal(noise_rows(z[i:i + 1], B), big[i:i + 1])
+        assert np.array_equal(noise_rows(z[i:i + 2], B)[:1], big[i:i + 1])
+    np.testing.assert_allclose(big, np.einsum("ij,pj->pi", B, z), rtol=1e-13, atol=1e-14)

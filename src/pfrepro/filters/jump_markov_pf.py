@@ -11,9 +11,11 @@ Boers & Driessen 2005, the "multiple model PF"):
     w_k^i ∝ w_{k-1}^i p(y_k | x_k^i)           (the shared measurement model)
 
 Mode probabilities are the weight sums per mode; the estimate is the weighted mean. The
-transitions are drawn as in ``JumpMarkovSystem.simulate``: one
-standard-normal draw per particle, mapped through the active mode's square root of Q, so
-every draw has the runs axis first and run i is the same in any batch.
+transitions are drawn as the mode models draw them: q standard normals per particle, mapped
+through the active mode's square-root factor of Q (:func:`noise_roots`: the model's low-rank
+factor B with Q = B B^T where it gives one, as the manoeuvring-target models do with q = 2 of
+a 6-D state; else the Cholesky or symmetric root, q = n). Every draw has the runs axis first,
+so run i is the same in any batch.
 """
 from __future__ import annotations
 
@@ -23,7 +25,30 @@ from ..validation import check_positive_int, check_probability
 from .resampling import check_scheme
 from .smc_steps import ParticleLoop
 
-__all__ = ["JumpMarkovParticleFilter"]
+__all__ = ["JumpMarkovParticleFilter", "noise_roots"]
+
+
+def noise_roots(models) -> np.ndarray:
+    """Each mode's square-root factor of its process noise, ``(r, n, q)``: Q_j = R_j R_j^T.
+
+    A model with a low-rank factor (``noise_factor``, B of shape (n, q_j) with Q = B B^T, as
+    :mod:`pfrepro.models.tracking` builds them) gives B, which its own ``sample_transition``
+    uses: q_j normals per state instead of n. Any other gives its noise's Cholesky factor (or
+    symmetric root, for a singular Q). Factors narrower than the widest are padded with zero
+    columns, so one draw of q = max q_j normals per particle serves every mode.
+    """
+    roots = []
+    for m in models:
+        B = getattr(m, "noise_factor", None)
+        roots.append(np.asarray(B, float) if B is not None else m.process_noise._chol)
+    n = roots[0].shape[0]
+    if any(R.ndim != 2 or R.shape[0] != n for R in roots):
+        raise ValueError(f"every mode's noise factor must have {n} rows, got {[R.shape for R in roots]}")
+    q = max(R.shape[1] for R in roots)
+    out = np.zeros((len(roots), n, q))
+    for j, R in enumerate(roots):
+        out[j, :, :R.shape[1]] = R
+    return out
 
 
 def _take_rows(a, rows):
@@ -39,6 +64,17 @@ def _take_rows(a, rows):
     # mode="clip": no bounds check, so numpy takes straight into ``out`` (mode="raise" buffers it)
     np.take(a2.view(rec)[:, 0], rows, out=out.reshape(-1, n).view(rec)[:, 0].reshape(np.shape(rows)), mode="clip")
     return out
+
+
+def noise_rows(z, root):
+    """``z @ root.T`` for the rows ``z`` (P, q) of one mode's particles, P >= 1, as a BLAS GEMM
+    (several times faster than the equivalent einsum). A GEMM rounds a row the same way whatever
+    the number of rows, except a lone row, which BLAS sends to its matrix-vector kernel: a lone
+    row is multiplied as the first of two, so a particle's numbers never depend on how many
+    particles of the batch share its mode."""
+    if z.shape[0] == 1:
+        return (np.concatenate([z, z]) @ root.T)[:1]
+    return z @ root.T
 
 
 class JumpMarkovParticleFilter(ParticleLoop):
@@ -76,7 +112,7 @@ class JumpMarkovParticleFilter(ParticleLoop):
         self.n_particles = check_positive_int(n_particles, "n_particles")
         self.resampling = check_scheme(resampling)
         self.ess_threshold = None if ess_threshold is None else check_probability(ess_threshold, "ess_threshold")
-        self._roots = np.stack([m.process_noise._chol for m in system.models])   # (r, n, n)
+        self._roots = noise_roots(system.models)                                   # (r, n, q)
         self._cum_Pi = np.cumsum(system.Pi, axis=1)
         self._cum_init = np.cumsum(system.initial_probs)
 
@@ -104,7 +140,7 @@ class JumpMarkovParticleFilter(ParticleLoop):
         for j in range(r):
             mode += u >= np.take(self._cum_Pi[:, j], prev)
         np.minimum(mode, r - 1, out=mode)
-        z = rng.standard_normal((runs, N, n))
+        z = rng.standard_normal((runs, N, self._roots.shape[-1]))
         # the particles grouped by mode once (a stable sort keeps each mode's particles in their
         # order: the rows each mode's f sees are those a boolean mask would select, so the numbers
         # are the same), each mode's block moved, the blocks put back by the inverse permutation.
@@ -118,8 +154,7 @@ class JumpMarkovParticleFilter(ParticleLoop):
         for j, m in enumerate(sysm.models):
             a, b = bounds[j], bounds[j + 1]
             if b > a:
-                # einsum on the mode's rows: row i's arithmetic does not depend on the batch
-                np.add(m.f(xo[a:b], k), np.einsum("ij,pj->pi", self._roots[j], zo[a:b]), out=moved[a:b])
+                np.add(m.f(xo[a:b], k), noise_rows(zo[a:b], self._roots[j]), out=moved[a:b])
         inv = np.empty_like(order)
         inv[order] = np.arange(order.size)
         nxt = _take_rows(moved, inv).reshape(x.shape)
