@@ -111,6 +111,8 @@ def test_bad_arguments_are_refused_with_their_name():
         legend_below(fig, ax, handles=ax.lines, labels=["a", "b"])
     with pytest.raises(ValueError, match="ncol"):
         legend_below(fig, ax, ncol=0)
+    with figure_layout(PHONE), pytest.raises(ValueError, match="ncol"):
+        legend_below(fig, ax, ncol=0)               # refused on the phone too, where one column is drawn anyway
     with pytest.raises(ValueError, match="width_in"):
         legend_columns(["a"], 2, width_in=0)
     plt.close(fig)

@@ -56,14 +56,17 @@ def test_fig3_names_both_filters_and_the_measurement():
 
 
 def test_legend_columns_follow_the_width():
+    from pfrepro.figures import legend_columns
+
+    assert F.legend_columns is legend_columns   # the old name of the DPF module, kept importable
     long = ["exact posterior mean", "IMMPFOR (eq 23)", "Liu–West", "DEKF"]
     with figure_layout(PHONE):
-        assert F.legend_columns(long, 4) == 1
-        assert F.legend_columns(["CV", "CT", "CA"], 3) == 3
+        assert legend_columns(long, 4) == 1
+        assert legend_columns(["CV", "CT", "CA"], 3) == 3
     with figure_layout(DESKTOP):
-        assert F.legend_columns(long, 4) >= 2
+        assert legend_columns(long, 4) >= 2
     with pytest.raises(ValueError):
-        F.legend_columns(long, 0)
+        legend_columns(long, 0)
 
 
 def test_no_figure_code_sets_a_font_size_or_calls_subplots():

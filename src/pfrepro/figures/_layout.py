@@ -14,6 +14,11 @@ def phone() -> bool:
     return layout is not None and layout.max_cols == 1
 
 
+def _check_ncol(who: str, ncol) -> None:
+    if ncol is not None and (isinstance(ncol, bool) or not isinstance(ncol, (int, np.integer)) or ncol < 1):
+        raise ValueError(f"{who} needs ncol >= 1 (or None), got {ncol!r}")
+
+
 def legend_columns(labels, ncol: int | None = None, width_in: float | None = None, **legend_kw) -> int:
     """Most legend columns (at most ``ncol``; ``None``: one per label) whose entries fit side by side
     in ``width_in`` inches at the legend's type size.
@@ -31,8 +36,7 @@ def legend_columns(labels, ncol: int | None = None, width_in: float | None = Non
     from ..plotting import DESKTOP, current_layout
 
     labels = [str(lab) for lab in labels]
-    if ncol is not None and (isinstance(ncol, bool) or not isinstance(ncol, (int, np.integer)) or ncol < 1):
-        raise ValueError(f"legend_columns needs ncol >= 1 (or None), got {ncol!r}")
+    _check_ncol("legend_columns", ncol)
     if width_in is None:
         width_in = (current_layout() or DESKTOP).width_in
     if not width_in > 0:
@@ -70,6 +74,7 @@ def legend_below(fig, axes=None, ncol: int | None = None, handles=None, labels=N
 
     from ..plotting import current_layout
 
+    _check_ncol("legend_below", ncol)
     if (handles is None) != (labels is None):
         raise ValueError("legend_below needs both handles and labels, or neither")
     if handles is None:
