@@ -76,6 +76,21 @@ def test_columns_fit_the_layout_width_and_the_phone_gets_one(layout, engine):
 
 
 @pytest.mark.parametrize("engine", list(ENGINES))
+def test_a_narrow_figure_keeps_its_legend_within_its_own_width(engine):
+    """A figure narrower than the layout (4.3 in of 6.5): the legend is fitted to the figure, not to
+    the layout, so the PNG does not widen beyond its panels (and shrink on the page)."""
+    with figure_layout(DESKTOP):
+        fig, ax = new_figure(figsize=(4.3, 3.5), **ENGINES[engine])
+        for lab in ("max |Δ altitude| (ft)", "max |Δ velocity| (ft/s)", "filters: 4 substeps"):
+            ax.plot([0, 1], [0, 1], label=lab)
+        leg = legend_below(fig, ax, ncol=3)
+        fig.canvas.draw()
+        box = _inches(fig, leg.get_window_extent(fig.canvas.get_renderer()))
+        assert box[2] - box[0] <= 4.3 and leg._ncols < 3
+        plt.close(fig)
+
+
+@pytest.mark.parametrize("engine", list(ENGINES))
 def test_panels_keep_their_size(layout, engine):
     sizes = []
     for legend in (False, True):

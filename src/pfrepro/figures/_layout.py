@@ -62,7 +62,8 @@ def legend_below(fig, axes=None, ncol: int | None = None, handles=None, labels=N
     The entries are ``handles`` with ``labels`` when given, else those of ``axes`` (an axis or an
     array of them; default every visible axis of ``fig``), each label once (the first handle) and
     labels starting with ``_`` left out. The columns are as many as fit the width the figure is drawn
-    for (:func:`legend_columns`, at most ``ncol``), one on the phone: a legend inside
+    at (its own width, at most the layout's, :func:`pfrepro.plotting.current_layout`;
+    :func:`legend_columns`, at most ``ncol``), one on the phone: a legend inside
     a panel hides data, and one wider than the layout would make the whole drawing wider and its text
     smaller. The panels keep their size: a figure with ``layout="constrained"`` grows by the legend's
     height (the legend is placed ``"outside lower center"``); any other figure is laid out with
@@ -92,8 +93,10 @@ def legend_below(fig, axes=None, ncol: int | None = None, handles=None, labels=N
     if not seen:
         return None
     labels, handles = list(seen), list(seen.values())
+    # the figure's width, at most the layout's: a legend wider than a narrow figure would widen the PNG
+    # beyond its panels, and the page would shrink the whole drawing (and its text) to fit the column
     layout = current_layout()
-    width_in = layout.width_in if layout is not None else fig.get_size_inches()[0]
+    width_in = fig.get_size_inches()[0] if layout is None else min(layout.width_in, fig.get_size_inches()[0])
     n = 1 if phone() else legend_columns(labels, ncol, width_in, **legend_kw)
     kw = {"frameon": False, "ncol": n, **legend_kw}
     if isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine):
