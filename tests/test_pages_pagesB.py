@@ -194,7 +194,7 @@ def test_ning_reading_words():
 
 
 def test_reader_text_turns_plain_subscripts_into_symbols():
-    from pfrepro.figures._layout import reader_text
+    from pfrepro.bookinfo import reader_text
 
     assert reader_text("x_k = x_{k-1}/2 + w_k") == "xₖ = xₖ₋₁/2 + wₖ"
     assert reader_text("Var(x_k | y_1:k)/N") == "Var(xₖ | y₁:ₖ)/N"

@@ -17,6 +17,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
+from pfrepro import bookinfo as B  # noqa: E402
 from pfrepro.figures import dpf_hou2008 as F  # noqa: E402
 from pfrepro.figures import immpfor_zhou2017 as FI  # noqa: E402
 from pfrepro.plotting import DESKTOP, PHONE, BOOK_DPI, figure_layout, responsive  # noqa: E402
@@ -55,14 +56,17 @@ def test_fig3_names_both_filters_and_the_measurement():
 
 
 def test_legend_columns_follow_the_width():
+    from pfrepro.figures import legend_columns
+
+    assert F.legend_columns is legend_columns   # the old name of the DPF module, kept importable
     long = ["exact posterior mean", "IMMPFOR (eq 23)", "Liu–West", "DEKF"]
     with figure_layout(PHONE):
-        assert F.legend_columns(long, 4) == 1
-        assert F.legend_columns(["CV", "CT", "CA"], 3) == 3
+        assert legend_columns(long, 4) == 1
+        assert legend_columns(["CV", "CT", "CA"], 3) == 3
     with figure_layout(DESKTOP):
-        assert F.legend_columns(long, 4) >= 2
+        assert legend_columns(long, 4) >= 2
     with pytest.raises(ValueError):
-        F.legend_columns(long, 0)
+        legend_columns(long, 0)
 
 
 def test_no_figure_code_sets_a_font_size_or_calls_subplots():
@@ -112,25 +116,44 @@ def test_captions_match_the_drawings():
     ("models_q", "models_q"),           # a name, not a formula: left for cell_html to set as code
 ])
 def test_plain_math(text, want):
-    assert F.plain_math(text) == want
+    assert B.plain_math(text) == want
 
 
 def test_cell_html_escapes_and_sets_code_names_as_code():
-    assert F.cell_html("a < b, run_all") == "a &lt; b, <code>run_all</code>"
-    assert F.cell_html("[r_l, r_u]") == "[rₗ, rᵤ]"
+    assert B.cell_html("a < b, run_all") == "a &lt; b, <code>run_all</code>"
+    assert B.cell_html("[r_l, r_u]") == "[rₗ, rᵤ]"
 
 
 def test_card_table_carries_column_names_and_refuses_other_input():
-    html = F.card_table(pd.DataFrame({"where": ["step 3(e)"], "printed": ["r_i"]}), "pf-dpf-errata").data
+    html = B.card_table(pd.DataFrame({"where": ["step 3(e)"], "printed": ["r_i"]}), "pf-dpf-errata").data
     assert 'data-label="where"' in html and "pf-dpf-errata" in html and "r_i" not in html
     with pytest.raises(TypeError):
-        F.card_table([1, 2], "x")
+        B.card_table([1, 2], "x")
+
+
+def test_card_tables_live_in_bookinfo_and_share_one_card_class():
+    """The table helpers' home is ``pfrepro.bookinfo`` (the old names in the figure modules are the same
+    functions), every card table carries ``pf-cards``, and the stylesheet writes the phone's card rules
+    once, for that class, not once per page."""
+    from pathlib import Path
+
+    from pfrepro.figures import immpfor_zhou2017
+
+    for name in ("plain_math", "cell_html", "card_table", "choices_display"):
+        assert getattr(F, name) is getattr(B, name) and name not in F.__all__ and name in B.__all__
+    assert immpfor_zhou2017.card_table is B.card_table
+    for html in (B.card_table(pd.DataFrame({"a": ["x"]}), "pf-dpf-cards", text=False).data,
+                 B.choices_display(FI.E.CHOICES, "pf-imm-choices", collapsed=False).data):
+        assert re.search(r'<table class="[^"]*\bpf-cards\b', html)
+    css = (Path(__file__).resolve().parents[1] / "book" / "_static" / "pfrepro-pages.css").read_text(encoding="utf-8")
+    assert css.count('content: attr(data-label) ": "') == 1
+    assert "table.pf-cards td::before" in css
 
 
 def test_choices_display_links_power_plans_to_their_claims():
     from pfrepro.experiments import dpf_hou2008 as E
 
-    html = F.choices_display(E.CHOICES, "pf-dpf-choices").data
+    html = B.choices_display(E.CHOICES, "pf-dpf-choices").data
     text = re.sub(r"<[^>]+>", " ", html)
     assert "liu west" in text and "liu_west" not in text
     # without the registry a plan row keeps its words; no snake_case id outside code elements
@@ -216,9 +239,9 @@ def test_k_of_refuses_impossible_counts():
 def test_choices_display_folds_the_long_table_and_counts_its_rows():
     from pfrepro.experiments import dpf_hou2008 as E
 
-    html = F.choices_display(E.CHOICES, "pf-dpf-choices").data
+    html = B.choices_display(E.CHOICES, "pf-dpf-choices").data
     assert html.startswith('<details class="pf-choices"><summary>The ' + str(len(E.CHOICES)) + " free choices")
-    assert not F.choices_display(E.CHOICES, "pf-dpf-choices", collapsed=False).data.startswith("<details")
+    assert not B.choices_display(E.CHOICES, "pf-dpf-choices", collapsed=False).data.startswith("<details")
 
 
 def test_causes_phrase():

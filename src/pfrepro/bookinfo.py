@@ -6,6 +6,9 @@ typed by hand:
 * :func:`papers_in_book` — which papers have a chapter in this build (from ``_toc.yml``);
 * :func:`claim_anchor` / :func:`claim_anchor_html` / :func:`claim_href` — one anchor per
   claim in its chapter, ``claim-<paper>-<claim_id>``, and links to it from the scorecard;
+* :func:`labelled_table_html`, :func:`card_table`, :func:`choices_display`, :func:`choices_cards` — the
+  chapters' text tables, whose rows become cards on a phone, with :func:`reader_text`,
+  :func:`plain_math` and :func:`cell_html` writing their formulas and names as a reader reads them;
 * :func:`build_info` — package versions, git commit, build date (UTC) and CPU, for the
   archive reader.
 """
@@ -21,7 +24,8 @@ from importlib import metadata
 from pathlib import Path
 
 __all__ = ["book_root", "toc_files", "papers_in_book", "claim_anchor", "claim_anchor_html",
-           "claim_href", "anchored_claims", "labelled_table_html", "nowrap_numbers", "build_info", "cpu_model"]
+           "claim_href", "anchored_claims", "labelled_table_html", "nowrap_numbers", "reader_text", "plain_math",
+           "cell_html", "card_table", "choices_display", "choices_cards", "build_info", "cpu_model"]
 
 
 def book_root(start: Path | None = None) -> Path:
@@ -193,6 +197,128 @@ def labelled_table_html(table, *, classes: str = "pf-claims pf-text") -> str:
         rows.append("<tr>" + "".join(cells) + "</tr>")
     return (f'<table class="{html.escape(classes)}"><thead><tr>{head}</tr></thead>'
             f'<tbody>{"".join(rows)}</tbody></table>')
+
+
+# ---- the chapters' text tables: formulas as a reader reads them, rows as cards on a phone ------------
+
+#: Unicode subscripts for the characters of a plain-text index ("z_k" -> "zₖ", "r_l" -> "rₗ")
+_SUBSCRIPT = dict(zip("0123456789+-=()aehijklmnoprstuvxβγρφχ", "₀₁₂₃₄₅₆₇₈₉₊₋₌₍₎ₐₑₕᵢⱼₖₗₘₙₒₚᵣₛₜᵤᵥₓᵦᵧᵨᵩᵪ"))
+#: Unicode superscripts for the characters of a plain-text exponent ("x^i" -> "xⁱ")
+_SUPERSCRIPT = str.maketrans("0123456789i+-nT", "⁰¹²³⁴⁵⁶⁷⁸⁹ⁱ⁺⁻ⁿᵀ")
+#: the index characters :func:`reader_text` writes as subscripts (Latin letters and digits only)
+_READER_INDEX = "0123456789k+-=()aeioruvxnmpsthlj"
+#: a symbol with a plain-text index for :func:`plain_math`: one letter (Latin or Greek, with an optional
+#: accent) and "_" + a short index or a braced one ("z_k", "x̂_{k-1}", "z_1:k-1", "α_0")
+_INDEXED = re.compile(r"(?<![\w.])([A-Za-zα-ωϕ][\u0302\u0303]?)_(\{[^{}]{1,12}\}|[0-9a-z][0-9a-z+\-]{0,2}(?::[0-9a-z+\-]{1,5})?)(?![\w(])")
+#: a snake_case identifier left in the text once the symbols are written (a function, choice or reading name)
+_SNAKE = re.compile(r"(?<![\w./:@-])[a-z][a-z0-9]*(?:_[a-z0-9]+)+(?![\w/@]|\.\w)")
+
+
+def reader_text(text: str) -> str:
+    """Plain-text formulas and names as a reader reads them: ``x_k`` -> ``xₖ``, ``x_{k-1}`` ->
+    ``xₖ₋₁``, ``x_(k-1)`` -> ``xₖ₋₁``, ``y_1:k`` -> ``y₁:ₖ``, ``x_k^i`` -> ``xₖⁱ``, ``sigma_w2`` ->
+    ``sigma w2`` (a name with underscores reads as words). Only for display: the claims and
+    choices keep their text. (:func:`plain_math` writes the same subscripts but leaves names for
+    :func:`cell_html` to set as code.)"""
+    def sub(m):
+        body = m.group(2) or m.group(3) or m.group(4)
+        if all(ch in _READER_INDEX + ":|" for ch in body):
+            return m.group(1).replace("~", "\u0303") + "".join(_SUBSCRIPT.get(ch, ch) for ch in body)
+        return m.group(0)
+
+    # one-letter symbols with a subscript: x_k, x_{k-1}, x_(k-1), y_1:k, B_k
+    out = re.sub(r"(?<![A-Za-z0-9_])([A-Za-zσηαβθ](?:\u0302|~)?)_(?:\{([^{}]+)\}|\(([^()]+)\)|([0-9k]+(?::[0-9k]+)?|th))(?![A-Za-z_])", sub, text)
+    out = re.sub(r"\^(\{[^{}]+\}|[0-9iTn])", lambda m: m.group(1).strip("{}").translate(_SUPERSCRIPT)
+                 if all(c in "0123456789i+-nT" for c in m.group(1).strip("{}")) else m.group(0), out)
+    # remaining snake_case names read as words
+    return re.sub(r"\b([A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]+)+)\b", lambda m: m.group(1).replace("_", " "), out)
+
+
+def plain_math(text: str) -> str:
+    """Text with plain-text indices written as Unicode subscripts ("p(z_k | θ, x̂_{k-1})" ->
+    "p(zₖ | θ, x̂ₖ₋₁)", "[r_l, r_u]" -> "[rₗ, rᵤ]"): the tables' formulas read as formulas, not as
+    code names. An index with a character Unicode has no subscript for is left as it is."""
+    def sub(m):
+        idx = m.group(2).strip("{}")
+        if all(ch in _SUBSCRIPT or ch == ":" for ch in idx):
+            return m.group(1) + "".join(_SUBSCRIPT.get(ch, ch) for ch in idx)
+        return m.group(0)
+
+    return _INDEXED.sub(sub, str(text))
+
+
+def cell_html(text, code_names: bool = True) -> str:
+    """One table cell as HTML: :func:`plain_math`, escaped, and the code names left (``run_all``,
+    ``n_th``) set as code, the way the prose shows them."""
+    # a quoted word ("'small': 100 ft") in typographic quotes: it reads as a quotation, not as Python
+    text = re.sub(r"'([^'\n]{1,40})'", "\u2018\\1\u2019", plain_math(text))
+    body = html.escape(text)
+    return _SNAKE.sub(lambda m: f"<code>{m.group(0)}</code>", body) if code_names else body
+
+
+def card_table(df, css_class: str, text: bool = True):
+    """``df`` as an HTML table (:func:`labelled_table_html`) whose cells carry their column name, so
+    that on a phone the book's stylesheet (``book/_static/pfrepro-pages.css``, class ``pf-cards``) shows
+    each row as a card of "column: value" lines instead of columns one word wide; every cell through
+    :func:`cell_html`, a missing value as "—". ``css_class``: the page's own class for the table (its
+    column widths); ``text``: left-align every cell (a table of words). Returns an
+    ``IPython.display.HTML``."""
+    import math
+
+    import pandas as pd
+    from IPython.display import HTML
+
+    if not isinstance(df, pd.DataFrame):
+        raise TypeError(f"card_table needs a DataFrame, got {type(df).__name__}")
+    cells = df.astype(object).map(lambda v: "—" if v is None or (isinstance(v, float) and math.isnan(v)) else cell_html(v))
+    return HTML(labelled_table_html(cells, classes=f"{'pf-text ' if text else ''}pf-cards {css_class}"))
+
+
+def choices_display(choices, css_class: str, reg=None, plan_label=None, collapsed: bool = True):
+    """The free-choices table as the chapter shows it (:func:`pfrepro.choices.choices_table`): choice names
+    in words ("liu_west" -> "liu west"), a power-plan row ``plan_<claim id>`` named by its claim and
+    linked to the claim's row of the claims table when ``reg`` (the registry) has that claim; other
+    ``plan_*`` rows through ``plan_label(name)`` when given; cells as in :func:`card_table` (``css_class``:
+    the page's class for the table; the rows are cards on a phone). ``collapsed``: inside a
+    ``<details>`` element, closed, whose summary counts the rows (a long table is opened, not scrolled past)."""
+    from IPython.display import HTML
+
+    from .choices import choices_table
+
+    t = choices_table(choices)
+    by = {c.claim_id: c for c in reg.claims} if reg is not None else {}
+
+    def name(n):
+        if n.startswith("plan_") and n[5:] in by:
+            c = by[n[5:]]
+            return (f'<a href="#{claim_anchor(reg.paper, c.claim_id)}">runs for: {html.escape(c.text)}</a>')
+        if n.startswith("plan_") and plan_label is not None:
+            return html.escape(plan_label(n))
+        return html.escape(n.replace("_", " "))
+
+    cells = t.astype(object).map(cell_html)
+    cells["choice"] = [name(n) for n in t["choice"]]
+    table = labelled_table_html(cells.rename(columns={"paper": "in the paper"}), classes=f"pf-text pf-cards {css_class}")
+    if not collapsed:
+        return HTML(table)
+    n = len(t)
+    return HTML(f'<details class="pf-choices"><summary>The {n} free choices, each with its value, status, reason '
+                f"and the paper's line (open the table)</summary>{table}</details>")
+
+
+def choices_cards(choices):
+    """The chapter's assumptions table (:func:`pfrepro.choices.choices_table`) as HTML whose rows
+    become cards on a phone (:func:`labelled_table_html`, class ``pf-choices``: on a laptop a table
+    with a wide "reason" column, on a phone one card per choice) instead of a five-column table
+    wrapping one word per line; every cell through :func:`reader_text`. Returns an
+    ``IPython.display.HTML``."""
+    from IPython.display import HTML
+
+    from .choices import choices_table
+
+    t = choices_table(choices)
+    return HTML(labelled_table_html(t.map(lambda v: html.escape(reader_text(str(v)))),
+                                    classes="pf-claims pf-text pf-choices"))
 
 
 def cpu_model() -> str:

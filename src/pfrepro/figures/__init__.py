@@ -4,7 +4,8 @@ Each figure function takes the results of the paper's experiment functions
 (:mod:`pfrepro.experiments`) and returns a :class:`matplotlib.figure.Figure`; the chapter
 shows it (drawn for the laptop and for the phone, :func:`pfrepro.plotting.show_figure`) and
 ``pfrepro run <paper>`` saves it as PNG, so the drawing code exists once.
-Every module also has ``tables(results)`` and ``figures(results)``: the paper's tables and
+One legend for a whole figure, below its panels and fitted to the width the figure is drawn for,
+is :func:`legend_below`. Every module also has ``tables(results)`` and ``figures(results)``: the paper's tables and
 figures from the results of its ``run_all``, which is what the command line saves (see
 :mod:`pfrepro.papers`).
 """
@@ -12,7 +13,9 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["DPI", "new_figure"]
+__all__ = ["DPI", "new_figure", "legend_below", "legend_columns"]
+
+from ._layout import legend_below, legend_columns  # noqa: E402  (re-exported: the figures' one legend helper)
 
 #: resolution of every figure (the book's minimum)
 DPI = 150

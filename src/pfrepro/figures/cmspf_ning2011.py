@@ -11,10 +11,11 @@ import numpy as np
 import pandas as pd
 
 from .. import published
+from ..bookinfo import reader_text
 from ..experiments import cmspf_ning2011 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
-from ._layout import legend_below, letter, phone, plain_log, reader_text
+from ._layout import legend_below, letter, phone, plain_log
 
 __all__ = ["printed", "styled", "divisor_check", "fig3_times", "timing_figures", "table1_per_run_long", "table1_strip", "sensitivity_fig",
            "table1_side_by_side", "table1_summary", "table2_vs_published", "table3_vs_published",

@@ -7,17 +7,16 @@ chapter shows (:func:`chapter_figures` and the ``*_table`` functions).
 """
 from __future__ import annotations
 
-import re
-
 import matplotlib.ticker
 import numpy as np
 import pandas as pd
 
+from ..bookinfo import card_table, cell_html, choices_display, plain_math  # noqa: F401  (their home is pfrepro.bookinfo; kept importable here)
 from ..experiments import dpf_hou2008 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
-from . import new_figure
+from . import legend_below, legend_columns, new_figure  # noqa: F401  (legend_columns: kept importable here)
 
-__all__ = ["pm", "rmse_table", "fig1", "fig3", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "fig_exact", "plain_math", "cell_html", "card_table", "choices_display", "legend_below", "legend_columns", "chapter_figure_alts", "CHAPTER_FIGURE_ALTS", "tables",
+__all__ = ["pm", "rmse_table", "fig1", "fig3", "fig2", "fig4", "fig5", "fig6", "figs_7_9", "fig_exact", "chapter_figure_alts", "CHAPTER_FIGURE_ALTS", "tables",
            "figures", "chapter_figures", "TABLES", "FIGURES", "N_STEPS", "paper_row_51", "sweeps_51",
            "integration_error", "errata_table", "readings_51_table", "sensitivity_display", "dekf_sensitivity_display",
            "law_table", "coverage_display", "table_52_display", "readings_52_table", "readings_52_tables"]
@@ -29,128 +28,6 @@ FIGURES = ("Fig. 4", "Fig. 5", "Figs. 7-9")
 N_STEPS = len(E.STEPS)
 #: the filters of the sec 5.1 RMSE table
 NAMES_51 = ("DPF", "DEKF", "Liu-West")
-
-
-def legend_columns(labels, ncol: int, width_in: float | None = None) -> int:
-    """Most legend columns (at most ``ncol``) whose entries fit side by side in ``width_in`` inches
-    (default: the layout's width, :func:`pfrepro.plotting.current_layout`, else 6.5 in) at the legend's
-    type size: a legend wider than the figure would widen the PNG and shrink all of its text."""
-    import matplotlib as mpl
-
-    from ..plotting import DESKTOP, current_layout
-
-    if ncol < 1:
-        raise ValueError(f"legend_columns needs ncol >= 1, got {ncol}")
-    layout = current_layout() or DESKTOP
-    width_in = layout.width_in if width_in is None else width_in
-    size = mpl.font_manager.FontProperties(size=mpl.rcParams["legend.fontsize"]).get_size_in_points()
-    # an entry is its handle (2 em), a gap (0.8 em) and its text (about 0.55 em per character); columns are
-    # 2 em apart and the legend has 0.5 em of border on each side (matplotlib's defaults)
-    widths = [len(str(lab)) * 0.55 + 2.8 for lab in labels]
-    for n in range(min(ncol, max(len(widths), 1)), 0, -1):
-        cols = [max(widths[i::n]) for i in range(n)]
-        if (sum(cols) + 2.0 * (n - 1) + 1.0) * size / 72 <= width_in * 0.98:
-            return n
-    return 1
-
-
-def legend_below(fig, axs, ncol=4, **kw):
-    """One legend for the figure, under the panels (never over the data): handles of every axis,
-    deduplicated, in as many columns (at most ``ncol``) as fit the width the figure is drawn for."""
-    handles, labels = [], []
-    for ax in np.atleast_1d(axs).ravel():
-        if ax is None:
-            continue
-        for h, lab in zip(*ax.get_legend_handles_labels()):
-            if lab not in labels:
-                handles.append(h); labels.append(lab)
-    fig.tight_layout()
-    leg = fig.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0),
-                     ncol=legend_columns(labels, ncol), frameon=False, **kw)
-    return leg
-
-
-#: Unicode subscripts for the characters of a plain-text index ("z_k" -> "zₖ", "r_l" -> "rₗ")
-_SUBSCRIPT = dict(zip("0123456789+-=()aehijklmnoprstuvxβγρφχ", "₀₁₂₃₄₅₆₇₈₉₊₋₌₍₎ₐₑₕᵢⱼₖₗₘₙₒₚᵣₛₜᵤᵥₓᵦᵧᵨᵩᵪ"))
-#: a symbol with a plain-text index: one letter (Latin or Greek, with an optional accent) and "_" + a
-#: short index or a braced one ("z_k", "x̂_{k-1}", "z_1:k-1", "α_0")
-_INDEXED = re.compile(r"(?<![\w.])([A-Za-zα-ωϕ][\u0302\u0303]?)_(\{[^{}]{1,12}\}|[0-9a-z][0-9a-z+\-]{0,2}(?::[0-9a-z+\-]{1,5})?)(?![\w(])")
-#: a snake_case identifier left in the text once the symbols are written (a function, choice or reading name)
-_SNAKE = re.compile(r"(?<![\w./:@-])[a-z][a-z0-9]*(?:_[a-z0-9]+)+(?![\w/@]|\.\w)")
-
-
-def plain_math(text: str) -> str:
-    """Text with plain-text indices written as Unicode subscripts ("p(z_k | θ, x̂_{k-1})" ->
-    "p(zₖ | θ, x̂ₖ₋₁)", "[r_l, r_u]" -> "[rₗ, rᵤ]"): the tables' formulas read as formulas, not as
-    code names. An index with a character Unicode has no subscript for is left as it is."""
-    def sub(m):
-        idx = m.group(2).strip("{}")
-        if all(ch in _SUBSCRIPT or ch == ":" for ch in idx):
-            return m.group(1) + "".join(_SUBSCRIPT.get(ch, ch) for ch in idx)
-        return m.group(0)
-
-    return _INDEXED.sub(sub, str(text))
-
-
-def cell_html(text, code_names: bool = True) -> str:
-    """One table cell as HTML: :func:`plain_math`, escaped, and the code names left (``run_all``,
-    ``n_th``) set as code, the way the prose shows them."""
-    import html
-
-    # a quoted word ("'small': 100 ft") in typographic quotes: it reads as a quotation, not as Python
-    text = re.sub(r"'([^'\n]{1,40})'", "\u2018\\1\u2019", plain_math(text))
-    body = html.escape(text)
-    return _SNAKE.sub(lambda m: f"<code>{m.group(0)}</code>", body) if code_names else body
-
-
-def card_table(df, css_class: str, text: bool = True):
-    """``df`` as an HTML table (``pfrepro.bookinfo.labelled_table_html``) whose cells carry their
-    column name, so that on a phone the page's stylesheet (``book/_static/pfrepro-pages.css``,
-    ``css_class``) shows each row as a card of "column: value" lines instead of columns one word
-    wide; every cell through :func:`cell_html`. ``text``: left-align every cell (a table of words)."""
-    from IPython.display import HTML
-
-    from ..bookinfo import labelled_table_html
-
-    if not isinstance(df, pd.DataFrame):
-        raise TypeError(f"card_table needs a DataFrame, got {type(df).__name__}")
-    cells = df.astype(object).map(lambda v: "—" if v is None or (isinstance(v, float) and np.isnan(v)) else cell_html(v))
-    return HTML(labelled_table_html(cells, classes=f"{'pf-text ' if text else ''}{css_class}"))
-
-
-def choices_display(choices, css_class: str, reg=None, plan_label=None, collapsed: bool = True):
-    """The free-choices table as the chapter shows it (``pfrepro.choices.choices_table``): choice names
-    in words ("liu_west" -> "liu west"), a power-plan row ``plan_<claim id>`` named by its claim and
-    linked to the claim's row of the claims table when ``reg`` (the registry) has that claim; other
-    ``plan_*`` rows through ``plan_label(name)`` when given; cells as in :func:`card_table` (``css_class``:
-    the page's class for the table, which makes it cards on a phone). ``collapsed``: inside a
-    ``<details>`` element, closed, whose summary counts the rows (a long table is opened, not scrolled past)."""
-    import html
-
-    from IPython.display import HTML
-
-    from ..bookinfo import claim_anchor, labelled_table_html
-    from ..choices import choices_table
-
-    t = choices_table(choices)
-    by = {c.claim_id: c for c in reg.claims} if reg is not None else {}
-
-    def name(n):
-        if n.startswith("plan_") and n[5:] in by:
-            c = by[n[5:]]
-            return (f'<a href="#{claim_anchor(reg.paper, c.claim_id)}">runs for: {html.escape(c.text)}</a>')
-        if n.startswith("plan_") and plan_label is not None:
-            return html.escape(plan_label(n))
-        return html.escape(n.replace("_", " "))
-
-    cells = t.astype(object).map(cell_html)
-    cells["choice"] = [name(n) for n in t["choice"]]
-    table = labelled_table_html(cells.rename(columns={"paper": "in the paper"}), classes=f"pf-text {css_class}")
-    if not collapsed:
-        return HTML(table)
-    n = len(t)
-    return HTML(f'<details class="pf-choices"><summary>The {n} free choices, each with its value, status, reason '
-                f"and the paper's line (open the table)</summary>{table}</details>")
 
 
 def pm(m, se, digits=3) -> str:

@@ -9,10 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from ..bookinfo import reader_text
 from ..experiments import ekf_pf_li2012 as E
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
 from . import new_figure
-from ._layout import legend_below, letter, phone, plain_log, reader_text
+from ._layout import legend_below, letter, phone, plain_log
 
 __all__ = ["one_run_panel", "per_time_panel", "figs_1_3", "figs_2_4", "fig1", "fig2", "fig3", "fig4",
            "table1_plot", "table1_shown", "ess_plot", "sweep_plot", "statistic_readings_table", "gap_table",
@@ -33,10 +34,6 @@ _LEGEND = {"EKF": "EKF, eq (10)", "EKF-prev": r"EKF, $B_k$ at $\hat x_{k-1|k-1}$
 
 def _phone() -> bool:
     return phone()
-
-
-def _legend_below(fig, axes, ncol: int = 2):
-    return legend_below(fig, axes, ncol)
 
 
 def _letter(i: int) -> str:
@@ -87,7 +84,7 @@ def figs_1_3(figs: dict, run: int = 0):
         one_run_panel(ax, figs[w], w, fno, run)
     for ax in axes:
         ax.set_xlabel("time step $k$")
-    _legend_below(fig, axes, ncol=4)
+    legend_below(fig, axes, ncol=4)
     return fig
 
 
@@ -96,7 +93,7 @@ def figs_2_4(figs: dict):
     fig, axes = new_figure(1, 2, figsize=(10.2, 4))
     for ax, w, fno in zip(axes, (1, 2), (2, 4)):
         per_time_panel(ax, figs[w], w, fno)
-    _legend_below(fig, axes, ncol=3)
+    legend_below(fig, axes, ncol=3)
     return fig
 
 
@@ -108,7 +105,7 @@ def _single(fig_no: int, figs: dict):
         ax.set_xlabel("time step $k$")
     else:
         per_time_panel(ax, figs[which], which, fig_no)
-    _legend_below(fig, ax, ncol=4)
+    legend_below(fig, ax, ncol=4)
     return fig
 
 
@@ -182,7 +179,7 @@ def table1_plot(t1):
         if w == 1:
             ax.set_yscale("log")
             _plain_log(ax)
-    _legend_below(fig, axes, ncol=3)
+    legend_below(fig, axes, ncol=3)
     return fig
 
 
@@ -204,7 +201,7 @@ def ess_plot(deg: dict, n_particles: int = E.N_PARTICLES):
         ax.set_xlabel("time step $k$")
         ax.set_ylabel("effective sample size / $N$")
         ax.set_title(f"{_letter(list(deg).index(w))} {E.MODEL_LABELS[w]}, $N$ = {n_particles}")
-    _legend_below(fig, axes, ncol=2)
+    legend_below(fig, axes, ncol=2)
     return fig
 
 
@@ -230,7 +227,7 @@ def sweep_plot(sens):
         if w == 1:
             ax.set_yscale("log")
             _plain_log(ax)
-    _legend_below(fig, axes, ncol=3)
+    legend_below(fig, axes, ncol=3)
     return fig
 
 
@@ -351,7 +348,7 @@ def seed_spread_plot(spread):
                       else "100-run set")
         ax.set_ylabel("mean per-run RMSE")
         ax.set_title(f"{_letter(w - 1)} {E.MODEL_LABELS[w]}")
-    _legend_below(fig, axes, ncol=2)
+    legend_below(fig, axes, ncol=2)
     return fig
 
 

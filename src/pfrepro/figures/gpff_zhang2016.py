@@ -13,8 +13,8 @@ from matplotlib.ticker import NullFormatter
 
 from ..experiments import gpff_zhang2016 as E
 from ..metrics import mc_summary, mse_per_component, mse_per_component_over_time
-from ..plotting import REFERENCE_COLOR, SERIES_COLORS, current_layout, method_color
-from . import new_figure
+from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color
+from . import legend_below, new_figure
 
 __all__ = ["fig1", "fig2", "fig3", "fig4", "fig5", "tables", "figures", "TABLES", "FIGURES", "N_STEPS",
            "BOT_FIGURE_FILTERS", "COMPONENT_LABELS", "table1_shown", "table2_shown", "cwpa_table",
@@ -28,28 +28,6 @@ N_STEPS = 6
 BOT_FIGURE_FILTERS = ("EKF", "UKF", "PF(500)", "GPFF(100)")
 #: axis labels of the BOT state components
 COMPONENT_LABELS = {"x": "x", "y": "y", "xdot": "ẋ", "ydot": "ẏ"}  # plain Unicode: no TeX in labels or docs
-
-
-def _legend_below(fig, handles, labels, *, max_ncol: int = 3) -> None:
-    """One legend for the whole figure, below its panels, with as many columns as fit the width the
-    figure is drawn for (:func:`pfrepro.plotting.current_layout`): a legend inside a panel hides data,
-    and one wider than a phone's 3 in would make the whole drawing wider and its text smaller."""
-    layout = current_layout()
-    width_in = layout.width_in if layout is not None else fig.get_size_inches()[0]
-    pt = layout.min_pt if layout is not None else 10.0
-    # an entry: the handle (2 em), a gap and the label at ~0.55 em per character, in inches
-    entry = max((2.8 + 0.55 * len(str(t))) * pt / 72 for t in labels)
-    ncol = int(max(1, min(max_ncol, len(labels), (0.95 * width_in) // entry)))
-    # the legend's rows are added to the figure's height, so the panels keep theirs
-    rows = -(-len(labels) // ncol)
-    w, h = fig.get_size_inches()
-    fig.set_size_inches(w, h + rows * 1.45 * pt / 72 + 0.15)
-    fig.legend(handles, labels, loc="outside lower center", ncol=ncol, frameon=False)
-
-
-def _handles(ax):
-    h, lab = ax.get_legend_handles_labels()
-    return h, lab
 
 
 def _color(name: str):
@@ -70,7 +48,7 @@ def fig1(mc_gaussian, mc_mixture):
             ax.plot(np.arange(1, len(v) + 1), v, mk, ms=3, lw=0.8, color=_color(name), label=name)
         ax.set_xlabel("Monte Carlo run"); ax.set_ylabel("MSE (eq 56)"); ax.set_title(label)
         ax.grid(alpha=0.3)
-    _legend_below(fig, *_handles(axes[0]))
+    legend_below(fig, axes[0], ncol=3)
     return fig
 
 
@@ -86,7 +64,7 @@ def fig2(mc_mixture, run: int = 0):
             color=_color("GPFF"), label="GPFF")
     ax.set_xlabel("x"); ax.set_ylabel("y"); ax.set_title(f"run {run + 1}, mixture noise")
     ax.grid(alpha=0.3)
-    _legend_below(fig, *_handles(ax), max_ncol=4)
+    legend_below(fig, ax, ncol=4)
     return fig
 
 
@@ -98,7 +76,7 @@ def fig3(mc_ung):
         ax.plot(np.arange(1, len(r) + 1), r, mk, ms=3, lw=0.8, color=_color(name), label=name)
     ax.set_yscale("log"); ax.set_xlabel("Monte Carlo run"); ax.set_ylabel(f"RMSE over {mc_ung.sim.T} steps")
     ax.grid(alpha=0.3, which="both")
-    _legend_below(fig, *_handles(ax))
+    legend_below(fig, ax, ncol=3)
     return fig
 
 
@@ -114,7 +92,7 @@ def fig4(mc_bot, names=BOT_FIGURE_FILTERS, dt: float = 0.1):
         ax.set_xlabel("time (s)"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]}"); ax.grid(alpha=0.3, which="both")
         ax.set_title(f"({'abcd'[j]}) {COMPONENT_LABELS[comp]}")
         ax.yaxis.set_minor_formatter(NullFormatter())   # minor labels of a short log axis overlap
-    _legend_below(fig, *_handles(axes[0, 0]), max_ncol=4)
+    legend_below(fig, axes[0, 0], ncol=4)
     return fig
 
 
@@ -128,7 +106,7 @@ def fig5(mc_bot, names=BOT_FIGURE_FILTERS):
         ax.set_xlabel("Monte Carlo run"); ax.set_ylabel(f"MSE of {COMPONENT_LABELS[comp]}")
         ax.set_title(f"({'abcd'[j]}) {COMPONENT_LABELS[comp]}"); ax.grid(alpha=0.3, which="both")
         ax.yaxis.set_minor_formatter(NullFormatter())
-    _legend_below(fig, *_handles(axes[0, 0]), max_ncol=4)
+    legend_below(fig, axes[0, 0], ncol=4)
     return fig
 
 
@@ -175,7 +153,7 @@ def fig_convergence_dlambda(conv: pd.DataFrame):
         ax.set_title(f"({panel}) {sched} λ grid")
         ax.set_ylabel("relative error")
         ax.grid(True, which="both", alpha=0.3)
-    _legend_below(fig, *_handles(axes[0]))
+    legend_below(fig, axes[0], ncol=3)
     return fig
 
 
@@ -190,7 +168,7 @@ def fig_convergence_n(conv_n: pd.DataFrame):
     ax.loglog(Ns, conv_n["mean error"].iloc[0] * np.sqrt(Ns[0] / Ns), "k:", label=r"$\propto N^{-1/2}$")
     ax.set_xlabel("particles N"); ax.set_ylabel("RMS relative error")
     ax.grid(True, which="both", alpha=0.3)
-    _legend_below(fig, *_handles(ax), max_ncol=2)
+    legend_below(fig, ax, ncol=2)
     return fig
 
 
@@ -221,7 +199,7 @@ def fig_bot_bound(results, components=("y", "ydot"), dt: float = 0.1):
         # the known-start bound and the UKF told x0 start near 0 and would stretch the axis over
         # decades no filter visits later
         log_ylim_from(ax, *[curves[name][tt > 1.0, j] for name in names], pad=1.5)
-    _legend_below(fig, *_handles(np.atleast_1d(axes)[0]))
+    legend_below(fig, np.atleast_1d(axes)[0], ncol=3)
     return fig
 
 

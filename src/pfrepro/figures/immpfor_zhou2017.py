@@ -14,8 +14,8 @@ import pandas as pd
 from ..experiments import immpfor_zhou2017 as E
 from ..models.tracking import IDX_POS, IDX_VEL
 from ..plotting import REFERENCE_COLOR, SERIES_COLORS, method_color  # noqa: F401  (the book palette)
-from . import new_figure
-from .dpf_hou2008 import card_table, choices_display, legend_below  # noqa: F401  (the chapter shows its tables through them)
+from ..bookinfo import card_table, choices_display  # noqa: F401  (their home is pfrepro.bookinfo; kept importable here)
+from . import legend_below, new_figure
 
 __all__ = ["plans_table", "d_sweep_figure", "table1_frame", "table1_shown", "fig1", "shade_turns", "rmse_plot", "fig2", "fig3", "fig4",
            "fig5", "tables", "figures", "readings_table", "robustness_table", "equal_compute_table", "modes_table",
