@@ -76,6 +76,11 @@ def configurations():
     # the IMM scenario's reference: a bootstrap PF on its first mode model (CV, the same measurement
     # model), N = 1500 as the IMM particle filters' 3 x 500 -- what an evaluation of this model costs
     add("PF systematic (IMM, CV mode)", "PF", "imm", 1500, lambda s: F.BootstrapParticleFilter(s.models[0], 1500))
+    # the same PF at N = 100, the particle count of the GPFF and LEDH rows: what an evaluation costs when
+    # the fixed work of a run's step (a generator call per run, numpy's cost per call) is spread over
+    # 100 particles instead of 1000 (references, not among the 28)
+    for key, label in (("ung", "UNGM"), ("bot", "BOT")):
+        add(f"PF systematic ({label}, N = 100)", "PF", key, 100, lambda m: F.BootstrapParticleFilter(m, 100))
     # GPFF per field and integrator
     for field in ("eq41", "eq43"):
         for integ in ("euler", "midpoint", "rk4"):
@@ -187,6 +192,11 @@ def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
     return derive(pd.DataFrame(rows).set_index("filter"))
 
 
+#: the column of the ratio against the bootstrap PF on the same model with the same particle count
+SAME_N_COLUMN = "time/count vs same-model PF, same N (batched)"
+#: rows that are yardsticks only, not among the particle filters the table judges
+REFERENCE_ROWS = ("PF systematic (IMM, CV mode)", "PF systematic (UNGM, N = 100)", "PF systematic (BOT, N = 100)")
+
 #: the models whose evaluation cost :func:`measure_models` compares (key, label)
 MODEL_ROWS = (("ung", "scalar growth model (UNGM)"), ("ung_ning", "scalar growth model, Ning's noise"),
               ("bot", "bearings-only (4-D)"), ("imm", "manoeuvring target, CV mode (6-D)"))
@@ -269,6 +279,14 @@ def derive(df: pd.DataFrame) -> pd.DataFrame:
                    for mkey in df.loc[is_pf, "model"].unique()}
             base0 = float(val[is_pf].iloc[0]) if is_pf.any() else np.nan
             df[col] = [v / ref.get(mkey, base0) for v, mkey in zip(val, df["model"])]
+            if src is not None and "particles" in df:
+                # the bootstrap PF on the same model with the same particle count, where the table has
+                # one: the fixed work of a run's step weighs alike in both, so the ratio is the count's
+                # prediction with that work taken out (else the same-model PF)
+                same_n = {(mkey, n): float(v) for mkey, n, v in
+                          zip(df.loc[is_pf, "model"], df.loc[is_pf, "particles"], val[is_pf])}
+                df[SAME_N_COLUMN] = [v / same_n.get((mkey, n), ref.get(mkey, base0))
+                                     for v, mkey, n in zip(val, df["model"], df["particles"])]
     return df
 
 
@@ -356,13 +374,13 @@ def annotate(df: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     """Add the ``particle filter`` and ``why`` columns.
 
     ``particle filter``: the rows :func:`pfrepro.cost.count_predicted` counts (particles, not the
-    Kalman family, not the IMM scenario's reference PF). ``why`` says, for a ratio above ``limit``,
+    Kalman family, not the :data:`REFERENCE_ROWS`). ``why`` says, for a ratio above ``limit``,
     what the count does not see: :data:`WHY` of the family where the filter exceeds it against the
     bootstrap PF on its own model (the yardstick); :data:`MODEL_COST` where it is within it there but
     not against the growth-model PF; :data:`SINGLE` where only one run alone exceeds it."""
     out = df.copy()
     out["particle filter"] = (out["particles"].notna() & (out["family"] != "Kalman")
-                              & ~out.index.str.contains("IMM, CV mode", regex=False))
+                              & ~out.index.isin(REFERENCE_ROWS))
     nan = pd.Series(np.nan, index=out.index)
     same = out.get("time/count vs same-model PF (batched)", nan)
     whys = []

@@ -296,6 +296,13 @@ def test_count_predicted_judges_on_the_same_model_ratio():
     assert int(count_predicted(_bench_table(), limit=2.2)["within"].sum()) == 3
     # without the marker column every row with particles counts (the reference row too)
     assert len(count_predicted(_bench_table().drop(columns=["particle filter"]))) == 4
+    assert "same N" not in out
+    from pfrepro.cost import SAME_N_RATIO
+
+    with_n = _bench_table().assign(**{SAME_N_RATIO: [1.0, 1.9, 1.6, 9.0, 1.0]})
+    out = count_predicted(with_n)
+    assert list(out["within at the same N"]) == [True, True, True]     # the flow's 2.1 is 1.6 at its own N
+    assert list(out["within"]) == [True, True, False]
 
 
 def test_count_predicted_refuses_bad_tables():
@@ -324,7 +331,8 @@ def test_the_book_bench_table_marks_its_particle_filters():
     assert "particle filter" in bench.columns
     pfs = count_predicted(bench)
     assert len(pfs) == 28
-    assert not pfs.index.str.contains("CV mode").any() and "EKF (BOT)" not in pfs.index
+    assert not pfs.index.str.contains("CV mode|N = 100").any() and "EKF (BOT)" not in pfs.index
+    assert "same N" in pfs and pfs["same N"].notna().all()
 
 
 def test_the_book_model_cost_table_has_every_model_of_the_bench():

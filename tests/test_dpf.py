@@ -709,3 +709,33 @@ def test_theta_grid_tests_for_collapse_per_run_not_over_all_runs():
         ThetaGridReference(OffGridAtStep2(Q=1.0, R=0.01, P0=4.0), **kw).filter(y)
     ok = ThetaGridReference(LinearTheta(Q=1.0, R=0.01, P0=4.0), **kw).filter(y).diagnostics
     assert ok["n_collapsed"] == 0 and np.all(np.isfinite(ok["log_evidence"]))
+
+
+def test_liu_west_weighted_quantiles_are_one_interp_per_level_bit_for_bit():
+    """The θ quantiles of the Liu-West filter: one ``np.interp`` per run for all levels gives the
+    bits of one call per run and level (the first implementation, kept here), on ties, a
+    weight carried by one particle, single particles and levels at 0 and 1."""
+    from pfrepro.filters.liu_west import weighted_quantiles
+
+    def one_call_per_level(w, v, q):
+        order = np.argsort(v, axis=1)
+        vs = np.take_along_axis(v, order, 1)
+        cw = np.cumsum(np.take_along_axis(w, order, 1), axis=1)
+        cw -= 0.5 * np.take_along_axis(w, order, 1)
+        return np.stack([np.array([np.interp(qq, cw[r], vs[r]) for r in range(v.shape[0])])
+                         for qq in np.atleast_1d(q)])
+
+    g = np.random.default_rng(0)
+    for t in range(120):
+        runs, N = int(g.integers(1, 6)), int(g.integers(1, 50))
+        v = g.standard_normal((runs, N))
+        if t % 3 == 0:
+            v = np.round(v, 1)                      # ties
+        w = g.random((runs, N)) ** int(g.integers(1, 30))
+        if t % 5 == 0:
+            w[:] = 0.0
+            w[:, 0] = 1.0                            # one particle carries the weight
+        w /= w.sum(axis=1, keepdims=True)
+        for q in ((0.025, 0.5, 0.975), (0.5,), 0.3, (0.0, 1.0, 0.9999)):
+            new, old = weighted_quantiles(w, v, q), one_call_per_level(w, v, q)
+            assert new.shape == old.shape and np.array_equal(new, old), (t, q)

@@ -67,7 +67,7 @@ from .montecarlo import time_filter_repeats
 
 __all__ = ["COUNTED", "COUNT_COLUMNS", "PRINTED_COLUMNS", "CountingModel", "count_model_calls", "cost_counts",
            "time_repeats", "time_summary", "median_interval", "imm_evaluations", "smc2_evaluations",
-           "count_predicted", "SAME_MODEL_RATIO", "UNGM_RATIO"]
+           "count_predicted", "SAME_MODEL_RATIO", "SAME_N_RATIO", "UNGM_RATIO"]
 
 #: counted model method -> column name
 COUNTED = {"sample_transition": "transitions", "log_likelihood": "likelihoods", "f": "f", "h": "h",
@@ -292,6 +292,8 @@ def time_summary(times: pd.DataFrame, reference: str | None = None) -> pd.DataFr
 #: column of a ``benchmarks/bench_all.py`` table: a filter's batched ns per counted model
 #: evaluation divided by the bootstrap PF's on the filter's own model
 SAME_MODEL_RATIO = "time/count vs same-model PF (batched)"
+#: the same ratio against the bootstrap PF on the filter's own model with the filter's particle count
+SAME_N_RATIO = "time/count vs same-model PF, same N (batched)"
 #: the same ratio against the bootstrap PF on the scalar growth model (UNGM)
 UNGM_RATIO = "time/count vs PF (batched)"
 
@@ -305,7 +307,11 @@ def count_predicted(bench: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     scalar and a cosine), so a filter's count predicts its time relative to the bootstrap PF on
     the *same* model: the ratio :data:`SAME_MODEL_RATIO`, batched over runs as every experiment
     runs. A filter is within its count when that ratio is at most ``limit``; the ratio against
-    the growth-model PF (:data:`UNGM_RATIO`) is returned beside it.
+    the growth-model PF (:data:`UNGM_RATIO`) is returned beside it, and, where the table has it,
+    the ratio against the same-model PF with the filter's own particle count
+    (:data:`SAME_N_RATIO`): a run's step has work that does not grow with N (a random-generator
+    call per run, numpy's fixed cost per call), which weighs more per evaluation at N = 100 than
+    at N = 1000, in the bootstrap PF as in any filter.
 
     Parameters
     ----------
@@ -321,7 +327,8 @@ def count_predicted(bench: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     -------
     pandas.DataFrame
         One row per particle filter: ``same model`` and ``UNGM`` (the two ratios), ``within``
-        (same-model ratio <= ``limit``) and ``within vs UNGM``.
+        (same-model ratio <= ``limit``) and ``within vs UNGM``; with :data:`SAME_N_RATIO` in the
+        table also ``same N`` and ``within at the same N``.
 
     Raises
     ------
@@ -341,8 +348,13 @@ def count_predicted(bench: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     if same.isna().any():
         raise ValueError(f"particle filters without a same-model ratio: {list(same.index[same.isna()])}")
     ungm = rows[UNGM_RATIO].astype(float)
-    return pd.DataFrame({"same model": same, "UNGM": ungm, "within": same <= limit, "within vs UNGM": ungm <= limit},
-                        index=rows.index)
+    out = pd.DataFrame({"same model": same, "UNGM": ungm, "within": same <= limit, "within vs UNGM": ungm <= limit},
+                       index=rows.index)
+    if SAME_N_RATIO in bench.columns:
+        same_n = rows[SAME_N_RATIO].astype(float)
+        out["same N"] = same_n
+        out["within at the same N"] = same_n <= limit
+    return out
 
 
 def imm_evaluations(result, n_particles: int, r: int = 3) -> np.ndarray:

@@ -59,12 +59,22 @@ def shrinkage_kernel(w, theta, delta: float):
 
 
 def weighted_quantiles(w, v, q):
-    """Weighted quantiles per run: w, v (runs, N) -> (len(q), runs)."""
+    """Weighted quantiles per run: w, v (runs, N) -> (len(q), runs).
+
+    The values sorted per run, the mid-point cumulative weights, and one ``np.interp`` per run
+    for all levels at once (the same numbers as one call per level: interp computes each point
+    on its own)."""
     order = np.argsort(v, axis=1)
-    vs = np.take_along_axis(v, order, 1)
-    cw = np.cumsum(np.take_along_axis(w, order, 1), axis=1)
-    cw -= 0.5 * np.take_along_axis(w, order, 1)
-    return np.stack([np.array([np.interp(qq, cw[r], vs[r]) for r in range(v.shape[0])]) for qq in np.atleast_1d(q)])
+    order += (np.arange(v.shape[0]) * v.shape[1])[:, None]     # flat indices: plain gathers
+    vs = np.take(v, order)
+    ws = np.take(w, order)
+    cw = np.cumsum(ws, axis=1)
+    cw -= 0.5 * ws
+    levels = np.atleast_1d(np.asarray(q, float))
+    out = np.empty((levels.size, v.shape[0]))
+    for r in range(v.shape[0]):
+        out[:, r] = np.interp(levels, cw[r], vs[r])
+    return out
 
 
 class LiuWestFilter(ParameterLearningFilter):
@@ -110,13 +120,13 @@ class LiuWestFilter(ParameterLearningFilter):
             counts = resample_counts(g, rng, self.resampling)
             idx = np.repeat(np.arange(runs * N), counts.ravel()).reshape(runs, N)
             j = idx - flat
-            mj = np.take_along_axis(m, j, 1)
+            mj = np.take(m, idx)                        # m[r, j]: idx is j's flat index in run r
             theta = mj + np.sqrt(h2V)[:, None] * rng.standard_normal((runs, N))
             xj = x.reshape(runs * N, n)[idx]
             x = mdl.sample_transition(xj, k, theta[..., None], rng)
             if not np.all(np.isfinite(x)):
                 raise FilterDivergenceError(f"Liu-West particles became non-finite at step {k}")
-            logw = mdl.log_likelihood(z, x) - np.take_along_axis(lg, j, 1)
+            logw = mdl.log_likelihood(z, x) - np.take(lg, idx)
             w, _, c = normalize_log_weights(logw)
             coll[:, k - 1] = c
             xs[:, k - 1] = np.einsum("rn,rni->ri", w, x)
