@@ -28,3 +28,22 @@ def random_linear_model(seed, nx=3, ny=2):
 @pytest.fixture
 def linear_model():
     return random_linear_model(12345)
+
+
+# the radar tracking scenario of the IMM tests: CV, CT (3 deg/s) and CA modes, sticky Markov chain
+TRACK_X0 = np.array([60000.0, -172.0, 0.0, 40000.0, 200.0, 0.0])
+TRACK_MEAS = (100.0, 5.0, 0.01)
+TRACK_P0 = np.diag(np.square([100.0, 10.0, 1.0, 100.0, 10.0, 1.0]))
+
+
+def tracking_system():
+    """Three radar-tracking modes (CV, CT, CA) on one 6-D state, switched by a sticky chain."""
+    import math
+
+    from pfrepro.models.jump_markov import JumpMarkovSystem
+    from pfrepro.models.tracking import ca_model, ct_model, cv_model
+
+    X0, MEAS, P0 = TRACK_X0, TRACK_MEAS, TRACK_P0
+    ms = [cv_model(1.0, 1.0, MEAS, X0, P0=P0), ct_model(1.0, math.radians(3), 1.0, MEAS, X0, P0=P0),
+          ca_model(1.0, 9.0, MEAS, X0, P0=P0)]
+    return JumpMarkovSystem(ms, [[0.9, 0.05, 0.05], [0.05, 0.9, 0.05], [0.05, 0.05, 0.9]])

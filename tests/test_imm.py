@@ -4,7 +4,6 @@ Every inner step is pinned by a hand-computed case or an invariant: mixing proba
 (eq 6), the interaction draw (eq 7), model likelihoods in both readings (eqs 11-15),
 model probabilities (eq 16), resampling (eq 19) and IMMPFOR's replacement (eqs 22-25).
 """
-import math
 
 import numpy as np
 import pytest
@@ -19,18 +18,10 @@ from pfrepro.filters.imm import (IMMKalman, IMMParticleFilter, IMMPFOR, _indices
 from pfrepro.filters.resampling import resample_counts
 from pfrepro.models import LinearGaussianModel
 from pfrepro.models.jump_markov import JumpMarkovSystem
-from pfrepro.models.tracking import ca_model, ct_model, cv_model
+from pfrepro.models.tracking import cv_model
 from pfrepro.rng import RunStreams
 
-X0 = np.array([60000.0, -172.0, 0.0, 40000.0, 200.0, 0.0])
-MEAS = (100.0, 5.0, 0.01)
-P0 = np.diag(np.square([100.0, 10.0, 1.0, 100.0, 10.0, 1.0]))
-
-
-def tracking_system():
-    w = math.radians(3)
-    ms = [cv_model(1.0, 1.0, MEAS, X0, P0=P0), ct_model(1.0, w, 1.0, MEAS, X0, P0=P0), ca_model(1.0, 9.0, MEAS, X0, P0=P0)]
-    return JumpMarkovSystem(ms, [[0.9, 0.05, 0.05], [0.05, 0.9, 0.05], [0.05, 0.05, 0.9]])
+from conftest import TRACK_MEAS as MEAS, TRACK_P0 as P0, TRACK_X0 as X0, tracking_system
 
 
 def scalar_system(Pi=((0.95, 0.05), (0.1, 0.9)), R=1.0):

@@ -21,20 +21,10 @@ from pfrepro.filters.imm import (IMMParticleFilter, IMMPFOR, _counts_from_below,
                                  systematic_indices, unit_ball_volume)
 from pfrepro.filters.jump_markov_pf import JumpMarkovParticleFilter, noise_rows
 from pfrepro.filters.smc_steps import repeat_rows
-from pfrepro.models.jump_markov import JumpMarkovSystem
-from pfrepro.models.tracking import ca_model, ct_model, cv_model
 from pfrepro.montecarlo import filter_streams, truth_streams
 from pfrepro.rng import take_runs
 
-X0 = np.array([60000.0, -172.0, 0.0, 40000.0, 200.0, 0.0])
-MEAS = (100.0, 5.0, 0.01)
-P0 = np.diag(np.square([100.0, 10.0, 1.0, 100.0, 10.0, 1.0]))
-
-
-def tracking_system():
-    w = math.radians(3)
-    ms = [cv_model(1.0, 1.0, MEAS, X0, P0=P0), ct_model(1.0, w, 1.0, MEAS, X0, P0=P0), ca_model(1.0, 9.0, MEAS, X0, P0=P0)]
-    return JumpMarkovSystem(ms, [[0.9, 0.05, 0.05], [0.05, 0.9, 0.05], [0.05, 0.05, 0.9]])
+from conftest import tracking_system
 
 
 # -- the first implementations (verbatim but for the names) -------------------------------------------

@@ -34,8 +34,8 @@ import numpy as np
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
 from .cmspf import _normalize, select_top_likelihood
-from .particle import normalize_log_weights, warn_collapse
-from .resampling import check_scheme, resample, resampling_counts_function
+from .particle import warn_collapse
+from .resampling import check_scheme, resampling_counts_function
 
 __all__ = ["EvolutionSamplingParticleFilter", "sbx_children"]
 
@@ -229,48 +229,6 @@ class EvolutionSamplingParticleFilter(Filter):
             origin[:, k - 1, 0] = n_res / N
             origin[:, k - 1, 1] = (N - n_res - n_sbx) / N
             origin[:, k - 1, 2] = n_sbx / N
-
-    def _loop_reference(self, y, rng, x, xs, acc_rate, origin, collapsed, log_trans, Lq):
-        """The loop as first written (fancy indexing, ``resample``, ``rng.uniform``): the reference
-        the tests hold :meth:`_loop` to, bit for bit."""
-        runs, T, _ = y.shape
-        N, n = self.n_particles, self.model.dim_x
-        npair = N // 2
-        rows = np.arange(runs)[:, None]
-        for k in range(1, T + 1):
-            if not np.all(np.isfinite(x)):
-                raise FilterDivergenceError(f"ESPF particles became non-finite at step {k}")
-            yk = y[:, k - 1]
-            m = self.model.f(x, k)                                       # predicted means
-            xp = m + rng.standard_normal((runs, N, n)) @ Lq.T
-            ll = self.model.log_likelihood(yk, xp)
-            w, _, collapsed[:, k - 1] = normalize_log_weights(ll)
-            a = resample(w, rng, self.resampling)                        # ancestors (runs, N)
-            xr, mr, llr = xp[rows, a], m[rows, a], ll[rows, a]
-            prop = xr + self.mcmc_scale * (rng.standard_normal((runs, N, n)) @ Lq.T)
-            llp = self.model.log_likelihood(yk, prop)
-            log_alpha = llp + log_trans(prop, mr) - llr - log_trans(xr, mr)
-            accept = np.log(rng.random((runs, N))) < log_alpha
-            xm = np.where(accept[..., None], prop, xr)
-            llm = np.where(accept, llp, llr)
-            acc_rate[:, k - 1] = accept.mean(axis=1)
-            perm = rng.permuted(np.broadcast_to(np.arange(N), (runs, N)), axis=1)
-            p1 = xr[rows, perm[:, :npair]]
-            p2 = xr[rows, perm[:, npair:2 * npair]]
-            u = rng.uniform(np.finfo(float).eps, 1.0 - np.finfo(float).eps, p1.shape)
-            c1, c2 = sbx_children(p1, p2, u, self.sbx_eta)
-            parts = [c1, c2]
-            if N % 2:
-                parts.append(xr[rows, perm[:, -1:]])
-            xc = np.concatenate(parts, axis=1)
-            llc = self.model.log_likelihood(yk, xc)
-            pool_x = np.concatenate([xr, xm, xc], axis=1)
-            pool_ll = np.concatenate([llr, llm, llc], axis=1)
-            sel = select_top_likelihood(pool_ll, N, sort=False)
-            x = np.take_along_axis(pool_x, sel[..., None], axis=1)
-            xs[:, k - 1] = x.mean(axis=1)
-            origin[:, k - 1] = np.stack([(sel < N).mean(1), ((sel >= N) & (sel < 2 * N)).mean(1),
-                                         (sel >= 2 * N).mean(1)], axis=1)
 
     def __repr__(self) -> str:
         return (f"EvolutionSamplingParticleFilter(N={self.n_particles}, mcmc_scale={self.mcmc_scale}, "

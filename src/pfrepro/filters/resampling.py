@@ -123,21 +123,6 @@ def _residual_counts(w, rng):
     return counts
 
 
-def _residual_counts_reference(w, rng):
-    """The residual scheme as first written (a loop over runs): the tests' reference."""
-    runs, N = w.shape
-    counts = np.floor(N * w).astype(np.intp)
-    rest = N - counts.sum(axis=1)
-    resid = N * w - counts
-    for r in np.flatnonzero(rest > 0):
-        c = np.cumsum(resid[r])
-        c /= c[-1]
-        c[-1] = 1.0
-        draws = np.minimum(np.searchsorted(c, run_stream(rng, r).random(rest[r]), side="right"), N - 1)
-        counts[r] += np.bincount(draws, minlength=N)
-    return counts
-
-
 _COUNTS = {
     "multinomial": _multinomial_counts,
     "stratified": _stratified_counts,
