@@ -365,11 +365,6 @@ MODEL_COST = ("an evaluation of this model costs more than one of the scalar gro
               "state whose transition draws correlated noise through a matrix product, and a measurement with "
               "an arctan2 and an angle wrap (and, for the manoeuvring target, a range and a range rate); "
               "against the bootstrap PF on its own model the filter is within 2x of its count")
-#: why a filter within its count batched is not within it on one run
-SINGLE = ("one run alone pays numpy's fixed cost per call at every step, which a batch of runs shares; "
-          "batched, the filter is within 2x of its count")
-
-
 def annotate(df: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     """Add the ``particle filter`` and ``why`` columns.
 
@@ -377,7 +372,8 @@ def annotate(df: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     Kalman family, not the :data:`REFERENCE_ROWS`). ``why`` says, for a ratio above ``limit``,
     what the count does not see: :data:`WHY` of the family where the filter exceeds it against the
     bootstrap PF on its own model (the yardstick); :data:`MODEL_COST` where it is within it there but
-    not against the growth-model PF; :data:`SINGLE` where only one run alone exceeds it."""
+    not against the growth-model PF. (A run alone pays numpy's fixed cost per call at every step,
+    which a batch shares: the one-run ratios are in the table, without a note.)"""
     out = df.copy()
     out["particle filter"] = (out["particles"].notna() & (out["family"] != "Kalman")
                               & ~out.index.isin(REFERENCE_ROWS))
@@ -390,8 +386,6 @@ def annotate(df: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
             whys.append(why(name, fam) if max(sm, b, one) > limit else "")
         elif b > limit and out.loc[name, "model"] in ("bot", "imm"):
             whys.append(MODEL_COST)
-        elif one > limit:
-            whys.append(SINGLE)
         else:
             whys.append("")
     out["why"] = whys
