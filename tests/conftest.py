@@ -47,3 +47,14 @@ def tracking_system():
     ms = [cv_model(1.0, 1.0, MEAS, X0, P0=P0), ct_model(1.0, math.radians(3), 1.0, MEAS, X0, P0=P0),
           ca_model(1.0, 9.0, MEAS, X0, P0=P0)]
     return JumpMarkovSystem(ms, [[0.9, 0.05, 0.05], [0.05, 0.9, 0.05], [0.05, 0.05, 0.9]])
+
+
+def three_claims_registry():
+    """A claims registry of one reproduced, one not reproduced and one inconclusive claim (Li 2012's)."""
+    from pfrepro.claims import ClaimsRegistry
+
+    reg = ClaimsRegistry("ekf_pf_li2012")
+    reg.add("cell", "EKF RMSE on model 1 is 13.2", published=13.2, reproduced=13.0, se=0.5)    # reproduced
+    reg.add("ratio", "The EKF's RMSE is more than 7 times the PF's", diff=-3.0, diff_se=0.5)   # not reproduced
+    reg.add("tie", "PF and EKF are close", diff=0.1, diff_se=0.5)                               # inconclusive
+    return reg

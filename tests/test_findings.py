@@ -2,15 +2,12 @@
 import pytest
 
 from pfrepro import findings
+from conftest import three_claims_registry
 from pfrepro.claims import ClaimsRegistry
 
 
 def _reg():
-    reg = ClaimsRegistry("ekf_pf_li2012")
-    reg.add("cell", "EKF RMSE on model 1 is 13.2", published=13.2, reproduced=13.0, se=0.5)        # reproduced
-    reg.add("ratio", "The EKF's RMSE is more than 7 times the PF's", diff=-3.0, diff_se=0.5)       # not reproduced
-    reg.add("tie", "PF and EKF are close", diff=0.1, diff_se=0.5)                                   # inconclusive
-    return reg
+    return three_claims_registry()
 
 
 def test_findings_html_lists_main_claims_with_links_counts_and_takeaway():

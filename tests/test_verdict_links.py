@@ -10,17 +10,14 @@ import pytest
 import yaml
 
 from pfrepro import bookinfo, findings
-from pfrepro.claims import VERDICT_HREF, VERDICTS, ClaimsRegistry, claims_table, verdict_html
+from conftest import three_claims_registry
+from pfrepro.claims import VERDICT_HREF, VERDICTS, claims_table, verdict_html
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _reg():
-    reg = ClaimsRegistry("ekf_pf_li2012")
-    reg.add("cell", "EKF RMSE on model 1 is 13.2", published=13.2, reproduced=13.0, se=0.5)    # reproduced
-    reg.add("ratio", "The EKF's RMSE is more than 7 times the PF's", diff=-3.0, diff_se=0.5)   # not reproduced
-    reg.add("tie", "PF and EKF are close", diff=0.1, diff_se=0.5)                               # inconclusive
-    return reg
+    return three_claims_registry()
 
 
 @pytest.mark.parametrize("word", VERDICTS)

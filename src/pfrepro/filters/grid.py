@@ -50,13 +50,21 @@ def compound_lost(steps, axis):
     return -np.expm1(np.log1p(-np.minimum(steps, 1.0)).sum(axis=axis))
 
 
-def grid_mass_message(who, frac, runs_lost, runs, first_step, bounds_name) -> str:
-    """The one-line report of mass leaving a grid (shared by the grid filters)."""
+def warn_lost_mass(who, lost, tol, bounds_name) -> None:
+    """Warn (:class:`GridMassWarning`, one line) if the mass lost off a grid exceeded ``tol`` at
+    some step: ``lost`` (runs, T) is the fraction lost per run and step. Shared by the grid
+    filters; the warning points at the caller of the filter's ``filter``."""
+    over = lost > tol
+    if not over.any():
+        return
+    runs_lost = np.flatnonzero(over.any(axis=1))
+    first_step = int(np.argmax(over.any(axis=0))) + 1
     shown = runs_lost[:10].tolist()
-    return (f"{who}: up to {frac:.3g} of the predictive probability mass left the grid at one step "
-            f"(first above the tolerance at step {first_step}) in {len(runs_lost)} of {runs} runs {shown}"
-            f"{' ...' if len(runs_lost) > 10 else ''}; the posterior is not contained in the grid and "
-            f"its estimates are wrong there: widen {bounds_name} (diagnostics['lost_mass_steps'])")
+    warnings.warn(GridMassWarning(
+        f"{who}: up to {float(lost.max()):.3g} of the predictive probability mass left the grid at one step "
+        f"(first above the tolerance at step {first_step}) in {len(runs_lost)} of {lost.shape[0]} runs {shown}"
+        f"{' ...' if len(runs_lost) > 10 else ''}; the posterior is not contained in the grid and "
+        f"its estimates are wrong there: widen {bounds_name} (diagnostics['lost_mass_steps'])"), stacklevel=3)
 
 
 class GridFilter(Filter):
@@ -209,12 +217,7 @@ class GridFilter(Filter):
                 f"GridFilter: the likelihood vanished at every node with predictive mass in "
                 f"{int(collapsed.sum())} of {collapsed.size} run-steps (an outlier measurement); those "
                 f"measurements were ignored (diagnostics['collapsed'])"), stacklevel=2)
-        over = lost > self.lost_mass_tol
-        if over.any():
-            bad = np.flatnonzero(over.any(axis=1))
-            warnings.warn(GridMassWarning(grid_mass_message(
-                "GridFilter", float(lost.max()), bad, runs, int(np.argmax(over.any(axis=0))) + 1,
-                f"bounds ({self.grid[0]:g}, {self.grid[-1]:g})")), stacklevel=2)
+        warn_lost_mass("GridFilter", lost, self.lost_mass_tol, f"bounds ({self.grid[0]:g}, {self.grid[-1]:g})")
         edge = p[:, :5].sum(axis=1) + p[:, -5:].sum(axis=1)
         return FilterResult(means, covs, diagnostics={
             "lost_mass": compound_lost(lost, axis=1), "lost_mass_steps": lost,

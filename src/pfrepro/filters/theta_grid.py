@@ -26,7 +26,7 @@ import warnings
 
 from ..validation import check_positive_int, check_probability, check_quantile_levels
 from .base import Filter, FilterResult
-from .grid import LOST_MASS_TOL, GridMassWarning, compound_lost, grid_mass_message, lost_fraction
+from .grid import LOST_MASS_TOL, compound_lost, lost_fraction, warn_lost_mass
 from .particle import WeightCollapseWarning
 from .parameter_learning import ParameterLearningFilter
 
@@ -199,12 +199,7 @@ class ThetaGridReference(ParameterLearningFilter):
                 f"ThetaGridReference: the likelihood vanished at every grid node in {int(collapsed.sum())} of "
                 f"{collapsed.size} run-steps (an outlier measurement); those measurements were ignored "
                 f"(diagnostics['collapsed'])"), stacklevel=2)
-        over = lost_w > self.lost_mass_tol
-        if over.any():
-            bad = np.flatnonzero(over.any(axis=1))
-            warnings.warn(GridMassWarning(grid_mass_message(
-                "ThetaGridReference", float(lost_w.max()), bad, runs, int(np.argmax(over.any(axis=0))) + 1,
-                f"x_bounds ({g[0]:g}, {g[-1]:g})")), stacklevel=2)
+        warn_lost_mass("ThetaGridReference", lost_w, self.lost_mass_tol, f"x_bounds ({g[0]:g}, {g[-1]:g})")
         # posterior of θ at every k (uniform prior on the grid range)
         mean, var, qs = posterior_summary(self.theta, logev, (0.025, 0.5, 0.975), self.n_fine)
         lw = logev - logev.max(-1, keepdims=True)
