@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pfrepro.cost import count_model_calls
+from pfrepro.cost import SAME_MODEL_RATIO, SAME_N_RATIO, count_model_calls, repeat_range_columns
 from pfrepro.montecarlo import filter_streams, truth_streams
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -188,12 +188,15 @@ def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
                      "single ns/particle-step": 1e9 * s / P if P else np.nan,
                      "batched ns/particle-step": 1e9 * b / P if P else np.nan,
                      "single ns/evaluation": 1e9 * s / per_step if per_step else np.nan,
-                     "batched ns/evaluation": 1e9 * b / per_step if per_step else np.nan})
+                     "batched ns/evaluation": 1e9 * b / per_step if per_step else np.nan}
+                    | {f"{REPEAT_COLUMN} {k}": t / T / runs for k, t in enumerate(batched[n], 1)})
     return derive(pd.DataFrame(rows).set_index("filter"))
 
 
-#: the column of the ratio against the bootstrap PF on the same model with the same particle count
-SAME_N_COLUMN = "time/count vs same-model PF, same N (batched)"
+#: the columns of the ratios against the bootstrap PF on the same model, and with the same particle count
+SAME_MODEL_COLUMN, SAME_N_COLUMN = SAME_MODEL_RATIO, SAME_N_RATIO
+#: the batched time of one repeat (``REPEAT_COLUMN k``, seconds per step and run): the ratios' range
+REPEAT_COLUMN = "batched s/step/run, repeat"
 #: rows that are yardsticks only, not among the particle filters the table judges
 REFERENCE_ROWS = ("PF systematic (IMM, CV mode)", "PF systematic (UNGM, N = 100)", "PF systematic (BOT, N = 100)")
 
@@ -243,6 +246,25 @@ def measure_models(runs: int = 100, N: int = 1000, repeats: int = 5, seed: int =
     return df
 
 
+def _against_same_model(df: pd.DataFrame, val: pd.Series):
+    """``val`` (ns per evaluation, one per row) divided by the bootstrap PF's on the row's own model,
+    and (where the table has the particle counts) by that PF's with the row's own particle count
+    (else the same-model PF's): the same-model and the same-N ratios (the second ``None`` without
+    a ``particles`` column)."""
+    is_pf = df.index.str.startswith("PF systematic")
+    ref = {mkey: float(val[is_pf & (df["model"] == mkey)].iloc[0]) for mkey in df.loc[is_pf, "model"].unique()}
+    base0 = float(val[is_pf].iloc[0]) if is_pf.any() else np.nan
+    same = pd.Series([v / ref.get(mkey, base0) for v, mkey in zip(val, df["model"])], index=df.index)
+    if "particles" not in df:
+        return same, None
+    # the bootstrap PF on the same model with the same particle count, where the table has one: the
+    # fixed work of a run's step weighs alike in both, so the ratio is the count's prediction with
+    # that work taken out (else the same-model PF)
+    same_n = {(mkey, n): float(v) for mkey, n, v in zip(df.loc[is_pf, "model"], df.loc[is_pf, "particles"], val[is_pf])}
+    return same, pd.Series([v / same_n.get((mkey, n), ref.get(mkey, base0))
+                            for v, mkey, n in zip(val, df["model"], df["particles"])], index=df.index)
+
+
 def derive(df: pd.DataFrame) -> pd.DataFrame:
     """The columns computed from the measured times and the counts: ns per evaluation and the
     time/count ratios against the bootstrap PF."""
@@ -266,27 +288,28 @@ def derive(df: pd.DataFrame) -> pd.DataFrame:
         # (the bearings-only h is two arctan2 and an angle wrap a particle, the UNGM's one cosine):
         # the count predicts a filter's time relative to the bootstrap PF on the SAME model, where
         # the table has one (else the first PF row, the UNGM's)
-        is_pf = df.index.str.startswith("PF systematic")
-        for col, src in (("time/count vs same-model PF (batched)", "batched ns/evaluation"),
-                         ("time/count vs same-model PF (batched, CPU)", None)):
-            if src is None:
-                if "batched CPU s/step/run" not in df:
-                    continue
-                val = 1e9 * df["batched CPU s/step/run"] / per_step
-            else:
-                val = df[src]
-            ref = {mkey: float(val[is_pf & (df["model"] == mkey)].iloc[0])
-                   for mkey in df.loc[is_pf, "model"].unique()}
-            base0 = float(val[is_pf].iloc[0]) if is_pf.any() else np.nan
-            df[col] = [v / ref.get(mkey, base0) for v, mkey in zip(val, df["model"])]
-            if src is not None and "particles" in df:
-                # the bootstrap PF on the same model with the same particle count, where the table has
-                # one: the fixed work of a run's step weighs alike in both, so the ratio is the count's
-                # prediction with that work taken out (else the same-model PF)
-                same_n = {(mkey, n): float(v) for mkey, n, v in
-                          zip(df.loc[is_pf, "model"], df.loc[is_pf, "particles"], val[is_pf])}
-                df[SAME_N_COLUMN] = [v / same_n.get((mkey, n), ref.get(mkey, base0))
-                                     for v, mkey, n in zip(val, df["model"], df["particles"])]
+        df[SAME_MODEL_COLUMN], same_n = _against_same_model(df, df["batched ns/evaluation"])
+        if same_n is not None:
+            df[SAME_N_COLUMN] = same_n
+        if "batched CPU s/step/run" in df:
+            df["time/count vs same-model PF (batched, CPU)"] = _against_same_model(
+                df, 1e9 * df["batched CPU s/step/run"] / per_step)[0]
+        # the same ratios repeat by repeat (each against the reference PF of the same repeat, which ran
+        # beside it: a drift of the load hits both), and their lowest and highest: a filter is within
+        # its count in every repeat, over it in every repeat, or at the edge
+        reps = sorted(int(c.rsplit(" ", 1)[1]) for c in df.columns if c.startswith(REPEAT_COLUMN))
+        if reps:
+            ratios = {SAME_MODEL_COLUMN: [], SAME_N_COLUMN: []}
+            for r in reps:
+                sm, sn = _against_same_model(df, 1e9 * df[f"{REPEAT_COLUMN} {r}"] / per_step)
+                ratios[SAME_MODEL_COLUMN].append(sm)
+                if sn is not None:
+                    ratios[SAME_N_COLUMN].append(sn)
+            for col, per_repeat in ratios.items():
+                if per_repeat:
+                    low, high = repeat_range_columns(col)
+                    stacked = pd.concat(per_repeat, axis=1)
+                    df[low], df[high] = stacked.min(axis=1), stacked.max(axis=1)
     return df
 
 
@@ -378,7 +401,7 @@ def annotate(df: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     out["particle filter"] = (out["particles"].notna() & (out["family"] != "Kalman")
                               & ~out.index.isin(REFERENCE_ROWS))
     nan = pd.Series(np.nan, index=out.index)
-    same = out.get("time/count vs same-model PF (batched)", nan)
+    same = out.get(SAME_MODEL_COLUMN, nan)
     whys = []
     for name, fam, sm, b, one in zip(out.index, out["family"], same, out["time/count vs PF (batched)"],
                                      out["time/count vs PF (single)"]):

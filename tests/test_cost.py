@@ -305,6 +305,27 @@ def test_count_predicted_judges_on_the_same_model_ratio():
     assert list(out["within"]) == [True, True, False]
 
 
+def test_count_predicted_says_which_filters_are_within_in_every_repeat():
+    """With the ratio's range over the benchmark's repeats in the table, a filter is within its
+    count in every repeat, over it in every repeat, or at the edge (neither)."""
+    from pfrepro.cost import SAME_MODEL_RATIO, SAME_N_RATIO, count_predicted, repeat_range_columns
+
+    low, high = repeat_range_columns(SAME_MODEL_RATIO)
+    table = _bench_table().assign(**{low: [0.9, 1.8, 2.05, 8.0, 0.9], high: [1.1, 2.1, 2.3, 10.0, 1.1]})
+    out = count_predicted(table)
+    assert list(out["within"]) == [True, True, False]               # the medians
+    assert list(out["within in every repeat"]) == [True, False, False]   # 1.9 reached 2.1 in a repeat
+    assert list(out["over in every repeat"]) == [False, False, True]
+    assert "within in every repeat at the same N" not in out
+    lo_n, hi_n = repeat_range_columns(SAME_N_RATIO)
+    table = table.assign(**{SAME_N_RATIO: [1.0, 1.9, 1.6, 9.0, 1.0], lo_n: [0.9, 1.85, 1.5, 8.0, 0.9],
+                            hi_n: [1.1, 1.95, 1.7, 10.0, 1.1]})
+    out = count_predicted(table)
+    assert list(out["within in every repeat at the same N"]) == [True, True, True]
+    assert list(out["over in every repeat at the same N"]) == [False, False, False]
+    assert list(count_predicted(table, limit=2.2)["within in every repeat"]) == [True, True, False]
+
+
 def test_count_predicted_refuses_bad_tables():
     from pfrepro.cost import SAME_MODEL_RATIO, count_predicted
 

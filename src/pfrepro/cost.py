@@ -67,7 +67,7 @@ from .montecarlo import time_filter_repeats
 
 __all__ = ["COUNTED", "COUNT_COLUMNS", "PRINTED_COLUMNS", "CountingModel", "count_model_calls", "cost_counts",
            "time_repeats", "time_summary", "median_interval", "imm_evaluations", "smc2_evaluations",
-           "count_predicted", "SAME_MODEL_RATIO", "SAME_N_RATIO", "UNGM_RATIO"]
+           "count_predicted", "repeat_range_columns", "SAME_MODEL_RATIO", "SAME_N_RATIO", "UNGM_RATIO"]
 
 #: counted model method -> column name
 COUNTED = {"sample_transition": "transitions", "log_likelihood": "likelihoods", "f": "f", "h": "h",
@@ -298,6 +298,12 @@ SAME_N_RATIO = "time/count vs same-model PF, same N (batched)"
 UNGM_RATIO = "time/count vs PF (batched)"
 
 
+def repeat_range_columns(ratio: str) -> tuple:
+    """The columns of a benchmark table holding the lowest and the highest of a ratio over the
+    benchmark's repeats (each repeat's filter time divided by the reference PF's of the same repeat)."""
+    return f"{ratio}, lowest repeat", f"{ratio}, highest repeat"
+
+
 def count_predicted(bench: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     """The particle filters of a benchmark table and whether each costs what its count predicts.
 
@@ -328,7 +334,10 @@ def count_predicted(bench: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     pandas.DataFrame
         One row per particle filter: ``same model`` and ``UNGM`` (the two ratios), ``within``
         (same-model ratio <= ``limit``) and ``within vs UNGM``; with :data:`SAME_N_RATIO` in the
-        table also ``same N`` and ``within at the same N``.
+        table also ``same N`` and ``within at the same N``. Where the table has a ratio's range
+        over the benchmark's repeats (:func:`repeat_range_columns`), also ``within in every
+        repeat`` (its highest <= ``limit``) and ``over in every repeat`` (its lowest > ``limit``),
+        with the suffix `` at the same N`` for the same-N ratio; a filter in neither is at the edge.
 
     Raises
     ------
@@ -354,6 +363,13 @@ def count_predicted(bench: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
         same_n = rows[SAME_N_RATIO].astype(float)
         out["same N"] = same_n
         out["within at the same N"] = same_n <= limit
+    # the ratio's range over the repeats, where the table has it: within (or over) in every repeat,
+    # or at the edge -- a count of filters within the limit that a rerun cannot flip
+    for ratio, label in ((SAME_MODEL_RATIO, ""), (SAME_N_RATIO, " at the same N")):
+        low, high = repeat_range_columns(ratio)
+        if low in bench.columns and high in bench.columns:
+            out["within in every repeat" + label] = rows[high].astype(float) <= limit
+            out["over in every repeat" + label] = rows[low].astype(float) > limit
     return out
 
 
