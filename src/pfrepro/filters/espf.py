@@ -62,11 +62,10 @@ def sbx_children(p1, p2, u, eta_c: float):
     return c1, c2
 
 
-def _sbx(p1, p2, u, eta_c: float, out=None):
+def _sbx(p1, p2, u, eta_c: float):
     """:func:`sbx_children` for the filter's own uniforms (in (0, 1) by construction, so unchecked),
     with the same numbers in fewer passes: the power is taken once, of the base each entry's branch
-    selects (an elementwise power of the same base is the same number), and 1 +- b once. ``out``:
-    optional pair of arrays the two children are written to (the filter's pool)."""
+    selects (an elementwise power of the same base is the same number), and 1 +- b once."""
     e = 1.0 / (float(eta_c) + 1.0)
     hi = np.subtract(1.0, u)
     hi *= 2.0
@@ -75,16 +74,30 @@ def _sbx(p1, p2, u, eta_c: float, out=None):
     b **= e
     bp = 1.0 + b
     bm = np.subtract(1.0, b, out=b)
-    o1, o2 = (None, None) if out is None else out
-    c1 = np.multiply(bp, p1, out=o1)
+    c1 = bp * p1
     np.multiply(bm, p2, out=hi)
     c1 += hi
     c1 *= 0.5
-    c2 = np.multiply(bm, p1, out=o2)
+    c2 = bm * p1
     np.multiply(bp, p2, out=hi)
     c2 += hi
     c2 *= 0.5
     return c1, c2
+
+
+class _Drawn:
+    """The uniforms ``(runs, 1)`` the systematic scheme draws, drawn beforehand (run by run, in
+    the streams' order): what ``rng.random((runs, 1))`` would return inside the counts function."""
+
+    __slots__ = ("u",)
+
+    def __init__(self, u):
+        self.u = u
+
+    def random(self, size):
+        if tuple(size) != self.u.shape:
+            raise AssertionError(f"drawn uniforms have shape {self.u.shape}, asked for {size}")
+        return self.u
 
 
 class EvolutionSamplingParticleFilter(Filter):
@@ -178,17 +191,17 @@ class EvolutionSamplingParticleFilter(Filter):
         # what differs is how the arrays are moved and how many numpy calls a step makes:
         # * resampled arrays by one ``np.repeat`` of the offspring counts (the ancestors of
         #   ``resample`` are those counts spelled out), gathers as ``np.take`` of flat indices;
-        # * the four draws after the resampling (the move's normals, its acceptance uniforms, the
-        #   pairing permutation, the SBX uniforms) are made run by run in one loop over the
-        #   streams of a :class:`~pfrepro.rng.RunStreams`, into buffers allocated once; the
-        #   permutation as ``Generator.shuffle`` of ``0..N-1`` (the same draws as ``permuted``, which
-        #   shuffles its copy the same way), the SBX uniforms as ``low + (high - low) u`` of
-        #   ``random`` (what ``Generator.uniform`` computes);
+        # * with a :class:`~pfrepro.rng.RunStreams`, the draws are made run by run in two loops
+        #   over the streams, into buffers allocated once: the prediction's normals with the
+        #   systematic scheme's one uniform (handed to the counts function by :class:`_Drawn`),
+        #   then the move's normals, its acceptance uniforms, the pairing permutation (as
+        #   ``Generator.shuffle`` of 0..N-1: the draws of ``permuted``, which shuffles its copy
+        #   the same way) and the SBX uniforms; each run's stream sees the plain reading's order;
+        # * the SBX uniforms as ``low + (high - low) u`` of ``random`` (what ``uniform`` computes);
         # * a scalar state's noise ``e @ Lq.T`` as ``e * Lq + 0.0`` (matmul's sum starts at 0, so
         #   a draw of -0.0 gives +0.0) and its ``log_trans`` as ``-0.5 ((d Qi) d)`` (einsum's order);
-        # * the SBX children are computed before the acceptance test (they do not depend on it) and
-        #   written beside the MCMC proposals, so one likelihood call evaluates both (an
-        #   elementwise function of the same numbers), and the pool is assembled in one buffer.
+        # * the pool's log-likelihoods are written negated into one buffer, which is the key
+        #   ``select_top_likelihood`` would partition (its NaN rule applied only if a NaN is there).
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
         npair = N // 2
@@ -203,19 +216,23 @@ class EvolutionSamplingParticleFilter(Filter):
             sq = float(Lq[0, 0])
             qi = float(np.linalg.inv(self.model.Q)[0, 0])   # the Qi of ``log_trans``
         # buffers of one step, reused: [proposals | children], the 3N pool and the draws
-        work = np.empty((runs, 2 * N, n))
-        prop, kids = work[:, :N], work[:, N:]
+        prop = np.empty((runs, N, n))
+        kids = np.empty((runs, N, n))
         pool_x = np.empty((runs, 3 * N, n))
-        pool_ll = np.empty((runs, 3 * N))
+        neg = np.empty((runs, 3 * N))      # -[log-likelihoods of the pool]
         e2 = np.empty((runs, N, n))
         ua = np.empty((runs, N))
         perm = np.empty((runs, N), dtype=np.intp)
         u = np.empty((runs, npair, n))
         order = np.arange(N)
         streams = list(rng) if isinstance(rng, RunStreams) and len(rng) == runs else None
+        first = None
         if streams is not None:
             rows = [(g.standard_normal, g.random, g.shuffle, a, b, c, d) for g, a, b, c, d in
                     zip(streams, e2.reshape(runs, -1), ua, perm, u.reshape(runs, -1))]
+            if self.resampling == "systematic":     # its one uniform per run, drawn in advance
+                e1 = np.empty((runs, N, n))
+                first = [(g.standard_normal, g.random, a) for g, a in zip(streams, e1.reshape(runs, -1))]
         for k in range(1, T + 1):
             # a non-finite particle makes its run's mean (stored below) non-finite: the full
             # check is needed only then (and at the first step)
@@ -223,7 +240,15 @@ class EvolutionSamplingParticleFilter(Filter):
                 raise FilterDivergenceError(f"ESPF particles became non-finite at step {k}")
             yk = y[:, k - 1]
             m = self.model.f(x, k)                                       # predicted means
-            e = rng.standard_normal((runs, N, n))
+            if first is not None:
+                # the prediction's normals and the systematic scheme's uniform, run by run
+                u1 = []
+                for normal, uniform, e_i in first:
+                    normal(out=e_i)
+                    u1.append(uniform())
+                e, res_rng = e1, _Drawn(np.array(u1)[:, None])
+            else:
+                e, res_rng = rng.standard_normal((runs, N, n)), rng
             if scalar:
                 e *= sq
                 e += 0.0
@@ -233,7 +258,7 @@ class EvolutionSamplingParticleFilter(Filter):
             ll = self.model.log_likelihood(yk, xp)
             w, collapsed[:, k - 1] = _normalize(ll)
             # resample: offspring counts of the normalised weights, as ``resample`` draws them
-            c = counts_of(w / w.sum(axis=1, keepdims=True), rng).ravel()
+            c = counts_of(w / w.sum(axis=1, keepdims=True), res_rng).ravel()
             xr = np.repeat(xp.reshape(-1, n), c, axis=0).reshape(runs, N, n)
             mr = np.repeat(m.reshape(-1, n), c, axis=0).reshape(runs, N, n)
             llr = np.repeat(ll.reshape(-1), c).reshape(runs, N)
@@ -261,17 +286,19 @@ class EvolutionSamplingParticleFilter(Filter):
                 move *= scale
             np.add(xr, move, out=prop)
             # SBX on random pairs of the resampled particles
-            pf = perm_k + off
+            pf = np.add(perm_k, off, out=perm_k)
             xr_flat = xr.reshape(-1, n)
             p1 = np.take(xr_flat, pf[:, :npair], axis=0)
             p2 = np.take(xr_flat, pf[:, npair:2 * npair], axis=0)
             u_k *= span
             u_k += lo
-            _sbx(p1, p2, u_k, self.sbx_eta, out=(kids[:, :npair], kids[:, npair:2 * npair]))
+            c1, c2 = _sbx(p1, p2, u_k, self.sbx_eta)
+            parts = [c1, c2]
             if N % 2:
-                kids[:, -1:] = np.take(xr_flat, pf[:, -1:], axis=0)
-            ll2 = self.model.log_likelihood(yk, work)                   # [proposals | children]
-            llp, llc = ll2[:, :N], ll2[:, N:]
+                parts.append(np.take(xr_flat, pf[:, -1:], axis=0))
+            np.concatenate(parts, axis=1, out=kids)
+            llp = self.model.log_likelihood(yk, prop)
+            llc = self.model.log_likelihood(yk, kids)
             if scalar:
                 d = np.subtract(prop[..., 0], mr[..., 0])
                 log_alpha = d * qi
@@ -288,10 +315,15 @@ class EvolutionSamplingParticleFilter(Filter):
                 log_alpha = llp + log_trans(prop, mr) - llr - log_trans(xr, mr)
             accept = np.log(ua_k, out=ua_k) < log_alpha
             acc_rate[:, k - 1] = np.count_nonzero(accept, axis=1) / N   # the mean of the booleans
-            # pool [resampled | moved | children] and select by fitness
+            # pool [resampled | moved | children]; the likelihoods negated as they are written
             np.concatenate([xr, np.where(accept[..., None], prop, xr), kids], axis=1, out=pool_x)
-            np.concatenate([llr, np.where(accept, llp, llr), llc], axis=1, out=pool_ll)
-            sel = select_top_likelihood(pool_ll, N, sort=False)
+            np.negative(llr, out=neg[:, :N])
+            np.negative(np.where(accept, llp, llr), out=neg[:, N:2 * N])
+            np.negative(llc, out=neg[:, 2 * N:])
+            if np.isnan(neg.sum()) and np.isnan(neg).any():      # NaN counts as -inf
+                sel = select_top_likelihood(np.negative(neg), N, sort=False)
+            else:
+                sel = np.argpartition(neg, N - 1, axis=1)[:, :N]
             x = np.take(pool_x.reshape(-1, n), sel + off3, axis=0)
             xs[:, k - 1] = x.mean(axis=1)
             n_res = np.count_nonzero(sel < N, axis=1)
