@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..chaos import ChaosCarrier
-from ..rng import take_runs
+from ..rng import RunStreams, take_runs
 from ..validation import as_finite_float, check_positive_int, check_probability
 from .base import Filter, FilterDivergenceError, FilterResult
 from .particle import normalize_log_weights, warn_collapse
@@ -171,6 +171,23 @@ def _normalize(lw):
     return w, np.zeros(lw.shape[0], dtype=bool)
 
 
+class _Drawn:
+    """The uniforms ``(runs, 1)`` the systematic scheme draws, drawn beforehand (one
+    ``Generator.random()`` per run, in the streams' order): what ``rng.random((runs, 1))`` of a
+    :class:`~pfrepro.rng.RunStreams` returns inside the counts function, without its per-run
+    array calls."""
+
+    __slots__ = ("u",)
+
+    def __init__(self, u):
+        self.u = u
+
+    def random(self, size):
+        if tuple(size) != self.u.shape:
+            raise AssertionError(f"drawn uniforms have shape {self.u.shape}, asked for {size}")
+        return self.u
+
+
 @dataclass
 class CMSStep:
     """Internals of one CMS-PF step for one batch (Figs. 4-6 of the paper).
@@ -275,9 +292,15 @@ class CMSParticleFilter(Filter):
         x2, lw2_prev, _ = map_particles(x1, lw1, logw_prev, r, self.eta, self.n_big, centre)
         ll2 = self.model.log_likelihood(y_k, x2)
         xc = np.concatenate([x1, x2], axis=1)
-        llc = np.concatenate([ll1, ll2], axis=1)
-        sel = select_top_likelihood(llc, N, sort=False)
-        runs, M = llc.shape
+        runs, M = ll1.shape[0], ll1.shape[1] + ll2.shape[1]
+        # the key select_top_likelihood partitions, -[ll1 | ll2], written negated in one buffer
+        neg = np.empty((runs, M))
+        np.negative(ll1, out=neg[:, :N])
+        np.negative(ll2, out=neg[:, N:])
+        if np.isnan(neg.sum()) and np.isnan(neg).any():    # NaN counts as -inf: the selection's rule
+            sel = select_top_likelihood(np.negative(neg), N, sort=False)
+        else:
+            sel = np.argpartition(neg, N - 1, axis=1)[:, :N]
         # w_{k-1} p(z_k | x) of the pool, added before the selection's gather (the same sums)
         lw2_prev += ll2
         lwc = np.concatenate([lw1, lw2_prev], axis=1)
@@ -326,6 +349,10 @@ class CMSParticleFilter(Filter):
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
         counts_of = resampling_counts_function(self.resampling)
+        # per-run streams and the systematic scheme: its one uniform per resampled run is drawn as
+        # ``Generator.random()`` of that run's stream (the number ``take_runs(rng, sel)`` would give)
+        uniform = ([g.random for g in rng] if isinstance(rng, RunStreams) and len(rng) == runs
+                   and self.resampling == "systematic" else None)
         for k in range(1, T + 1):
             if not np.all(np.isfinite(x)):
                 raise FilterDivergenceError(f"{self.name} particles became non-finite at step {k}")
@@ -345,14 +372,17 @@ class CMSParticleFilter(Filter):
             if do.all():
                 # every run resamples: the streams of all runs (what take_runs would select), and
                 # the weights normalised as resample_counts does (w is finite and positive here)
-                counts = counts_of(w / w.sum(axis=1, keepdims=True), rng)
+                src = rng if uniform is None else _Drawn(np.array([u() for u in uniform])[:, None])
+                counts = counts_of(w / w.sum(axis=1, keepdims=True), src)
                 x = np.repeat(x.reshape(-1, n), counts.ravel(), axis=0).reshape(runs, N, n)
                 logw = np.full((runs, N), -np.log(N))
             elif do.any():
                 sel = np.flatnonzero(do)
                 ws = w[sel]
                 full = np.ones((runs, N), dtype=np.intp)    # one copy of each particle elsewhere
-                full[sel] = counts_of(ws / ws.sum(axis=1, keepdims=True), take_runs(rng, sel))
+                src = (take_runs(rng, sel) if uniform is None
+                       else _Drawn(np.array([uniform[i]() for i in sel.tolist()])[:, None]))
+                full[sel] = counts_of(ws / ws.sum(axis=1, keepdims=True), src)
                 x = np.repeat(x.reshape(-1, n), full.ravel(), axis=0).reshape(runs, N, n)
                 logw = np.where(do[:, None], -np.log(N), logw)
             resampled[:, k - 1] = do
