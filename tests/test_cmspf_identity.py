@@ -180,6 +180,55 @@ def test_cms_filter_bit_identical_to_the_plain_reading(case, streams, sv, monkey
         assert same(new.diagnostics[key], ref.diagnostics[key]), key
 
 
+@pytest.mark.parametrize("runs", [1, 3, 8])
+@pytest.mark.parametrize("N", [7, 40])
+@pytest.mark.parametrize("scheme", ["systematic", "stratified", "multinomial", "residual"])
+def test_cms_filter_bit_identical_every_batch_size_and_scheme(runs, N, scheme, monkeypatch):
+    """Batches of 1, 3 and 8 runs, odd and even N, every scheme, resampling at every step
+    (``n_th = 1``) or for some runs only (``n_th = 0.5``), per-run streams and one generator,
+    two seeds: the reference's numbers and flags."""
+    m = _ning(3.0)
+    mixed = 0
+    for seed in (1, 6):
+        sim = m.simulate(15, runs, np.random.default_rng(200 + seed))
+        for make in (lambda: RunStreams.from_entropy(seed, runs), lambda: np.random.default_rng(seed)):
+            for n_th in (0.5, 1.0):
+                new = CMSParticleFilter(m, N, n_th=n_th, resampling=scheme).filter(sim.y, make())
+                old = CMSParticleFilter(m, N, n_th=n_th, resampling=scheme)
+                monkeypatch.setattr(old, "_loop", loop_ref.__get__(old))
+                monkeypatch.setattr(old.carrier, "generate", old_carrier(old.carrier))
+                ref = old.filter(sim.y, make())
+                assert same(new.x, ref.x) and same(new.P, ref.P), (seed, n_th)
+                for key in ("ess", "resampled", "map_share", "collapsed"):
+                    assert same(new.diagnostics[key], ref.diagnostics[key]), (seed, n_th, key)
+                r = new.diagnostics["resampled"]
+                mixed += int(np.any(r.any(axis=0) & ~r.all(axis=0)))
+    if runs > 1:
+        assert mixed        # some step resampled some runs only: that branch was compared too
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_cms_nan_likelihoods_take_the_selection_rule(monkeypatch):
+    """NaN log-likelihoods in the 2N pool count as -inf in the selection, as in
+    ``select_top_likelihood``: the reference's numbers."""
+    m = _ning()
+    plain = m.log_likelihood
+
+    def nan_below(y, x):
+        out = np.array(plain(y, x))
+        out[x[..., 0] < -1.0] = np.nan
+        return out
+
+    sim = m.simulate(8, 3, np.random.default_rng(2))
+    monkeypatch.setattr(m, "log_likelihood", nan_below)
+    new = CMSParticleFilter(m, 12).filter(sim.y, RunStreams.from_entropy(3, 3))
+    old = CMSParticleFilter(m, 12)
+    monkeypatch.setattr(old, "_loop", loop_ref.__get__(old))
+    monkeypatch.setattr(old.carrier, "generate", old_carrier(old.carrier))
+    ref = old.filter(sim.y, RunStreams.from_entropy(3, 3))
+    assert same(new.x, ref.x) and same(new.diagnostics["map_share"], ref.diagnostics["map_share"])
+
+
 def test_oracle_cms_bit_identical(monkeypatch):
     m = _ning()
     sim = m.simulate(20, 5, np.random.default_rng(8))
