@@ -229,6 +229,21 @@ def test_cms_nan_likelihoods_take_the_selection_rule(monkeypatch):
     assert same(new.x, ref.x) and same(new.diagnostics["map_share"], ref.diagnostics["map_share"])
 
 
+def test_select_negated_is_select_top_likelihood_of_the_negation():
+    """The filters' selection from negated log-likelihoods gives ``select_top_likelihood``'s
+    indices, in its order, with ties, -inf, +inf and NaN (counted as -inf) in the rows."""
+    rng = np.random.default_rng(12)
+    ll = np.round(rng.standard_normal((6, 90)), 1)            # many ties
+    ll[1, :7] = -np.inf
+    ll[2, 3:40:3] = np.nan
+    ll[3, 5] = np.inf
+    ll[4] = np.nan
+    for n_keep in (1, 30, 89, 90):
+        for rows in (ll, ll[:1], ll[[0, 3, 5]]):
+            assert same(C._select_negated(np.negative(rows), n_keep),
+                        select_top_likelihood(rows, n_keep, sort=False)), n_keep
+
+
 def test_oracle_cms_bit_identical(monkeypatch):
     m = _ning()
     sim = m.simulate(20, 5, np.random.default_rng(8))

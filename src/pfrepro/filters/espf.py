@@ -34,7 +34,7 @@ import numpy as np
 from ..rng import RunStreams
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
-from .cmspf import _Drawn, _normalize, select_top_likelihood
+from .cmspf import _Drawn, _normalize, _select_negated
 from .particle import warn_collapse
 from .resampling import check_scheme, resampling_counts_function
 
@@ -185,8 +185,8 @@ class EvolutionSamplingParticleFilter(Filter):
         # * the SBX uniforms as ``low + (high - low) u`` of ``random`` (what ``uniform`` computes);
         # * a scalar state's noise ``e @ Lq.T`` as ``e * Lq + 0.0`` (matmul's sum starts at 0, so
         #   a draw of -0.0 gives +0.0) and its ``log_trans`` as ``-0.5 ((d Qi) d)`` (einsum's order);
-        # * the pool's log-likelihoods are written negated into one buffer, which is the key
-        #   ``select_top_likelihood`` would partition (its NaN rule applied only if a NaN is there).
+        # * the pool's log-likelihoods are written negated into one buffer, the key
+        #   ``select_top_likelihood`` partitions (:func:`~pfrepro.filters.cmspf._select_negated`).
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
         npair = N // 2
@@ -305,10 +305,7 @@ class EvolutionSamplingParticleFilter(Filter):
             np.negative(llr, out=neg[:, :N])
             np.negative(np.where(accept, llp, llr), out=neg[:, N:2 * N])
             np.negative(llc, out=neg[:, 2 * N:])
-            if np.isnan(neg.sum()) and np.isnan(neg).any():      # NaN counts as -inf
-                sel = select_top_likelihood(np.negative(neg), N, sort=False)
-            else:
-                sel = np.argpartition(neg, N - 1, axis=1)[:, :N]
+            sel = _select_negated(neg, N)                               # fitness selection
             x = np.take(pool_x.reshape(-1, n), sel + off3, axis=0)
             xs[:, k - 1] = x.mean(axis=1)
             n_res = np.count_nonzero(sel < N, axis=1)
