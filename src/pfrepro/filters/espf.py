@@ -174,8 +174,9 @@ class EvolutionSamplingParticleFilter(Filter):
         # Every draw, every product and every sum is the one of the plain reading (kept as
         # ``espf_loop_reference`` in the identity tests, which pin this loop to it bit for bit);
         # what differs is how the arrays are moved and how many numpy calls a step makes:
-        # * resampled arrays by one ``np.repeat`` of the offspring counts (the ancestors of
-        #   ``resample`` are those counts spelled out), gathers as ``np.take`` of flat indices;
+        # * the ancestors as one ``np.repeat`` of the flat particle indices by the offspring counts
+        #   (``resample``'s ancestors are those counts spelled out), the resampled arrays and all
+        #   other gathers as ``np.take`` of flat indices;
         # * with a :class:`~pfrepro.rng.RunStreams`, the draws are made run by run in two loops
         #   over the streams, into buffers allocated once: the prediction's normals with the
         #   systematic scheme's one uniform (handed to the counts function by :class:`_Drawn`),
@@ -210,6 +211,7 @@ class EvolutionSamplingParticleFilter(Filter):
         perm = np.empty((runs, N), dtype=np.intp)
         u = np.empty((runs, npair, n))
         order = np.arange(N)
+        base = np.arange(runs * N)
         streams = list(rng) if isinstance(rng, RunStreams) and len(rng) == runs else None
         first = None
         if streams is not None:
@@ -244,9 +246,10 @@ class EvolutionSamplingParticleFilter(Filter):
             w, collapsed[:, k - 1] = _normalize(ll)
             # resample: offspring counts of the normalised weights, as ``resample`` draws them
             c = counts_of(w / w.sum(axis=1, keepdims=True), res_rng).ravel()
-            xr = np.repeat(xp.reshape(-1, n), c, axis=0).reshape(runs, N, n)
-            mr = np.repeat(m.reshape(-1, n), c, axis=0).reshape(runs, N, n)
-            llr = np.repeat(ll.reshape(-1), c).reshape(runs, N)
+            anc = np.repeat(base, c)
+            xr = np.take(xp.reshape(-1, n), anc, axis=0).reshape(runs, N, n)
+            mr = np.take(m.reshape(-1, n), anc, axis=0).reshape(runs, N, n)
+            llr = np.take(ll.reshape(-1), anc).reshape(runs, N)
             # the step's other draws, in the order of the plain reading
             if streams is not None:
                 perm[...] = order
