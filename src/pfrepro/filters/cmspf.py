@@ -41,7 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..chaos import ChaosCarrier
-from ..rng import RunStreams, take_runs
+from ..rng import take_runs
 from ..validation import as_finite_float, check_positive_int, check_probability
 from .base import Filter, FilterDivergenceError, FilterResult
 from .particle import normalize_log_weights, warn_collapse
@@ -180,23 +180,6 @@ def _normalize(lw):
     np.exp(w, out=w)
     w /= w.sum(axis=1, keepdims=True)
     return w, np.zeros(lw.shape[0], dtype=bool)
-
-
-class _Drawn:
-    """The uniforms ``(runs, 1)`` the systematic scheme draws, drawn beforehand (one
-    ``Generator.random()`` per run, in the streams' order): what ``rng.random((runs, 1))`` of a
-    :class:`~pfrepro.rng.RunStreams` returns inside the counts function, without its per-run
-    array calls."""
-
-    __slots__ = ("u",)
-
-    def __init__(self, u):
-        self.u = u
-
-    def random(self, size):
-        if tuple(size) != self.u.shape:
-            raise AssertionError(f"drawn uniforms have shape {self.u.shape}, asked for {size}")
-        return self.u
 
 
 @dataclass
@@ -357,10 +340,6 @@ class CMSParticleFilter(Filter):
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
         counts_of = resampling_counts_function(self.resampling)
-        # per-run streams and the systematic scheme: its one uniform per resampled run is drawn as
-        # ``Generator.random()`` of that run's stream (the number ``take_runs(rng, sel)`` would give)
-        uniform = ([g.random for g in rng] if isinstance(rng, RunStreams) and len(rng) == runs
-                   and self.resampling == "systematic" else None)
         for k in range(1, T + 1):
             if not np.all(np.isfinite(x)):
                 raise FilterDivergenceError(f"{self.name} particles became non-finite at step {k}")
@@ -380,17 +359,14 @@ class CMSParticleFilter(Filter):
             if do.all():
                 # every run resamples: the streams of all runs (what take_runs would select), and
                 # the weights normalised as resample_counts does (w is finite and positive here)
-                src = rng if uniform is None else _Drawn(np.array([u() for u in uniform])[:, None])
-                counts = counts_of(w / w.sum(axis=1, keepdims=True), src)
+                counts = counts_of(w / w.sum(axis=1, keepdims=True), rng)
                 x = np.repeat(x.reshape(-1, n), counts.ravel(), axis=0).reshape(runs, N, n)
                 logw = np.full((runs, N), -np.log(N))
             elif do.any():
                 sel = np.flatnonzero(do)
                 ws = w[sel]
                 full = np.ones((runs, N), dtype=np.intp)    # one copy of each particle elsewhere
-                src = (take_runs(rng, sel) if uniform is None
-                       else _Drawn(np.array([uniform[i]() for i in sel.tolist()])[:, None]))
-                full[sel] = counts_of(ws / ws.sum(axis=1, keepdims=True), src)
+                full[sel] = counts_of(ws / ws.sum(axis=1, keepdims=True), take_runs(rng, sel))
                 x = np.repeat(x.reshape(-1, n), full.ravel(), axis=0).reshape(runs, N, n)
                 logw = np.where(do[:, None], -np.log(N), logw)
             resampled[:, k - 1] = do

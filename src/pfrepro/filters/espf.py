@@ -34,7 +34,7 @@ import numpy as np
 from ..rng import RunStreams
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
-from .cmspf import _Drawn, _normalize, _select_negated
+from .cmspf import _normalize, _select_negated
 from .particle import warn_collapse
 from .resampling import check_scheme, resampling_counts_function
 
@@ -83,6 +83,23 @@ def _sbx(p1, p2, u, eta_c: float):
     c2 += hi
     c2 *= 0.5
     return c1, c2
+
+
+class _Drawn:
+    """The uniforms ``(runs, 1)`` the systematic scheme draws, drawn beforehand (one
+    ``Generator.random()`` per run, in the streams' order): what ``rng.random((runs, 1))`` of a
+    :class:`~pfrepro.rng.RunStreams` returns inside the counts function, without its per-run
+    array calls."""
+
+    __slots__ = ("u",)
+
+    def __init__(self, u):
+        self.u = u
+
+    def random(self, size):
+        if tuple(size) != self.u.shape:
+            raise AssertionError(f"drawn uniforms have shape {self.u.shape}, asked for {size}")
+        return self.u
 
 
 class EvolutionSamplingParticleFilter(Filter):
