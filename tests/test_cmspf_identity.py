@@ -180,6 +180,70 @@ def test_cms_filter_bit_identical_to_the_plain_reading(case, streams, sv, monkey
         assert same(new.diagnostics[key], ref.diagnostics[key]), key
 
 
+@pytest.mark.parametrize("runs", [1, 3, 8])
+@pytest.mark.parametrize("N", [7, 40])
+@pytest.mark.parametrize("scheme", ["systematic", "stratified", "multinomial", "residual"])
+def test_cms_filter_bit_identical_every_batch_size_and_scheme(runs, N, scheme, monkeypatch):
+    """Batches of 1, 3 and 8 runs, odd and even N, every scheme, resampling at every step
+    (``n_th = 1``) or for some runs only (``n_th = 0.5``), per-run streams and one generator,
+    two seeds: the reference's numbers and flags."""
+    m = _ning(3.0)
+    mixed = 0
+    for seed in (1, 6):
+        sim = m.simulate(15, runs, np.random.default_rng(200 + seed))
+        for make in (lambda: RunStreams.from_entropy(seed, runs), lambda: np.random.default_rng(seed)):
+            for n_th in (0.5, 1.0):
+                new = CMSParticleFilter(m, N, n_th=n_th, resampling=scheme).filter(sim.y, make())
+                old = CMSParticleFilter(m, N, n_th=n_th, resampling=scheme)
+                monkeypatch.setattr(old, "_loop", loop_ref.__get__(old))
+                monkeypatch.setattr(old.carrier, "generate", old_carrier(old.carrier))
+                ref = old.filter(sim.y, make())
+                assert same(new.x, ref.x) and same(new.P, ref.P), (seed, n_th)
+                for key in ("ess", "resampled", "map_share", "collapsed"):
+                    assert same(new.diagnostics[key], ref.diagnostics[key]), (seed, n_th, key)
+                r = new.diagnostics["resampled"]
+                mixed += int(np.any(r.any(axis=0) & ~r.all(axis=0)))
+    if runs > 1:
+        assert mixed        # some step resampled some runs only: that branch was compared too
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_cms_nan_likelihoods_take_the_selection_rule(monkeypatch):
+    """NaN log-likelihoods in the 2N pool count as -inf in the selection, as in
+    ``select_top_likelihood``: the reference's numbers."""
+    m = _ning()
+    plain = m.log_likelihood
+
+    def nan_below(y, x):
+        out = np.array(plain(y, x))
+        out[x[..., 0] < -1.0] = np.nan
+        return out
+
+    sim = m.simulate(8, 3, np.random.default_rng(2))
+    monkeypatch.setattr(m, "log_likelihood", nan_below)
+    new = CMSParticleFilter(m, 12).filter(sim.y, RunStreams.from_entropy(3, 3))
+    old = CMSParticleFilter(m, 12)
+    monkeypatch.setattr(old, "_loop", loop_ref.__get__(old))
+    monkeypatch.setattr(old.carrier, "generate", old_carrier(old.carrier))
+    ref = old.filter(sim.y, RunStreams.from_entropy(3, 3))
+    assert same(new.x, ref.x) and same(new.diagnostics["map_share"], ref.diagnostics["map_share"])
+
+
+def test_select_negated_is_select_top_likelihood_of_the_negation():
+    """The filters' selection from negated log-likelihoods gives ``select_top_likelihood``'s
+    indices, in its order, with ties, -inf, +inf and NaN (counted as -inf) in the rows."""
+    rng = np.random.default_rng(12)
+    ll = np.round(rng.standard_normal((6, 90)), 1)            # many ties
+    ll[1, :7] = -np.inf
+    ll[2, 3:40:3] = np.nan
+    ll[3, 5] = np.inf
+    ll[4] = np.nan
+    for n_keep in (1, 30, 89, 90):
+        for rows in (ll, ll[:1], ll[[0, 3, 5]]):
+            assert same(C._select_negated(np.negative(rows), n_keep),
+                        select_top_likelihood(rows, n_keep, sort=False)), n_keep
+
+
 def test_oracle_cms_bit_identical(monkeypatch):
     m = _ning()
     sim = m.simulate(20, 5, np.random.default_rng(8))
@@ -269,6 +333,112 @@ def test_espf_bit_identical_to_its_reference_loop(N, scheme, streams, monkeypatc
     assert same(new.x, ref.x)
     for key in ("acceptance", "origin_share", "collapsed"):
         assert same(new.diagnostics[key], ref.diagnostics[key]), key
+
+
+ESPF_SCHEMES = ["systematic", "stratified", "multinomial", "residual"]
+
+
+@pytest.mark.parametrize("runs", [1, 3, 8])
+@pytest.mark.parametrize("N", [2, 7, 40])
+@pytest.mark.parametrize("scheme", ESPF_SCHEMES)
+def test_espf_bit_identical_every_batch_size_scheme_and_parity(runs, N, scheme, monkeypatch):
+    """Batches of 1, 3 and 8 runs, odd and even N, every scheme, per-run streams and one shared
+    generator, several seeds, a scale of the move other than 1: the filter's estimates and all its
+    diagnostics are the reference loop's, byte for byte."""
+    m = _ning(2.0)
+    for seed in (0, 5):
+        sim = m.simulate(12, runs, np.random.default_rng(100 + seed))
+        for make in (lambda: RunStreams.from_entropy(seed, runs), lambda: np.random.default_rng(seed)):
+            for scale in (1.0, 0.7):
+                new = EvolutionSamplingParticleFilter(m, N, mcmc_scale=scale, resampling=scheme).filter(sim.y, make())
+                old = EvolutionSamplingParticleFilter(m, N, mcmc_scale=scale, resampling=scheme)
+                monkeypatch.setattr(old, "_loop", types.MethodType(espf_loop_reference, old))
+                ref = old.filter(sim.y, make())
+                assert same(new.x, ref.x), (seed, scale)
+                for key in ("acceptance", "origin_share", "collapsed"):
+                    assert same(new.diagnostics[key], ref.diagnostics[key]), (seed, scale, key)
+
+
+def test_espf_bit_identical_for_a_vector_state(monkeypatch):
+    """A 2-D state keeps the matrix forms (``e @ Lq.T``, the einsum of ``log_trans``): still the
+    reference's numbers."""
+    from pfrepro.models.linear import LinearGaussianModel
+    m = LinearGaussianModel(F=[[0.9, 0.2], [0.0, 0.8]], H=[[1.0, 0.5]], Q=[[0.5, 0.1], [0.1, 0.3]],
+                            R=[[0.4]], x0=[0.3, -0.2])
+    sim = m.simulate(10, 3, np.random.default_rng(4))
+    for make in (lambda: RunStreams.from_entropy(8, 3), lambda: np.random.default_rng(8)):
+        new = EvolutionSamplingParticleFilter(m, 9, mcmc_scale=0.6).filter(sim.y, make())
+        old = EvolutionSamplingParticleFilter(m, 9, mcmc_scale=0.6)
+        monkeypatch.setattr(old, "_loop", types.MethodType(espf_loop_reference, old))
+        ref = old.filter(sim.y, make())
+        assert same(new.x, ref.x) and same(new.diagnostics["origin_share"], ref.diagnostics["origin_share"])
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_espf_nan_likelihoods_take_the_selection_rule(monkeypatch):
+    """A pool holding NaN log-likelihoods (a model that returns NaN at some states) is selected
+    with NaN as -inf, as ``select_top_likelihood`` does: the reference's particles."""
+    m = _ning()
+    plain = m.log_likelihood
+
+    def nan_below(y, x):                         # NaN where the state is below -1 (finite states)
+        out = np.array(plain(y, x))
+        out[x[..., 0] < -1.0] = np.nan
+        return out
+
+    sim = m.simulate(8, 3, np.random.default_rng(2))
+    monkeypatch.setattr(m, "log_likelihood", nan_below)
+    new = EvolutionSamplingParticleFilter(m, 12).filter(sim.y, RunStreams.from_entropy(3, 3))
+    old = EvolutionSamplingParticleFilter(m, 12)
+    monkeypatch.setattr(old, "_loop", types.MethodType(espf_loop_reference, old))
+    ref = old.filter(sim.y, RunStreams.from_entropy(3, 3))
+    assert same(new.x, ref.x) and same(new.diagnostics["origin_share"], ref.diagnostics["origin_share"])
+
+
+def test_shuffle_draws_what_permuted_draws():
+    """The ESPF pairs particles by ``Generator.shuffle`` of 0..N-1 in place of ``permuted`` of a
+    broadcast 0..N-1 (what ``RunStreams.permuted`` and the reference call): the same permutation
+    and the same draws consumed, for small, odd, even and large N."""
+    for N in (1, 2, 3, 7, 40, 201, 1000):
+        for seed in range(5):
+            a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+            want = a.permuted(np.broadcast_to(np.arange(N), (2, N))[0], axis=0)
+            got = np.arange(N)
+            b.shuffle(got)
+            assert same(got, want)
+            assert same(a.random(3), b.random(3))         # the streams stay in step
+
+
+def test_scalar_draw_is_the_one_element_draw():
+    """The systematic scheme's uniform is drawn as ``Generator.random()`` (a float) where the counts
+    function would call ``random`` for one element: the same number, the streams in step."""
+    for seed in range(5):
+        a, b = np.random.default_rng(seed), np.random.default_rng(seed)
+        a.standard_normal(5)
+        b.standard_normal(5)
+        row = np.empty(1)
+        a.random(out=row)
+        assert same(np.array([b.random()]), row)
+        assert same(a.standard_normal(4), b.standard_normal(4))
+
+
+def test_scalar_forms_of_the_noise_and_transition_density():
+    """For a scalar state, ``e @ Lq.T`` is ``e * Lq + 0.0`` (a draw of -0.0 included) and
+    ``-0.5 einsum(d, Qi, d)`` is ``-0.5 ((d Qi) d)``, bit for bit."""
+    rng = np.random.default_rng(7)
+    for q in (1.0, 0.37, 12.5):
+        Q = np.array([[q]])
+        Lq, Qi = np.linalg.cholesky(Q), np.linalg.inv(Q)
+        e = rng.standard_normal((6, 33, 1))
+        e[0, :3, 0] = [-0.0, 0.0, 1e-310]
+        got = e * Lq[0, 0]
+        got += 0.0
+        assert same(got, e @ Lq.T)
+        d = rng.standard_normal((6, 33, 1)) * 5
+        t = d[..., 0] * Qi[0, 0]
+        t *= d[..., 0]
+        t *= -0.5
+        assert same(t, -0.5 * np.einsum("...i,ij,...j->...", d, Qi, d))
 
 
 def test_sbx_fast_form_bit_identical():

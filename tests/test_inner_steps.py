@@ -623,12 +623,12 @@ def test_espf_mh_move_leaves_the_transition_prior_invariant(monkeypatch):
     model = FlatLikelihoodModel(c, Q)
     kept = []
 
-    def keep_mcmc_block(pool_ll, n_keep, sort=False):
-        assert pool_ll.shape == (runs, 3 * N) and n_keep == N
+    def keep_mcmc_block(neg_pool_ll, n_keep):
+        assert neg_pool_ll.shape == (runs, 3 * N) and n_keep == N
         kept.append(True)
         return np.broadcast_to(np.arange(N, 2 * N), (runs, N)).copy()
 
-    monkeypatch.setattr(espf_module, "select_top_likelihood", keep_mcmc_block)
+    monkeypatch.setattr(espf_module, "_select_negated", keep_mcmc_block)
     f = EvolutionSamplingParticleFilter(model, N, mcmc_scale=1.5)
     res = f.filter(np.zeros((runs, 2, 1)), rng=np.random.default_rng(2011))
     assert kept
@@ -704,8 +704,8 @@ def test_espf_uses_the_requested_resampling_scheme(monkeypatch):
     0..N-1). Systematic resampling of equal weights keeps every particle once (N distinct
     values); multinomial draws duplicates (expected distinct share 1 - 1/e = 0.63)."""
     N = 200
-    monkeypatch.setattr(espf_module, "select_top_likelihood",
-                        lambda ll, n, sort=False: np.broadcast_to(np.arange(n), (ll.shape[0], n)).copy())
+    monkeypatch.setattr(espf_module, "_select_negated",
+                        lambda neg, n: np.broadcast_to(np.arange(n), (neg.shape[0], n)).copy())
     distinct = {}
     for scheme in ("systematic", "multinomial"):
         model = FlatSpy1D()
@@ -1029,11 +1029,11 @@ def test_espf_mcmc_block_is_consistent_with_its_moves(monkeypatch):
     runs, N = 3, 500
     pools = []
 
-    def keep_mcmc_block(pool_ll, n_keep, sort=False):
-        pools.append(pool_ll.copy())
+    def keep_mcmc_block(neg_pool_ll, n_keep):
+        pools.append(-neg_pool_ll)                  # the pool's log-likelihoods (held negated)
         return np.broadcast_to(np.arange(N, 2 * N), (runs, N)).copy()
 
-    monkeypatch.setattr(espf_module, "select_top_likelihood", keep_mcmc_block)
+    monkeypatch.setattr(espf_module, "_select_negated", keep_mcmc_block)
     model = TiltedSpy1D()
     res = EvolutionSamplingParticleFilter(model, N).filter(np.zeros((runs, 3, 1)), rng=np.random.default_rng(4))
     acc = res.diagnostics["acceptance"]

@@ -76,6 +76,17 @@ def select_top_likelihood(loglik, n_keep: int, sort: bool = True) -> np.ndarray:
     return np.take_along_axis(part, order, axis=1)
 
 
+def _select_negated(neg, n_keep: int) -> np.ndarray:
+    """``select_top_likelihood(-neg, n_keep, sort=False)`` for log-likelihoods held negated in
+    ``neg`` (the key that function partitions; negation is exact): ``np.argpartition`` of ``neg``
+    itself, with the NaN rule (NaN counts as -inf) applied only when a NaN is there (the sum of a
+    row holding NaN is NaN). The filters write their pools' log-likelihoods negated straight into
+    one buffer, so the pool is neither concatenated nor negated again."""
+    if n_keep >= neg.shape[1] or (np.isnan(neg.sum()) and np.isnan(neg).any()):
+        return select_top_likelihood(np.negative(neg), n_keep, sort=False)
+    return np.argpartition(neg, n_keep - 1, axis=1)[:, :n_keep]
+
+
 def map_particles(x_pred, lw_pred, logw_prev, r, eta: float, n_big: int, centre=None):
     """Map particles of Step 2.2, ``x2 = c + r eta (big - small)``, for a batch.
 
@@ -275,9 +286,12 @@ class CMSParticleFilter(Filter):
         x2, lw2_prev, _ = map_particles(x1, lw1, logw_prev, r, self.eta, self.n_big, centre)
         ll2 = self.model.log_likelihood(y_k, x2)
         xc = np.concatenate([x1, x2], axis=1)
-        llc = np.concatenate([ll1, ll2], axis=1)
-        sel = select_top_likelihood(llc, N, sort=False)
-        runs, M = llc.shape
+        runs, M = ll1.shape[0], ll1.shape[1] + ll2.shape[1]
+        # the key select_top_likelihood partitions, -[ll1 | ll2], written negated in one buffer
+        neg = np.empty((runs, M))
+        np.negative(ll1, out=neg[:, :N])
+        np.negative(ll2, out=neg[:, N:])
+        sel = _select_negated(neg, N)
         # w_{k-1} p(z_k | x) of the pool, added before the selection's gather (the same sums)
         lw2_prev += ll2
         lwc = np.concatenate([lw1, lw2_prev], axis=1)

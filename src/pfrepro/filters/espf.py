@@ -31,9 +31,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..rng import RunStreams
 from ..validation import check_positive_int
 from .base import Filter, FilterDivergenceError, FilterResult
-from .cmspf import _normalize, select_top_likelihood
+from .cmspf import _normalize, _select_negated
 from .particle import warn_collapse
 from .resampling import check_scheme, resampling_counts_function
 
@@ -72,14 +73,33 @@ def _sbx(p1, p2, u, eta_c: float):
     b = np.where(u <= 0.5, 2.0 * u, hi)
     b **= e
     bp = 1.0 + b
-    bm = 1.0 - b
+    bm = np.subtract(1.0, b, out=b)
     c1 = bp * p1
-    c1 += bm * p2
+    np.multiply(bm, p2, out=hi)
+    c1 += hi
     c1 *= 0.5
     c2 = bm * p1
-    c2 += bp * p2
+    np.multiply(bp, p2, out=hi)
+    c2 += hi
     c2 *= 0.5
     return c1, c2
+
+
+class _Drawn:
+    """The uniforms ``(runs, 1)`` the systematic scheme draws, drawn beforehand (one
+    ``Generator.random()`` per run, in the streams' order): what ``rng.random((runs, 1))`` of a
+    :class:`~pfrepro.rng.RunStreams` returns inside the counts function, without its per-run
+    array calls."""
+
+    __slots__ = ("u",)
+
+    def __init__(self, u):
+        self.u = u
+
+    def random(self, size):
+        if tuple(size) != self.u.shape:
+            raise AssertionError(f"drawn uniforms have shape {self.u.shape}, asked for {size}")
+        return self.u
 
 
 class EvolutionSamplingParticleFilter(Filter):
@@ -169,11 +189,22 @@ class EvolutionSamplingParticleFilter(Filter):
 
     def _loop(self, y, rng, x, xs, acc_rate, origin, collapsed, log_trans, Lq):
         # Every draw, every product and every sum is the one of the plain reading (kept as
-        # ``_loop_reference`` and pinned by the tests); what differs is how the arrays are moved:
-        # resampled arrays by one ``np.repeat`` of the offspring counts (the ancestors of
-        # ``resample`` are those counts spelled out), gathers as ``np.take`` of flat indices,
-        # the SBX uniforms as ``low + (high - low) u`` of ``random`` (what ``Generator.uniform``
-        # computes, without the per-run parameter handling of :class:`~pfrepro.rng.RunStreams`).
+        # ``espf_loop_reference`` in the identity tests, which pin this loop to it bit for bit);
+        # what differs is how the arrays are moved and how many numpy calls a step makes:
+        # * the ancestors as one ``np.repeat`` of the flat particle indices by the offspring counts
+        #   (``resample``'s ancestors are those counts spelled out), the resampled arrays and all
+        #   other gathers as ``np.take`` of flat indices;
+        # * with a :class:`~pfrepro.rng.RunStreams`, the draws are made run by run in two loops
+        #   over the streams, into buffers allocated once: the prediction's normals with the
+        #   systematic scheme's one uniform (handed to the counts function by :class:`_Drawn`),
+        #   then the move's normals, its acceptance uniforms, the pairing permutation (as
+        #   ``Generator.shuffle`` of 0..N-1: the draws of ``permuted``, which shuffles its copy
+        #   the same way) and the SBX uniforms; each run's stream sees the plain reading's order;
+        # * the SBX uniforms as ``low + (high - low) u`` of ``random`` (what ``uniform`` computes);
+        # * a scalar state's noise ``e @ Lq.T`` as ``e * Lq + 0.0`` (matmul's sum starts at 0, so
+        #   a draw of -0.0 gives +0.0) and its ``log_trans`` as ``-0.5 ((d Qi) d)`` (einsum's order);
+        # * the pool's log-likelihoods are written negated into one buffer, the key
+        #   ``select_top_likelihood`` partitions (:func:`~pfrepro.filters.cmspf._select_negated`).
         runs, T, _ = y.shape
         N, n = self.n_particles, self.model.dim_x
         npair = N // 2
@@ -182,46 +213,119 @@ class EvolutionSamplingParticleFilter(Filter):
         off3 = 3 * off
         eps = np.finfo(float).eps
         lo, span = eps, (1.0 - eps) - eps
+        scale = self.mcmc_scale
+        scalar = n == 1
+        if scalar:
+            sq = float(Lq[0, 0])
+            qi = float(np.linalg.inv(self.model.Q)[0, 0])   # the Qi of ``log_trans``
+        # buffers of one step, reused: [proposals | children], the 3N pool and the draws
+        prop = np.empty((runs, N, n))
+        kids = np.empty((runs, N, n))
+        pool_x = np.empty((runs, 3 * N, n))
+        neg = np.empty((runs, 3 * N))      # -[log-likelihoods of the pool]
+        e2 = np.empty((runs, N, n))
+        ua = np.empty((runs, N))
+        perm = np.empty((runs, N), dtype=np.intp)
+        u = np.empty((runs, npair, n))
+        order = np.arange(N)
+        base = np.arange(runs * N)
+        streams = list(rng) if isinstance(rng, RunStreams) and len(rng) == runs else None
+        first = None
+        if streams is not None:
+            rows = [(g.standard_normal, g.random, g.shuffle, a, b, c, d) for g, a, b, c, d in
+                    zip(streams, e2.reshape(runs, -1), ua, perm, u.reshape(runs, -1))]
+            if self.resampling == "systematic":     # its one uniform per run, drawn in advance
+                e1 = np.empty((runs, N, n))
+                first = [(g.standard_normal, g.random, a) for g, a in zip(streams, e1.reshape(runs, -1))]
         for k in range(1, T + 1):
-            if not np.all(np.isfinite(x)):
+            # a non-finite particle makes its run's mean (stored below) non-finite: the full
+            # check is needed only then (and at the first step)
+            if (k == 1 or not np.isfinite(xs[:, k - 2]).all()) and not np.isfinite(x).all():
                 raise FilterDivergenceError(f"ESPF particles became non-finite at step {k}")
             yk = y[:, k - 1]
             m = self.model.f(x, k)                                       # predicted means
-            xp = m + rng.standard_normal((runs, N, n)) @ Lq.T
+            if first is not None:
+                # the prediction's normals and the systematic scheme's uniform, run by run
+                u1 = []
+                for normal, uniform, e_i in first:
+                    normal(out=e_i)
+                    u1.append(uniform())
+                e, res_rng = e1, _Drawn(np.array(u1)[:, None])
+            else:
+                e, res_rng = rng.standard_normal((runs, N, n)), rng
+            if scalar:
+                e *= sq
+                e += 0.0
+                xp = np.add(m, e, out=e)
+            else:
+                xp = m + e @ Lq.T
             ll = self.model.log_likelihood(yk, xp)
             w, collapsed[:, k - 1] = _normalize(ll)
             # resample: offspring counts of the normalised weights, as ``resample`` draws them
-            c = counts_of(w / w.sum(axis=1, keepdims=True), rng).ravel()
-            xr = np.repeat(xp.reshape(-1, n), c, axis=0).reshape(runs, N, n)
-            mr = np.repeat(m.reshape(-1, n), c, axis=0).reshape(runs, N, n)
-            llr = np.repeat(ll.reshape(-1), c).reshape(runs, N)
-            # MCMC move (random-walk MH, target p(z|x) N(x; m, Q))
-            prop = xr + self.mcmc_scale * (rng.standard_normal((runs, N, n)) @ Lq.T)
-            llp = self.model.log_likelihood(yk, prop)
-            log_alpha = llp + log_trans(prop, mr) - llr - log_trans(xr, mr)
-            accept = np.log(rng.random((runs, N))) < log_alpha
-            xm = np.where(accept[..., None], prop, xr)
-            llm = np.where(accept, llp, llr)
-            acc_rate[:, k - 1] = np.count_nonzero(accept, axis=1) / N   # the mean of the booleans
-            # SBX on random pairs
-            perm = rng.permuted(np.broadcast_to(np.arange(N), (runs, N)), axis=1)
-            pf = perm + off
+            c = counts_of(w / w.sum(axis=1, keepdims=True), res_rng).ravel()
+            anc = np.repeat(base, c)
+            xr = np.take(xp.reshape(-1, n), anc, axis=0).reshape(runs, N, n)
+            mr = np.take(m.reshape(-1, n), anc, axis=0).reshape(runs, N, n)
+            llr = np.take(ll.reshape(-1), anc).reshape(runs, N)
+            # the step's other draws, in the order of the plain reading
+            if streams is not None:
+                perm[...] = order
+                for normal, uniform, shuffle, e_i, a_i, p_i, u_i in rows:
+                    normal(out=e_i)
+                    uniform(out=a_i)
+                    shuffle(p_i)
+                    uniform(out=u_i)
+                move, ua_k, perm_k, u_k = e2, ua, perm, u
+            else:
+                move = rng.standard_normal((runs, N, n))
+                ua_k = rng.random((runs, N))
+                perm_k = rng.permuted(np.broadcast_to(order, (runs, N)), axis=1)
+                u_k = rng.random((runs, npair, n))
+            # MCMC proposal (random-walk MH, target p(z|x) N(x; m, Q))
+            if scalar:
+                move *= sq
+                move += 0.0
+            else:
+                move = move @ Lq.T
+            if scale != 1.0:                                             # 1 * v is v
+                move *= scale
+            np.add(xr, move, out=prop)
+            # SBX on random pairs of the resampled particles
+            pf = np.add(perm_k, off, out=perm_k)
             xr_flat = xr.reshape(-1, n)
             p1 = np.take(xr_flat, pf[:, :npair], axis=0)
             p2 = np.take(xr_flat, pf[:, npair:2 * npair], axis=0)
-            u = rng.random(p1.shape)
-            u *= span
-            u += lo
-            c1, c2 = _sbx(p1, p2, u, self.sbx_eta)
+            u_k *= span
+            u_k += lo
+            c1, c2 = _sbx(p1, p2, u_k, self.sbx_eta)
             parts = [c1, c2]
             if N % 2:
                 parts.append(np.take(xr_flat, pf[:, -1:], axis=0))
-            xc = np.concatenate(parts, axis=1)
-            llc = self.model.log_likelihood(yk, xc)
-            # pool and select by fitness
-            pool_x = np.concatenate([xr, xm, xc], axis=1)
-            pool_ll = np.concatenate([llr, llm, llc], axis=1)
-            sel = select_top_likelihood(pool_ll, N, sort=False)
+            np.concatenate(parts, axis=1, out=kids)
+            llp = self.model.log_likelihood(yk, prop)
+            llc = self.model.log_likelihood(yk, kids)
+            if scalar:
+                d = np.subtract(prop[..., 0], mr[..., 0])
+                log_alpha = d * qi
+                log_alpha *= d
+                log_alpha *= -0.5
+                log_alpha += llp
+                log_alpha -= llr
+                np.subtract(xr[..., 0], mr[..., 0], out=d)
+                t = d * qi
+                t *= d
+                t *= -0.5
+                log_alpha -= t
+            else:
+                log_alpha = llp + log_trans(prop, mr) - llr - log_trans(xr, mr)
+            accept = np.log(ua_k, out=ua_k) < log_alpha
+            acc_rate[:, k - 1] = np.count_nonzero(accept, axis=1) / N   # the mean of the booleans
+            # pool [resampled | moved | children]; the likelihoods negated as they are written
+            np.concatenate([xr, np.where(accept[..., None], prop, xr), kids], axis=1, out=pool_x)
+            np.negative(llr, out=neg[:, :N])
+            np.negative(np.where(accept, llp, llr), out=neg[:, N:2 * N])
+            np.negative(llc, out=neg[:, 2 * N:])
+            sel = _select_negated(neg, N)                               # fitness selection
             x = np.take(pool_x.reshape(-1, n), sel + off3, axis=0)
             xs[:, k - 1] = x.mean(axis=1)
             n_res = np.count_nonzero(sel < N, axis=1)
