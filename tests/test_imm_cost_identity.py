@@ -407,3 +407,17 @@ def test_one_filter_object_in_two_threads_at_once(scenario8):
     for a, b in zip(par, serial):
         assert_same(a, b)
     assert f._work is None and not getattr(imm_module._THREAD, "works", {})
+
+
+def test_work_memory_kept_for_the_next_call_up_to_the_cap(scenario8, monkeypatch):
+    from pfrepro.filters import imm as imm_module
+    s, y = scenario8
+    f = IMMPFOR(s, 100)
+    first = f.filter(y[:3], filter_streams(3, "cost", 3))
+    kept = imm_module._THREAD.kept
+    assert 0 < kept.nbytes <= imm_module.KEEP_WORK_BYTES
+    assert_same(IMMPFOR(s, 100).filter(y[:3], filter_streams(3, "cost", 3)), first)   # on the kept memory
+    assert imm_module._THREAD.kept is kept
+    monkeypatch.setattr(imm_module, "KEEP_WORK_BYTES", 1000)
+    f.filter(y[:3], filter_streams(3, "cost", 3))
+    assert getattr(imm_module._THREAD, "kept", None) is None                  # over the cap: freed
