@@ -421,3 +421,16 @@ def test_work_memory_kept_for_the_next_call_up_to_the_cap(scenario8, monkeypatch
     monkeypatch.setattr(imm_module, "KEEP_WORK_BYTES", 1000)
     f.filter(y[:3], filter_streams(3, "cost", 3))
     assert getattr(imm_module._THREAD, "kept", None) is None                  # over the cap: freed
+
+
+def test_replacement_out_must_be_a_c_contiguous_array_like_x():
+    rng = np.random.default_rng(2)
+    x = rng.normal(size=(2, 3, 10, 6))
+    w = np.full((2, 3, 10), 0.1)
+    u = np.full((2, 3), 1 / 3)
+    M = np.full((2, 3, 3), 1 / 3)
+    counts = np.ones((2, 3, 10), dtype=np.intp)
+    f = IMMPFOR(tracking_system(), 10)
+    for bad in (np.empty((2, 3, 10, 6), order="F"), np.empty((2, 3, 10, 5)), np.empty((2, 3, 10, 6), np.float32)):
+        with pytest.raises(ValueError, match="out must be"):
+            f.replacement(x, w, u, M, counts, np.zeros((2, 3, 10), dtype=np.intp), out=bad)

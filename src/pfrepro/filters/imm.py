@@ -505,7 +505,8 @@ class IMMParticleFilter(Filter):
     # -- the recursion -------------------------------------------------------------------------------
     def filter(self, y, rng=None) -> FilterResult:
         # the large arrays of a step live in work memory reused by every step of this call; it is
-        # the thread's own (one filter object may run in several threads at once) and freed at the end
+        # the thread's own (one filter object may run in several threads at once), kept for the
+        # thread's next call up to KEEP_WORK_BYTES
         works = _THREAD.__dict__.setdefault("works", {})
         key = id(self)
         outer = works.get(key)             # (a call from within a call gets its own, then gives it back)
@@ -717,6 +718,9 @@ class IMMPFOR(IMMParticleFilter):
         Only the extra-copy slots are computed (flat arrays over all of them at once).
         """
         R_, r, N, n = x.shape
+        if out is not None and not (isinstance(out, np.ndarray) and out.shape == x.shape and out.dtype == np.float64
+                                    and out.flags.c_contiguous):
+            raise ValueError(f"out must be a C-contiguous float64 array of the shape of x {x.shape}")
         do = np.ones((R_, r), dtype=bool) if do is None else np.asarray(do, bool)
         M = np.asarray(M, dtype=float)
         work = self._work
