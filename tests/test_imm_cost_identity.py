@@ -16,9 +16,10 @@ import math
 import numpy as np
 import pytest
 
+from pfrepro.filters.base import gaussian_loglik
 from pfrepro.filters.imm import (IMMParticleFilter, IMMPFOR, _counts_from_below, _indices_from_below,
-                                 _indices_from_counts, _put_rows, _systematic_below, mixing_probabilities,
-                                 systematic_indices, unit_ball_volume)
+                                 _indices_from_counts, _put_rows, _subtract_rows, _systematic_below, _var_axis1,
+                                 _Work, mixing_probabilities, systematic_indices, unit_ball_volume)
 from pfrepro.filters.jump_markov_pf import JumpMarkovParticleFilter, noise_rows
 from pfrepro.filters.smc_steps import repeat_rows
 from pfrepro.montecarlo import filter_streams, truth_streams
@@ -38,8 +39,62 @@ def _old_interact(self, x, w, mu, rng):
     return np.take(x.reshape(-1, n), idx, axis=0), M
 
 
+def _old_var_axis1(a):
+    R, K, n = a.shape
+    if R == 1:
+        return np.var(a, axis=1)
+    t = np.array(np.swapaxes(a, 0, 1), order="C").reshape(K, R * n)
+    mean = np.add.reduce(t, axis=0, keepdims=True)
+    mean /= K
+    np.subtract(t, mean, out=t)
+    np.multiply(t, t, out=t)
+    out = np.add.reduce(t, axis=0)
+    out /= K
+    return out.reshape(R, n)
+
+
+def _old_model_log_likelihood(self, eps, logw, loglik):
+    N = eps.shape[-2]
+    if self.model_likelihood == "mean":
+        a = loglik + (-np.log(N)) if logw is None else logw + loglik
+        m = np.max(a, axis=-1, keepdims=True)
+        m = np.where(np.isfinite(m), m, 0.0)
+        with np.errstate(divide="ignore"):
+            return (m[..., 0] + np.log(np.sum(np.exp(a - m), axis=-1)))
+    if logw is None:
+        w = np.full(eps.shape[:-1], 1.0 / N)
+        ebar = (w[..., None, :] @ eps)[..., 0, :]
+        dw = eps - ebar[..., None, :]
+        dw *= math.sqrt(1.0 / N)
+    else:
+        w = np.exp(logw - logw.max(axis=-1, keepdims=True))
+        w /= w.sum(axis=-1, keepdims=True)
+        ebar = (w[..., None, :] @ eps)[..., 0, :]
+        d = eps - ebar[..., None, :]
+        dw = d * np.sqrt(w)[..., None]
+    S = self.system.R + np.swapaxes(dw, -1, -2) @ dw
+    return gaussian_loglik(ebar, S)
+
+
+def _old_joint_whitening(x, w, u):
+    R_, r, N, n = x.shape
+    wj = (u[:, :, None] * w).reshape(R_, r * N)
+    wj = wj / wj.sum(axis=1, keepdims=True)
+    flat = x.reshape(R_, r * N, n)
+    m = (wj[:, None, :] @ flat)[:, 0]
+    dev = flat - m[:, None, :]
+    C = np.swapaxes(dev * wj[..., None], -1, -2) @ dev
+    spread = _old_var_axis1(flat)
+    C = C + np.einsum("ai,ij->aij", 1e-6 * spread + 1e-12, np.eye(n))
+    L = np.linalg.cholesky(C)
+    Linv = np.linalg.inv(L)
+    z = dev @ np.swapaxes(Linv, -1, -2)
+    return m, L, z.reshape(R_, r, N, n)
+
+
 class _OldIMMPF(IMMParticleFilter):
     interact = _old_interact
+    model_log_likelihood = _old_model_log_likelihood
 
     def _resample(self, x, w, do, u_next, M_next, rng, k, cost):
         runs, r, N, n = x.shape
@@ -59,6 +114,8 @@ class _OldIMMPF(IMMParticleFilter):
 
 class _OldIMMPFOR(IMMPFOR):
     interact = _old_interact
+    model_log_likelihood = _old_model_log_likelihood
+    joint_whitening = staticmethod(_old_joint_whitening)
 
     def replacement(self, x, w, u, M, counts, other_slots, do=None, idx=None):
         R_, r, N, n = x.shape
@@ -208,7 +265,7 @@ def assert_same(new, old):
 
 
 def run(cls, s, y, seed, *args, **kw):
-    return cls(s, *args, **kw).filter(y, filter_streams(seed, "cost", RUNS))
+    return cls(s, *args, **kw).filter(y, filter_streams(seed, "cost", len(y)))
 
 
 @pytest.mark.parametrize("kw", [dict(), dict(n_th=1.0), dict(n_th=0.0), dict(model_likelihood="mean", n_th=0.3)])
@@ -258,3 +315,122 @@ def test_replacement_is_its_first_implementation_on_random_sets():
 def test_jmpf_is_its_first_implementation_bit_for_bit(scenario, kw):
     s, y = scenario
     assert_same(run(JumpMarkovParticleFilter, s, y, 3, 400, **kw), run(_OldJMPF, s, y, 3, 400, **kw))
+
+
+# -- the work-memory rewrite of IMMPF/IMMPFOR (work arrays reused across steps, sets replaced in place) --
+#: every reading and option of IMMPFOR the chapter runs (the d grid's ends, the three readings of the
+#: lost equations, the model-likelihood reading, the own-parent ablation, N_th = N)
+CHAPTER_READINGS = [dict(), dict(d=1e-6), dict(d=3.0), dict(replace="always"), dict(density="weights"),
+                    dict(metric="diagonal"), dict(model_likelihood="mean"), dict(mix_modes=False, d=0.1),
+                    dict(n_th=1.0)]
+
+
+@pytest.fixture(scope="module")
+def scenario8():
+    s = tracking_system()
+    return s, s.simulate(T, 8, truth_streams(12, 8)).y
+
+
+@pytest.mark.parametrize("runs", [1, 3, 8])
+@pytest.mark.parametrize("kw", CHAPTER_READINGS)
+def test_immpfor_every_chapter_reading_and_batch_size_is_its_first_implementation(scenario8, runs, kw):
+    s, y = scenario8
+    assert_same(run(IMMPFOR, s, y[:runs], 4, 120, keep_steps=(2, 9), **kw),
+                run(_OldIMMPFOR, s, y[:runs], 4, 120, keep_steps=(2, 9), **kw))
+
+
+@pytest.mark.parametrize("runs", [1, 3, 8])
+@pytest.mark.parametrize("kw", [dict(), dict(model_likelihood="mean"), dict(n_th=1.0)])
+def test_immpf_every_batch_size_is_its_first_implementation(scenario8, runs, kw):
+    s, y = scenario8
+    assert_same(run(IMMParticleFilter, s, y[:runs], 5, 120, keep_steps=(4,), **kw),
+                run(_OldIMMPF, s, y[:runs], 5, 120, keep_steps=(4,), **kw))
+
+
+def test_joint_whitening_with_work_memory_is_the_first_one():
+    rng = np.random.default_rng(8)
+    for R in (1, 3, 8):
+        x = rng.normal(size=(R, 3, 70, 6)) * np.array([1e4, 1e2, 1.0, 1e4, 1e2, 1.0])
+        w = rng.gamma(0.5, size=(R, 3, 70))
+        u = rng.dirichlet(np.ones(3), size=R)
+        work = _Work()
+        for got in (IMMPFOR.joint_whitening(x, w, u), IMMPFOR.joint_whitening(x, w, u, work),
+                    IMMPFOR.joint_whitening(x, w, u, work)):                   # work memory reused
+            for a, b in zip(got, _old_joint_whitening(x, w, u)):
+                assert np.array_equal(a, b)
+        assert np.array_equal(_var_axis1(x.reshape(R, -1, 6), work), _old_var_axis1(x.reshape(R, -1, 6)))
+
+
+def test_subtract_rows_is_the_broadcast_subtraction():
+    rng = np.random.default_rng(9)
+    for shape in ((4, 1500, 6), (2, 3, 500, 2), (5, 97, 3), (1, 1, 4), (3, 128, 6)):
+        a = rng.normal(size=shape) * 1e3
+        v = rng.normal(size=shape[:-2] + shape[-1:])
+        assert np.array_equal(_subtract_rows(a, v), a - v[..., None, :])
+    a = rng.normal(size=(6, 40, 3))[::2]                                        # not contiguous
+    v = rng.normal(size=(3, 3))
+    assert np.array_equal(_subtract_rows(a, v), a - v[..., None, :])
+
+
+def test_replacement_in_place_is_the_replacement_into_a_new_array():
+    rng = np.random.default_rng(6)
+    R, r, N, n = 4, 3, 40, 6
+    x = rng.normal(size=(R, r, N, n)) * np.array([1e4, 1e2, 1.0, 1e4, 1e2, 1.0])
+    w = rng.gamma(0.3, size=(R, r, N))
+    w /= w.sum(axis=-1, keepdims=True)
+    u = rng.dirichlet(np.ones(r), size=R)
+    M = rng.dirichlet(np.ones(r), size=(R, r)).transpose(0, 2, 1)
+    counts = _counts_from_below(_systematic_below(w, rng.random((R, r)), N))
+    other = rng.integers(0, N, size=(R, r, N))
+    do = rng.random((R, r)) < 0.6
+    do[1] = False
+    for kw in (dict(), dict(metric="diagonal"), dict(density="weights"), dict(mix_modes=False)):
+        f = IMMPFOR(tracking_system(), N, **kw)
+        new, nd = f.replacement(x, w, u, M, counts, other, do)
+        xi = x.copy()
+        got, nd2 = f.replacement(xi, w, u, M, counts, other, do, out=xi)
+        assert got is xi and np.array_equal(got, new) and np.array_equal(nd, nd2)
+        assert np.array_equal(got[~do], x[~do])                               # modes not in do untouched
+
+
+def test_one_filter_object_in_two_threads_at_once(scenario8):
+    # each thread's filter call has its own work memory: the same object run concurrently gives each
+    # call's serial result, and no work memory is left behind
+    from concurrent.futures import ThreadPoolExecutor
+
+    from pfrepro.filters import imm as imm_module
+    s, y = scenario8
+    f = IMMPFOR(s, 150, n_th=0.8)
+    serial = [f.filter(y[i:i + 4], filter_streams(7 + i, "cost", 4)) for i in (0, 4)]
+    with ThreadPoolExecutor(2) as ex:
+        par = list(ex.map(lambda i: f.filter(y[i:i + 4], filter_streams(7 + i, "cost", 4)), (0, 4)))
+    for a, b in zip(par, serial):
+        assert_same(a, b)
+    assert f._work is None and not getattr(imm_module._THREAD, "works", {})
+
+
+def test_work_memory_kept_for_the_next_call_up_to_the_cap(scenario8, monkeypatch):
+    from pfrepro.filters import imm as imm_module
+    s, y = scenario8
+    f = IMMPFOR(s, 100)
+    first = f.filter(y[:3], filter_streams(3, "cost", 3))
+    kept = imm_module._THREAD.kept
+    assert 0 < kept.nbytes <= imm_module.KEEP_WORK_BYTES
+    assert_same(IMMPFOR(s, 100).filter(y[:3], filter_streams(3, "cost", 3)), first)   # on the kept memory
+    assert imm_module._THREAD.kept is kept
+    monkeypatch.setattr(imm_module, "KEEP_WORK_BYTES", 1000)
+    f.filter(y[:3], filter_streams(3, "cost", 3))
+    assert getattr(imm_module._THREAD, "kept", None) is None                  # over the cap: freed
+
+
+def test_replacement_out_must_be_a_c_contiguous_array_like_x():
+    rng = np.random.default_rng(2)
+    x = rng.normal(size=(2, 3, 10, 6))
+    w = np.full((2, 3, 10), 0.1)
+    u = np.full((2, 3), 1 / 3)
+    M = np.full((2, 3, 3), 1 / 3)
+    counts = np.ones((2, 3, 10), dtype=np.intp)
+    f = IMMPFOR(tracking_system(), 10)
+    for bad in (np.empty((2, 3, 10, 6), order="F"), np.empty((2, 3, 10, 5)), np.empty((2, 3, 10, 6), np.float32)):
+        with pytest.raises(ValueError, match="out must be"):
+            f.replacement(x, w, u, M, counts, np.zeros((2, 3, 10), dtype=np.intp), out=bad)

@@ -26,6 +26,7 @@ stored as ``M[..., i, j]``. Particles are ``(runs, r, N, dim_x)``, log-weights
 from __future__ import annotations
 
 import math
+import threading
 
 import numpy as np
 
@@ -149,16 +150,97 @@ def _put_rows(a, rows, values):
     a.view(rec)[:, 0][rows] = np.ascontiguousarray(values, dtype=a.dtype).view(rec)[:, 0]
 
 
-def _var_axis1(a):
+class _Work:
+    """Work arrays reused across the time steps of one ``filter`` call (grown when a step needs more).
+
+    The IMM particle filters' steps handle arrays of (runs, r N, n) floats, several MB each; freshly
+    allocated at every step, such arrays are handed back to the system and re-mapped by the C
+    allocator (glibc trims its heap above a threshold that follows the largest blocks), a page fault
+    per 4 kB touched, every step. Reusing the same memory for the whole run avoids that; the
+    arithmetic written into it is unchanged. A thread keeps the memory of its last call (up to
+    ``KEEP_WORK_BYTES``) for its next one: freed and re-mapped at every call, it would move the
+    page faults to whatever the process runs next (seen in the benchmark: the bootstrap PF measured
+    after the IMM filters took 29 000 faults a call instead of about 1 000).
+    """
+
+    def __init__(self):
+        self._arrays = {}
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held."""
+        return sum(a.nbytes for a in self._arrays.values())
+
+    def get(self, name: str, shape, dtype=np.float64):
+        """An uninitialised array of ``shape`` in the work memory ``name`` (valid until its next ``get``)."""
+        size = math.prod(shape)
+        a = self._arrays.get(name)
+        if a is None or a.size < size or a.dtype != dtype:
+            a = self._arrays[name] = np.empty(max(size, 1), dtype)
+        return a[:size].reshape(shape)
+
+    def other(self, x, shape):
+        """Of the two work memories ``"x0"``/``"x1"``, an array of ``shape`` in the one ``x`` does not use
+        (the particle sets of consecutive steps alternate between them)."""
+        for name in ("x0", "x1"):
+            a = self.get(name, shape)
+            if not np.may_share_memory(a, x):
+                return a
+        raise AssertionError("unreachable: x overlaps both work memories")  # pragma: no cover
+
+
+#: per thread: the work memory of each IMM particle filter whose ``filter`` call is under way
+#: (``works``) and the work memory kept from the last call (``kept``)
+_THREAD = threading.local()
+#: a thread keeps the work memory of its last IMM particle-filter call for the next one up to this size
+#: (the benchmark's 100 runs of 3 x 500 particles use about 67 MB; larger calls free theirs at the end)
+KEEP_WORK_BYTES = 128 * 2**20
+
+
+def _work_array(work, name, shape, dtype=np.float64):
+    """``work.get(name, shape, dtype)``, or a new array when there is no work memory (``work=None``)."""
+    return np.empty(shape, dtype) if work is None else work.get(name, shape, dtype)
+
+
+def _take_rows(a, rows, out):
+    """``out[...] = a[rows]`` for a C-contiguous float array ``a`` (M, n) and ``out`` (rows.shape + (n,)),
+    each row moved as one opaque record (a byte copy per row: faster than numpy's float row gather).
+    ``rows`` must be valid row indices (not checked: mode="clip" lets numpy take straight into ``out``;
+    mode="raise" would gather into a temporary first)."""
+    a = np.ascontiguousarray(a)
+    rec = np.dtype((np.void, a.shape[-1] * a.itemsize))
+    np.take(a.view(rec)[:, 0], rows, out=out.view(rec)[..., 0], mode="clip")
+    return out
+
+
+def _subtract_rows(a, v, out=None):
+    """``a - v[..., None, :]`` for ``a`` (..., K, n) and ``v`` (..., n), bit for bit (the same subtractions).
+
+    numpy's inner loop of the broadcast runs over the n numbers of one row; here g rows (g a
+    divisor of K, at most 64) are taken as one row of g n numbers against v tiled g times, so the
+    inner loop is g times longer: about twice as fast for n = 2..6. ``out`` optional (C-contiguous)."""
+    *lead, K, n = a.shape
+    g = max(d for d in range(1, min(K, 64) + 1) if K % d == 0)
+    if out is None:
+        out = np.empty(a.shape, np.result_type(a, v))
+    shape = (*lead, K // g, g * n)
+    np.subtract(np.ascontiguousarray(a).reshape(shape), np.tile(v, g)[..., None, :], out=out.reshape(shape))
+    return out
+
+
+def _var_axis1(a, work=None):
     """``np.var(a, axis=1)`` of ``a`` (R, K, n), bit for bit, faster when R > 1.
 
     numpy reduces a middle axis sequentially (row after row, vectorised over the n entries of a
     row); the same sums over axis 0 of the (K, R n) transposed copy run the identical sequence
-    of additions with R n entries per row instead of n, several times faster."""
+    of additions with R n entries per row instead of n, several times faster. ``work`` (a
+    :class:`_Work`, optional) holds the transposed copy."""
     R, K, n = a.shape
     if R == 1:
         return np.var(a, axis=1)
-    t = np.array(np.swapaxes(a, 0, 1), order="C").reshape(K, R * n)     # a copy: worked in place
+    t = _work_array(work, "var", (K, R, n))
+    np.copyto(t, np.swapaxes(a, 0, 1))                                   # a copy: worked in place
+    t = t.reshape(K, R * n)
     mean = np.add.reduce(t, axis=0, keepdims=True)
     mean /= K
     np.subtract(t, mean, out=t)
@@ -351,7 +433,10 @@ class IMMParticleFilter(Filter):
         # (runs, r, N) flat particle indices: the run's offset plus the atom among its r N particles
         base = np.repeat(np.arange(runs) * (r * N), r)
         idx = systematic_indices(W.reshape(runs, r, r * N), u, N, overwrite=True, base=base)
-        return np.take(x.reshape(-1, n), idx, axis=0), M                         # (take: a fast row gather)
+        if self._work is None:
+            return np.take(x.reshape(-1, n), idx, axis=0), M                     # (take: a fast row gather)
+        # into the work memory x does not use
+        return _take_rows(x.reshape(-1, n), idx, self._work.other(x, (runs, r, N, n))), M
 
     def model_log_likelihood(self, eps, logw, loglik):
         """Eqs 11-15: log Lambda_j (runs, r) from residuals ``eps`` (runs, r, N, m), previous log-weights.
@@ -370,7 +455,7 @@ class IMMParticleFilter(Filter):
             # exp(logw - max) = 1 exactly and the N ones sum to N exactly: the weights are 1.0 / N
             w = np.full(eps.shape[:-1], 1.0 / N)
             ebar = (w[..., None, :] @ eps)[..., 0, :]                            # (11)
-            dw = eps - ebar[..., None, :]
+            dw = _subtract_rows(eps, ebar)                                       # eps - ebar
             dw *= math.sqrt(1.0 / N)                                             # d sqrt(w), in place
         else:
             w = np.exp(logw - logw.max(axis=-1, keepdims=True))
@@ -411,8 +496,34 @@ class IMMParticleFilter(Filter):
         w[do] = 1.0 / N
         return x, w, np.zeros((runs, r), dtype=np.intp)
 
+    @property
+    def _work(self):
+        """The work memory (:class:`_Work`) of this filter's ``filter`` call under way in this thread, or
+        None (a call of a step method outside ``filter``: its arrays are allocated afresh)."""
+        return getattr(_THREAD, "works", {}).get(id(self))
+
     # -- the recursion -------------------------------------------------------------------------------
     def filter(self, y, rng=None) -> FilterResult:
+        # the large arrays of a step live in work memory reused by every step of this call; it is
+        # the thread's own (one filter object may run in several threads at once), kept for the
+        # thread's next call up to KEEP_WORK_BYTES
+        works = _THREAD.__dict__.setdefault("works", {})
+        key = id(self)
+        outer = works.get(key)             # (a call from within a call gets its own, then gives it back)
+        # the work memory the thread's last call kept, taken for this call (a nested call gets new memory)
+        work = _THREAD.__dict__.pop("kept", None) or _Work()
+        works[key] = work
+        try:
+            return self._filter(y, rng)
+        finally:
+            if outer is None:
+                del works[key]
+            else:
+                works[key] = outer
+            if work.nbytes <= KEEP_WORK_BYTES:
+                _THREAD.kept = work
+
+    def _filter(self, y, rng) -> FilterResult:
         y = self._prepare(y, rng)
         runs, T, _ = y.shape
         sysm = self.system
@@ -570,26 +681,30 @@ class IMMPFOR(IMMParticleFilter):
         return super().resample_mask(ess, N)
 
     @staticmethod
-    def joint_whitening(x, w, u):
-        """Eq 24: joint weights w' = u_j w_l^j; returns (mean (R, n), lower Cholesky L (R, n, n), z)."""
+    def joint_whitening(x, w, u, work=None):
+        """Eq 24: joint weights w' = u_j w_l^j; returns (mean (R, n), lower Cholesky L (R, n, n), z).
+
+        ``work`` (optional, a ``filter`` call's work memory): z and the temporaries of the
+        (R, r N, n) size are written into it (z is then valid until the next step)."""
         R_, r, N, n = x.shape
         wj = (u[:, :, None] * w).reshape(R_, r * N)
         wj = wj / wj.sum(axis=1, keepdims=True)
         flat = x.reshape(R_, r * N, n)
         m = (wj[:, None, :] @ flat)[:, 0]
-        dev = flat - m[:, None, :]
-        C = np.swapaxes(dev * wj[..., None], -1, -2) @ dev
+        dev = _subtract_rows(flat, m, out=_work_array(work, "dev", flat.shape))
+        dw = np.multiply(dev, wj[..., None], out=_work_array(work, "z", flat.shape))
+        C = np.swapaxes(dw, -1, -2) @ dev
         # regularisation: the weighted covariance is singular when the weight sits on a few
         # particles (or on copies of one); add 1e-6 of the unweighted spread of all r N particles
         # (never degenerate: every mode's prediction adds noise) plus an absolute floor
-        spread = _var_axis1(flat)
+        spread = _var_axis1(flat, work)
         C = C + np.einsum("ai,ij->aij", 1e-6 * spread + 1e-12, np.eye(n))
         L = np.linalg.cholesky(C)
         Linv = np.linalg.inv(L)
-        z = dev @ np.swapaxes(Linv, -1, -2)
+        z = np.matmul(dev, np.swapaxes(Linv, -1, -2), out=dw)                      # (dw is spent)
         return m, L, z.reshape(R_, r, N, n)
 
-    def replacement(self, x, w, u, M, counts, other_slots, do=None, idx=None):
+    def replacement(self, x, w, u, M, counts, other_slots, do=None, idx=None, out=None):
         """Eqs 22-25 for the modes of ``R`` runs; returns the new particle sets (R, r, N, n) and ``|S^j|``.
 
         ``x`` (R, r, N, n) particles after weighting, ``w`` (R, r, N) their weights, ``u`` (R, r)
@@ -597,13 +712,19 @@ class IMMPFOR(IMMParticleFilter):
         ``counts`` (R, r, N) systematic offspring counts of every mode, ``other_slots``
         (R, r, N) uniform slot indices that pick the parents x_a^i, i != j; ``do`` (R, r)
         the modes to resample (default all). Modes not in ``do`` are returned unchanged.
-        ``idx`` (R, r, N) optional: the ancestor indices of ``counts`` if the caller has them.
+        ``idx`` (R, r, N) optional: the ancestor indices of ``counts`` if the caller has them;
+        ``out`` (R, r, N, n) optional, C-contiguous: the array to write the new sets into; ``out=x``
+        replaces them in ``x`` itself (only the modes in ``do`` are written).
         Only the extra-copy slots are computed (flat arrays over all of them at once).
         """
         R_, r, N, n = x.shape
+        if out is not None and not (isinstance(out, np.ndarray) and out.shape == x.shape and out.dtype == np.float64
+                                    and out.flags.c_contiguous):
+            raise ValueError(f"out must be a C-contiguous float64 array of the shape of x {x.shape}")
         do = np.ones((R_, r), dtype=bool) if do is None else np.asarray(do, bool)
         M = np.asarray(M, dtype=float)
-        m, L, z = self.joint_whitening(x, w, u)                                   # (24)
+        work = self._work
+        m, L, z = self.joint_whitening(x, w, u, work)                             # (24)
         if self.metric == "diagonal":      # scale by the standard deviations only (L = D Lc)
             sd = np.sqrt(np.einsum("aii->ai", L @ np.swapaxes(L, -1, -2)))          # (R, n)
             Lc = L / sd[:, :, None]                                                # Cholesky of D^-1 C D^-1
@@ -611,22 +732,41 @@ class IMMPFOR(IMMParticleFilter):
             L = np.einsum("ai,ij->aij", sd, np.eye(n))
             logdet = np.sum(np.log(np.einsum("aii->ai", Lc)), axis=1)[:, None, None]
         else:
-            Lc, logdet = None, 0.0
+            Lc, logdet = None, None
         if self.density == "weights":      # p(x) = w' = u_j w_l^j, the jointly normalised weight (24)
             wj = u[:, :, None] * w
             with np.errstate(divide="ignore"):
-                logp = np.log(wj / wj.sum(axis=(1, 2), keepdims=True))
+                logstep = np.log(wj / wj.sum(axis=(1, 2), keepdims=True))
         else:                              # the moment-matched Gaussian of the w'-weighted set
             zw = z if Lc is None else np.einsum("aij,arnj->arni", np.linalg.inv(Lc), z)
-            logp = -0.5 * np.einsum("arni,arni->arn", zw, zw) - 0.5 * n * np.log(2 * np.pi) - logdet
-        logL = math.lgamma(1 + 1 / n) - (np.log(r * N) + logp + np.log(unit_ball_volume(n))) / n   # (22), (25)
-        logstep = np.log(self.d) + logL                                          # (R, r, N) per particle
+            # log p = -0.5 z.z - 0.5 n log(2 pi) - log det, in place (the whitened metric's log det is 0)
+            logstep = np.einsum("arni,arni->arn", zw, zw, out=_work_array(work, "logstep", (R_, r, N)))
+            logstep *= -0.5
+            logstep -= 0.5 * n * np.log(2 * np.pi)
+            if logdet is not None:
+                logstep -= logdet
+        # (22), (25) in place, in the order of log L = lgamma(1 + 1/n) - (log(r N) + log p + log V_n) / n,
+        # then log d + log L (sums and products of two numbers commute bit for bit)
+        logstep += np.log(r * N)
+        logstep += np.log(unit_ball_volume(n))
+        logstep /= n
+        np.subtract(math.lgamma(1 + 1 / n), logstep, out=logstep)
+        np.add(np.log(self.d), logstep, out=logstep)                             # (R, r, N) per particle
         if idx is None:
             idx = _indices_from_counts(counts)                                   # (R, r, N) ancestors
-        rowbase = (np.arange(R_)[:, None] * r + np.arange(r)) * N                 # (R, r) flat row offsets
-        # the standard resampled sets of the modes in do, the others unchanged: one row gather
-        src = np.where(do[..., None], idx, np.arange(N)) + rowbase[..., None]
-        out = np.take(x.reshape(-1, n), src, axis=0)                              # (R, r, N, n), C order
+        if out is x:                       # in place: only the sets of the modes in do move
+            a_do, j_do = np.nonzero(do)
+            rows = a_do * r + j_do                                                # flat (run, mode) rows
+            sets = _take_rows(x.reshape(-1, n), idx[a_do, j_do] + (rows * N)[:, None],
+                              _work_array(work, "sets", (rows.size, N, n)))
+            _put_rows(x.reshape(R_ * r, N * n), rows, sets.reshape(rows.size, N * n))
+        else:
+            rowbase = (np.arange(R_)[:, None] * r + np.arange(r)) * N             # (R, r) flat row offsets
+            # the standard resampled sets of the modes in do, the others unchanged: one row gather
+            src = np.where(do[..., None], idx, np.arange(N)) + rowbase[..., None]
+            if out is None:
+                out = np.empty((R_, r, N, n))
+            _take_rows(x.reshape(-1, n), src, out)                                # (R, r, N, n), C order
         is_disc = counts == 0
         n_disc = is_disc.sum(axis=-1)                                             # |S^j| = number of extra copies
         is_dup = np.zeros((R_, r, N), dtype=bool)
@@ -634,41 +774,63 @@ class IMMPFOR(IMMParticleFilter):
         is_dup &= do[..., None]
         # K extra-copy slots, as flat indices into (R, r, N) (C order: by row, then slot)
         f = np.flatnonzero(is_dup)
-        if f.size == 0:
+        K = f.size
+        if K == 0:
             return out, n_disc
         # m-th extra copy (slot order) <-> m-th discarded particle (index order): a row has as many
         # extra copies as discarded particles, so the two flat C-order lists pair up one to one
         is_disc &= do[..., None]
         z_flat = z.reshape(-1, n)
-        z_s = np.take(z_flat, np.flatnonzero(is_disc), axis=0)                                 # (K, n)
+        z_s = _take_rows(z_flat, np.flatnonzero(is_disc), _work_array(work, "z_s", (K, n)))
         row = f // N                                                              # flat (run, mode) row
-        A, J, Sl = row // r, row % r, f % N
+        A, J = np.divmod(row, r)
         idx_flat = idx.reshape(-1)
         logstep_flat = logstep.reshape(-1)
-        other_flat = other_slots.reshape(-1)[f]
-        new = np.zeros((f.size, n))
+        AN = A * (r * N)                                                          # rowbase[A, i] = AN + i N
+        other_pos = np.take(other_slots.reshape(-1), f)
+        other_pos += AN                                                           # slot of mode i: + i N
+        M_flat = M.reshape(-1)
+        AJ = A * (r * r) + J                                                      # M[A, i, J] at AJ + i r
+        new = _work_array(work, "new", (K, n))
+        new.fill(0.0)
+        z_a, dv = _work_array(work, "z_a", (K, n)), _work_array(work, "dv", (K, n))
+        pos, par = _work_array(work, "pos", (K,), np.intp), _work_array(work, "par", (K,), np.intp)
+        lam, tmp = _work_array(work, "lam", (K,)), _work_array(work, "tmp", (K,))
         for i in range(r):
-            # parent from mode i: the slot's own copy (i == j) or a uniformly drawn slot of mode i
-            base = np.take(rowbase[:, i], A)
-            slot = np.where(J == i, Sl, other_flat)
-            par = np.take(idx_flat, base + slot) + base                                   # flat index of x_a^i
-            z_a = np.take(z_flat, par, axis=0)
-            dv = z_s - z_a
-            dist = np.sqrt(np.einsum("ki,ki->k", dv, dv))
+            # parent from mode i: the slot's own copy (i == j: at the slot f itself) or a uniformly
+            # drawn slot of mode i; par = the flat index of x_a^i
+            own = J == i
+            np.add(other_pos, i * N, out=pos)
+            np.copyto(pos, f, where=own)
+            np.take(idx_flat, pos, out=par, mode="clip")
+            par += AN
+            par += i * N
+            _take_rows(z_flat, par, z_a)
+            np.subtract(z_s, z_a, out=dv)
+            dist = np.einsum("ki,ki->k", dv, dv, out=lam)
+            np.sqrt(dist, out=dist)
             # fraction of the way to x_s: d L / ||z_s - z_a||, capped at 1 (never past x_s)
             with np.errstate(divide="ignore", over="ignore"):
-                lam = np.log(dist, out=dist)
-                np.subtract(np.take(logstep_flat, par), lam, out=lam)
+                np.log(dist, out=lam)
+                np.subtract(np.take(logstep_flat, par, out=tmp, mode="clip"), lam, out=lam)
                 np.minimum(lam, 0.0, out=lam)
                 np.exp(lam, out=lam)
             dv *= lam[:, None]                                                    # (23): in place,
             dv += z_a                                                             # M (z_a + lam dv)
             if self.mix_modes:
-                dv *= np.take(M.reshape(-1), (A * r + i) * r + J)[:, None]        # mu_{i|j}
+                dv *= np.take(M_flat, AJ + i * r, out=tmp, mode="clip")[:, None]  # mu_{i|j}
             else:                                                                 # ablation: own parent only
-                dv *= (J == i)[:, None]
+                dv *= own[:, None]
             new += dv
-        _put_rows(out.reshape(-1, n), f, np.take(m, A, axis=0) + np.einsum("kij,kj->ki", np.take(L, A, axis=0), new))
+        # x = m + L z per extra slot, run by run (A is non-decreasing: f is in C order): the same
+        # einsum kernel as over a (K, n, n) gather of L, without that large temporary
+        bounds = np.searchsorted(A, np.arange(R_ + 1))
+        Lz = z_a                                                                  # (z_a is spent)
+        for a in np.flatnonzero(bounds[1:] > bounds[:-1]):
+            part = Lz[bounds[a]:bounds[a + 1]]
+            np.einsum("ij,kj->ki", L[a], new[bounds[a]:bounds[a + 1]], out=part)
+            part += m[a]                                                          # m + L z (addition commutes)
+        _put_rows(out.reshape(-1, n), f, Lz)
         return out, n_disc
 
     def _resample(self, x, w, do, u_next, M_next, rng, k, cost):
@@ -680,14 +842,22 @@ class IMMPFOR(IMMParticleFilter):
         rs = take_runs(rng, sel)
         uu = rs.random((sel.size, r))
         other = rs.integers(0, N, size=(sel.size, r, N))
-        ws = np.take(w, sel, axis=0)
+        every = sel.size == runs
+        ws = w if every else np.take(w, sel, axis=0)                             # (read only below)
         below = _systematic_below(ws, uu, N)
         counts = _counts_from_below(below)                                        # = systematic_counts(ws, uu, N)
         idx = _indices_from_below(below, N)
         dsel = do[sel]
-        new, n_disc = self.replacement(np.take(x, sel, axis=0), ws, u_next[sel], M_next[sel], counts, other, dsel, idx=idx)
+        x = np.ascontiguousarray(x)
+        if every:                          # the sets replaced in x itself
+            x, n_disc = self.replacement(x, ws, u_next, M_next, counts, other, dsel, idx=idx, out=x)
+        else:                              # the selected runs' sets (a copy in work memory), put back
+            shape = (sel.size, r, N, n)
+            xs = np.take(x, sel, axis=0) if self._work is None else np.take(
+                x, sel, axis=0, out=self._work.get("x_sel", shape), mode="clip")
+            xs, n_disc = self.replacement(xs, ws, u_next[sel], M_next[sel], counts, other, dsel, idx=idx, out=xs)
+            _put_rows(x.reshape(runs, r * N * n), sel, xs.reshape(sel.size, r * N * n))
         cost["density"][sel] += r * N
-        x[sel] = new
         replaced[sel] = np.where(dsel, n_disc, 0)
         w = w.copy()
         w[do] = 1.0 / N
