@@ -149,7 +149,27 @@ def _timed(filt, y, rng_seed, name):
         gc.enable()
 
 
-def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
+def _worker(conn, filt, y, seed, name, blas_threads):
+    """One configuration's timing process: answers ``"single"`` / ``"batched"`` with (wall, CPU)
+    of one call, until ``None``. A process of its own, so that the allocator's state (what the heap
+    kept or gave back after other filters' calls, and the page faults that follow) is this
+    filter's alone: a filter's time does not depend on which filters ran before it."""
+    if blas_threads is not None:
+        import threadpoolctl
+
+        threadpoolctl.threadpool_limits(blas_threads, user_api="blas")
+    _timed(filt, y[:1], seed, name)                  # warm-up
+    while (what := conn.recv()) is not None:
+        conn.send(_timed(filt, y[:1] if what == "single" else y, seed, name))
+    conn.close()
+
+
+def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026, blas_threads=None, isolate: bool = True):
+    """Time every configuration: ``repeats`` interleaved rounds (every filter once per round, so a
+    drift of the machine's load hits every filter alike), each filter in a worker process of its
+    own (``isolate``; forked, so it holds the parent's filters and data) and one call at a time."""
+    import multiprocessing as mp
+
     built, keys = {}, {}
     mk = models()
     sims = {}
@@ -162,19 +182,41 @@ def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026):
         filt = build(m)
         built[name] = (filt, sim.y, fam, N)
         keys[name] = key
-    # interleaved repeats: a drift of the machine's load hits every filter alike
     single = {n: [] for n in built}
     batched = {n: [] for n in built}
     single_cpu = {n: [] for n in built}
     batched_cpu = {n: [] for n in built}
-    for n, (filt, y, _, _) in built.items():        # warm-up
-        _timed(filt, y[:1], seed, n)
-    for _ in range(repeats):
+    if isolate:
+        ctx = mp.get_context("fork")
+        workers = {}
         for n, (filt, y, _, _) in built.items():
-            for store, cpu, yy in ((single, single_cpu, y[:1]), (batched, batched_cpu, y)):
-                wall, c = _timed(filt, yy, seed, n)
-                store[n].append(wall)
-                cpu[n].append(c)
+            here, there = ctx.Pipe()
+            proc = ctx.Process(target=_worker, args=(there, filt, y, seed, n, blas_threads), daemon=True)
+            proc.start()
+            workers[n] = (here, proc)
+
+        def timed(n, what):
+            workers[n][0].send(what)
+            return workers[n][0].recv()
+    else:
+        for n, (filt, y, _, _) in built.items():        # warm-up
+            _timed(filt, y[:1], seed, n)
+
+        def timed(n, what):
+            filt, y = built[n][:2]
+            return _timed(filt, y[:1] if what == "single" else y, seed, n)
+    try:
+        for _ in range(repeats):
+            for n in built:
+                for store, cpu, what in ((single, single_cpu, "single"), (batched, batched_cpu, "batched")):
+                    wall, c = timed(n, what)
+                    store[n].append(wall)
+                    cpu[n].append(c)
+    finally:
+        if isolate:
+            for conn, proc in workers.values():
+                conn.send(None)
+                proc.join()
     for n, (filt, y, fam, N) in built.items():
         counts = count_model_calls(filt, y[:1])
         per_step = counts["model_evaluations"] / T
@@ -443,6 +485,8 @@ def main(argv=None):
                     help="limit the BLAS thread pool (threadpoolctl) for the whole measurement; on a "
                          "machine whose cores other processes use, a threaded BLAS call over (runs x N) "
                          "rows waits for its threads and the wait is counted (default: BLAS's own)")
+    ap.add_argument("--same-process", action="store_true",
+                    help="time every filter in this process (the old way) instead of a worker process of its own")
     ap.add_argument("--recount", action="store_true",
                     help="recompute the counts (and the columns derived from them) of the book's saved table, "
                          "keeping its measured times; no timing is run")
@@ -465,7 +509,9 @@ def main(argv=None):
 
         threadpoolctl.threadpool_limits(a.blas_threads, user_api="blas")
         info += f", BLAS limited to {a.blas_threads} thread(s) for the measurement"
-    df = annotate(measure(configs, T, runs, repeats))
+    if not a.same_process:
+        info += ", each filter timed in a process of its own"
+    df = annotate(measure(configs, T, runs, repeats, blas_threads=a.blas_threads, isolate=not a.same_process))
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(out.with_suffix(".csv"), float_format="%.6g")
