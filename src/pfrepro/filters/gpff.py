@@ -481,14 +481,14 @@ class GaussianParticleFlowFilter(Filter):
         alive = np.arange(runs)
         diverged_at = np.zeros(runs, dtype=int)
         pts = self.points
-        c_sig = pts.n + pts.lam                   # (n + lambda) of the sigma points
-        Wm, Wc = pts.Wm, pts.Wc
         R = model.R                               # (1, 1)
-        Rr = R[..., 0, :]                         # (1,)
-        lam_col = self._lams[:, None]             # (L, 1)
         lams, index, hs, cols, _ = flow._plan(self.grid, self.integrator)
-        h_col = hs[:, None]                       # (n, 1)
-        pat = self._probe_pattern[0, :, 0]        # (0, 1): the probes m + 0 s, m + 1 s
+        euler = self.integrator == "euler"
+        # constants of _update_scalar: (n + lambda) of the sigma points, the UT weights, R, the
+        # stage lambdas and steps as rows, the Euler steps times 1/2 and -1/2, the probe pattern
+        self._sc = (pts.n + pts.lam, pts.Wm, pts.Wc, R[0], R[..., 0, :], self._lams[None, :], hs[None, :],
+                    0.5 * hs[None, :] if euler else None, -0.5 * hs[None, :] if euler else None, cols,
+                    self._probe_pattern[0, :, 0])
         growth, shift2 = self.max_growth, self.max_shift**2
         tiny = np.finfo(float).tiny
         with np.errstate(all="ignore"):
@@ -504,7 +504,7 @@ class GaussianParticleFlowFilter(Filter):
                 bad = ~np.isfinite(P)
                 yk = y[alive, k - 1, 0] if len(alive) < runs else y[:, k - 1, 0]
                 if not bad.any():
-                    u = self._update_scalar(dev, m, P, yk, c_sig, Wm, Wc, R, Rr, lam_col, h_col, cols, pat)
+                    u = self._update_scalar(dev, m, P, yk, k)
                 else:
                     x_new = np.full_like(x, np.nan)
                     if (~bad).any():
@@ -548,12 +548,16 @@ class GaussianParticleFlowFilter(Filter):
                         Ps[:, k - 1, 0, 0] = var
         return self._result(xs, Ps, diverged_at, runs)
 
-    def _update_scalar(self, dev, m, P, y, c_sig, Wm, Wc, R, Rr, lam_col, h_col, cols, pat):
+    def _update_scalar(self, dev, m, P, y, k):
         """The eq-43 update of :meth:`update` for d = m = 1 and a plain residual (see
         :meth:`_filter_scalar`): ``dev`` (runs, N) the prior deviations x - m (overwritten and
-        returned as the moved particles), ``m``, ``P``, ``y`` (runs,)."""
+        returned as the moved particles), ``m``, ``P``, ``y`` (runs,). Every number is the one
+        the general path computes (same operation, same operands, same order), except that for
+        Euler the factors 1/2 of A and b are moved onto the step h (a product with 1/2 is exact,
+        so h (1/2 w) and (h/2) w are the same number for normal floats)."""
+        c_sig, Wm, Wc, R0, Rr, lam_row, h_row, hh_row, hneg_row, cols, pat = self._sc
         runs = m.shape[0]
-        # sigma points m, m + L, m - L with L the square root of the symmetrised (n + lambda) P
+        # sigma points m, m + L, m - L, L the square root of the symmetrised (n + lambda) P
         a = c_sig * P
         L = np.sqrt(0.5 * (a + a))
         sig = np.empty((runs, 3, 1))
@@ -562,35 +566,58 @@ class GaussianParticleFlowFilter(Filter):
         np.add(m, L, out=sv[:, 1])
         np.subtract(m, L, out=sv[:, 2])
         Y = self.model.h(sig)                                       # (runs, 3, 1)
-        # unscented_transform and the cross covariance (eqs 47-50), the same einsums
-        y_hat = np.einsum("i,...ij->...j", Wm, Y)
-        dy = Y - y_hat[..., None, :]
-        Pyy = np.einsum("i,...ij,...ik->...jk", Wc, dy, dy)[:, 0, 0]
-        Pxy = np.einsum("i,rij,rik->rjk", Wc, sig - m[:, None, None], dy)[:, 0, 0]
+        # unscented_transform and the cross covariance (eqs 47-50): y_hat, then Pxy and Pyy in one
+        # einsum over the stacked deviations [sigma - m, Y - y_hat] (each entry the same sum of
+        # the same products as the two separate einsums)
+        y_hat = np.einsum("i,...ij->...j", Wm, Y)[:, 0]
+        Z = np.empty((runs, 3, 2))
+        np.subtract(sig, m[:, None, None], out=Z[..., :1])
+        np.subtract(Y, y_hat[:, None, None], out=Z[..., 1:])
+        C = np.einsum("i,rij,rik->rjk", Wc, Z, Z[..., 1:])         # (runs, 2, 1): Pxy, Pyy
+        Pxy = C[:, 0, 0]
+        Pyy = C[:, 1, 0]
         Pyy = 0.5 * (Pyy + Pyy)
-        y_hat = y_hat[:, 0]
-        # flow_field_coefficients at every stage lambda (L, runs): S = lam Pyy + R, G = Pxy / S,
-        # c = R (y - y_hat) / S; then A = -1/2 J^T G^T, b = 1/2 [(y - y_hat) + c] G^T
-        S = lam_col * Pyy + R[0]
-        G = Pxy / S
-        e = y - y_hat
-        c = Rr * (e / S)
+        # flow_field_coefficients at every stage lambda, laid out (runs, L): S = lam Pyy + R,
+        # G = Pxy / S, c = R (y - y_hat) / S; A = -1/2 J^T G^T, b = 1/2 [(y - y_hat) + c] G^T
+        S = Pyy[:, None] * lam_row
+        S += R0
+        G = Pxy[:, None] / S
+        e = (y - y_hat)[:, None]
+        w = e / S
+        w *= Rr                                                     # c
+        w += e                                                      # (y - y_hat) + c
+        w *= G
         JT = Pxy / P
-        A = -0.5 * (JT * G)
-        b = 0.5 * ((e + c) * G)
-        # flow.affine_flow_map for d = 1: each step's map, suffix products, sum over the steps
-        M, v = flow._step_maps(A, b, h_col, cols, self.integrator, np.multiply, 1.0)
-        Sfx = np.cumprod(M[::-1], axis=0)[::-1]
-        vt = np.ascontiguousarray((v[:-1] * Sfx[1:]).T).sum(axis=-1) + v[-1]
-        Mf = Sfx[0]
+        if hneg_row is not None:
+            # Euler: the steps' maps M_j = 1 + h A_j, v_j = h b_j (flow._step_maps), the 1/2 on h
+            M = JT[:, None] * G
+            M *= hneg_row
+            M += 1.0
+            v = w
+            v *= hh_row
+        else:
+            A = JT[:, None] * G
+            A *= -0.5
+            w *= 0.5
+            Mt, vt_ = flow._step_maps(A.T, w.T, h_row.T, cols, self.integrator, np.multiply, 1.0)
+            M, v = Mt.T, vt_.T
+        # flow.affine_flow_map for d = 1: suffix products, then the sum over the steps along a
+        # contiguous axis (a fresh (runs, n - 1) array, as the general path's copy)
+        Sfx = np.cumprod(M[:, ::-1], axis=1)[:, ::-1]
+        vt = (v[:, :-1] * Sfx[:, 1:]).sum(axis=-1)
+        vt += v[:, -1]
         # the two probes m + 0 s, m + s through the map (AffineField.integrate), and M^T, c read
         # off them as in update
         s = np.sqrt(P)
         mc = m[:, None]
         probes = mc + pat * s[:, None]                              # (runs, 2)
-        out = mc + (probes - mc) * Mf[:, None] + vt[:, None]
-        c0 = out[:, 0]
-        MT = (out[:, 1] - c0) / s
+        probes -= mc
+        probes *= Sfx[:, :1]
+        probes += mc
+        probes += vt[:, None]
+        c0 = probes[:, 0]
+        MT = probes[:, 1] - c0
+        MT /= s
         dev *= MT[:, None]
         dev += c0[:, None]
         return dev
