@@ -566,16 +566,11 @@ class GaussianParticleFlowFilter(Filter):
         np.add(m, L, out=sv[:, 1])
         np.subtract(m, L, out=sv[:, 2])
         Y = self.model.h(sig)                                       # (runs, 3, 1)
-        # unscented_transform and the cross covariance (eqs 47-50): y_hat, then Pxy and Pyy in one
-        # einsum over the stacked deviations [sigma - m, Y - y_hat] (each entry the same sum of
-        # the same products as the two separate einsums)
+        # unscented_transform and the cross covariance (eqs 47-50), the same einsums
         y_hat = np.einsum("i,...ij->...j", Wm, Y)[:, 0]
-        Z = np.empty((runs, 3, 2))
-        np.subtract(sig, m[:, None, None], out=Z[..., :1])
-        np.subtract(Y, y_hat[:, None, None], out=Z[..., 1:])
-        C = np.einsum("i,rij,rik->rjk", Wc, Z, Z[..., 1:])         # (runs, 2, 1): Pxy, Pyy
-        Pxy = C[:, 0, 0]
-        Pyy = C[:, 1, 0]
+        dy = Y - y_hat[:, None, None]
+        Pyy = np.einsum("i,...ij,...ik->...jk", Wc, dy, dy)[:, 0, 0]
+        Pxy = np.einsum("i,rij,rik->rjk", Wc, sig - m[:, None, None], dy)[:, 0, 0]
         Pyy = 0.5 * (Pyy + Pyy)
         # flow_field_coefficients at every stage lambda, laid out (runs, L): S = lam Pyy + R,
         # G = Pxy / S, c = R (y - y_hat) / S; A = -1/2 J^T G^T, b = 1/2 [(y - y_hat) + c] G^T
