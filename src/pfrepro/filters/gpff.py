@@ -68,6 +68,12 @@ def _posterior_moments(x, full_cov=True):
 
 def particle_moments(x):
     """Sample mean and covariance (1/(N-1)) of particles ``(runs, N, d)`` (eqs 51, 52)."""
+    return _moments_dev(x)[:2]
+
+
+def _moments_dev(x):
+    """:func:`particle_moments` and the deviations ``x - m`` it computes on the way (the
+    filter's update starts from the same array)."""
     x = np.asarray(x, float)
     if x.ndim != 3:
         raise ValueError(f"particles must be (runs, N, d), got shape {x.shape}")
@@ -84,7 +90,7 @@ def particle_moments(x):
         P = (np.swapaxes(d, -1, -2) @ d) / (N - 1)
     S = P + np.swapaxes(P, -1, -2)
     S *= 0.5
-    return m, S
+    return m, S, d
 
 
 class _WrapCheckedEuler(flow.AffineField):
@@ -240,6 +246,9 @@ class GaussianParticleFlowFilter(Filter):
         # a residual that is plain subtraction makes the eq-43 field affine in the state
         # (an angle wrap is not: the bearings-only model keeps integrating probe points)
         self._plain_residual = getattr(type(model), "residual_y", None) is StateSpaceModel.residual_y
+        # how update finds the eq-43 map: in closed form (plain residual), by checked Euler steps
+        # of the probes, or by integrating them with the wrapping field
+        self._mode = "closed" if self._plain_residual else ("checked" if integrator == "euler" else "probes")
         self.points = ScaledSigmaPoints(model.dim_x, alpha, beta, kappa)
         # the eq-43 probes m + s * row: the mean, then one step of one prior sd along each axis
         self._probe_pattern = np.concatenate([np.zeros((1, model.dim_x)), np.eye(model.dim_x)])[None]
@@ -276,16 +285,17 @@ class GaussianParticleFlowFilter(Filter):
 
         ``moments``: ``particle_moments(x)`` if the caller has it already (not recomputed).
         """
-        if self._plain_residual:
-            return self._update(x, y, moments, "closed")
-        return self._update(x, y, moments, "checked" if self.integrator == "euler" else "probes")
+        return self._update(x, y, moments, self._mode)
 
     def _update_probes(self, x, y, moments=None):
         """:meth:`update` with the eq-43 map always found by integrating d + 1 probe points
         (the reference for the closed form, and the path of a model whose residual wraps)."""
         return self._update(x, y, moments, "probes")
 
-    def _update(self, x, y, moments, mode):
+    def _update(self, x, y, moments, mode, dev=None):
+        """The update in ``mode`` ("closed", "checked" or "probes"); ``dev``: ``x - m`` of the
+        moments if the caller has it (the same array :func:`particle_moments` computed; it is
+        overwritten)."""
         model = self.model
         if self.integrator == "exact":
             m, P = particle_moments(x) if moments is None else moments
@@ -350,7 +360,11 @@ class GaussianParticleFlowFilter(Filter):
 
                 def plain(hz):
                     e = yN[:, None] - hz
-                    dev = np.abs(r(yN[:, None], hz) - e)
+                    dev = r(yN[:, None], hz)
+                    dev -= e
+                    np.abs(dev, out=dev)
+                    if dev.max() <= 1e-9:     # within the tolerance everywhere (NaN fails this)
+                        return np.ones(len(hz), dtype=bool)
                     return np.all(dev <= 1e-9 * (1.0 + np.abs(e)), axis=(1, 2, 3))
 
                 field = _WrapCheckedEuler(A_all, b_all, m, self.grid, self._stages, field, base, JT, plain)
@@ -363,7 +377,7 @@ class GaussianParticleFlowFilter(Filter):
         out = flow.integrate_flow(probes, field, self.grid, self.integrator)
         c = out[:, 0]
         MT = (out[:, 1:] - c[:, None, :]) / s[:, :, None]             # M^T (runs, d, d)
-        u = x - mN
+        u = x - mN if dev is None else dev
         if MT.shape[-1] == 1:
             # d = 1: a product of scalars (numpy's multiply, the same number as the 1 x 1
             # matmul), in place, as is the shift (the same sum c + u M^T)
@@ -428,10 +442,11 @@ class GaussianParticleFlowFilter(Filter):
                 # (flow.solve_per_run, safe_cholesky(on_error="nan")): a diverging run never
                 # changes another run's numbers. A cloud whose covariance overflows cannot be
                 # moved (eq 52): diverged in the prediction; then the flow's growth test.
-                m_prior, P_prior = particle_moments(x)
+                m_prior, P_prior, dev = _moments_dev(x)
                 bad = ~np.isfinite(P_prior.reshape(len(alive), -1)).all(axis=1)
                 if not bad.any():
-                    x_new = self.update(x, y[alive, k - 1], moments=(m_prior, P_prior))
+                    # update(), starting from the deviations the moments computed
+                    x_new = self._update(x, y[alive, k - 1], (m_prior, P_prior), self._mode, dev)
                 else:
                     x_new = np.full_like(x, np.nan)
                     if (~bad).any():
