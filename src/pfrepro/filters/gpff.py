@@ -116,20 +116,24 @@ class _WrapCheckedEuler(flow.AffineField):
             raise ValueError("this field is tabulated for Euler steps on its own grid")
         lams, index, hs, cols, _ = flow._plan(self.grid, "euler")
         d = self.A.shape[-1]
+        n = len(hs)
         h = hs[:, None, None, None]
         M = np.eye(d) + h * self.A[cols[0]]                     # (n, runs, d, d)
-        v = h[..., 0] * self.b[cols[0]]                          # (n, runs, d)
+        v = h * self.b[cols[0]][:, :, None, :]                   # (n, runs, 1, d)
         o = self.origin[:, None, :]
-        u = np.asarray(z, float) - o                             # (runs, K, d)
-        runs, K = u.shape[:2]
-        U = np.empty((runs, len(hs), K, d))                      # the points the field is evaluated at
-        for j in range(len(hs)):
-            U[:, j] = u
-            u = u @ M[j]
-            u += v[j][:, None, :]
-        hz = self._base[:, None] + (U.reshape(runs, -1, d) @ self._JT).reshape(runs, len(hs), K, -1)
+        u0 = np.asarray(z, float) - o                            # (runs, K, d)
+        runs, K = u0.shape[:2]
+        # U[j]: the probes after j steps (each step writes the next slot, no copies); U[:n] are
+        # the points the field is evaluated at
+        U = np.empty((n + 1, runs, K, d))
+        U[0] = u0
+        for j in range(n):
+            np.matmul(U[j], M[j], out=U[j + 1])
+            U[j + 1] += v[j]
+        Ur = U[:n].transpose(1, 0, 2, 3).reshape(runs, -1, d)   # (runs, n K, d), step-major as before
+        hz = self._base[:, None] + (Ur @ self._JT).reshape(runs, n, K, -1)
         self.failed = ~self._plain(hz)
-        return o + u
+        return o + U[n]
 
 
 class GaussianParticleFlowFilter(Filter):
