@@ -510,6 +510,11 @@ class GaussianParticleFlowFilter(Filter):
                     self._probe_pattern[0, :, 0])
         growth, shift2 = self.max_growth, self.max_shift**2
         tiny = np.finfo(float).tiny
+        # a prior variance below p_fast keeps the divergence thresholds (and (n + lambda) P + itself)
+        # finite
+        big = np.finfo(float).max / 4
+        p_fast = big / max(growth, shift2, 1.0)
+        self._sc_sqrt = pts.n + pts.lam <= 1.0 and p_fast <= big
         with np.errstate(all="ignore"):
             for k in range(1, T + 1):
                 x = model.sample_transition(x, k, take_runs(rng, alive) if len(alive) < runs else rng)
@@ -520,29 +525,45 @@ class GaussianParticleFlowFilter(Filter):
                 P = np.einsum("rn,rn->r", dev, dev) / (N - 1)
                 P += P                          # the symmetrised 1 x 1 covariance: (P + P^T) / 2
                 P *= 0.5
-                bad = ~np.isfinite(P)
                 yk = y[alive, k - 1, 0] if len(alive) < runs else y[:, k - 1, 0]
-                if not bad.any():
+                if (P < p_fast).all():
+                    # every prior variance finite and below p_fast, so growth * prior and
+                    # shift^2 * prior are finite: then "not (value <= threshold)" is the test of
+                    # _diverged (a NaN or infinite mean makes the squared shift NaN or infinite, a
+                    # NaN or infinite variance fails its comparison), in a third of the calls
                     u = self._update_scalar(dev, m, P, yk, k)
+                    m1 = np.add.reduce(u, 1) / N
+                    d1 = u - m1[:, None]
+                    var = np.einsum("rn,rn->r", d1, d1) / (N - 1)
+                    if Ps is not None:          # the full covariance's diagonal, symmetrised
+                        var += var
+                        var *= 0.5
+                    prior = np.maximum(P, tiny)
+                    good = var <= growth * prior
+                    sh = m1 - m
+                    sh *= sh
+                    good &= sh <= shift2 * prior
+                    bad = ~good
                 else:
+                    bad = ~np.isfinite(P)
                     x_new = np.full_like(x, np.nan)
                     if (~bad).any():
                         x_new[~bad] = self.update(x[~bad], y[alive[~bad], k - 1])
                     u = x_new[..., 0]
-                # the divergence test (_diverged) on the moved particles' mean and variances
-                m1 = np.add.reduce(u, 1) / N
-                d1 = u - m1[:, None]
-                var = np.einsum("rn,rn->r", d1, d1) / (N - 1)
-                if Ps is not None:              # the full covariance's diagonal, symmetrised
-                    var += var
-                    var *= 0.5
-                bad |= ~np.isfinite(m1)
-                bad |= ~np.isfinite(var)
-                prior = np.maximum(P, tiny)
-                bad |= var > growth * prior
-                sh = m1 - m
-                sh *= sh
-                bad |= sh > shift2 * prior
+                    # the divergence test (_diverged) on the moved particles' mean and variances
+                    m1 = np.add.reduce(u, 1) / N
+                    d1 = u - m1[:, None]
+                    var = np.einsum("rn,rn->r", d1, d1) / (N - 1)
+                    if Ps is not None:
+                        var += var
+                        var *= 0.5
+                    bad |= ~np.isfinite(m1)
+                    bad |= ~np.isfinite(var)
+                    prior = np.maximum(P, tiny)
+                    bad |= var > growth * prior
+                    sh = m1 - m
+                    sh *= sh
+                    bad |= sh > shift2 * prior
                 x = u[..., None]
                 if bad.any():
                     if self.on_divergence == "raise":
@@ -578,7 +599,8 @@ class GaussianParticleFlowFilter(Filter):
         runs = m.shape[0]
         # sigma points m, m + L, m - L, L the square root of the symmetrised (n + lambda) P
         a = c_sig * P
-        L = np.sqrt(0.5 * (a + a))
+        # (with P below p_fast and n + lambda <= 1, a + a cannot overflow: 0.5 (a + a) is a itself)
+        L = np.sqrt(a) if self._sc_sqrt else np.sqrt(0.5 * (a + a))
         sig = np.empty((runs, 3, 1))
         sv = sig[:, :, 0]
         sv[:, 0] = m
