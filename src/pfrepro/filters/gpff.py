@@ -118,22 +118,22 @@ class _WrapCheckedEuler(flow.AffineField):
         d = self.A.shape[-1]
         n = len(hs)
         h = hs[:, None, None, None]
-        M = np.eye(d) + h * self.A[cols[0]]                     # (n, runs, d, d)
+        # I + h A_j: 1 added on the diagonal in place (np.eye(d) + h A broadcasts a 4 x 4 block,
+        # ten times slower; the same sums, 0 + a = a off the diagonal)
+        M = h * self.A[cols[0]]                                  # (n, runs, d, d)
+        M.reshape(-1, d * d)[:, ::d + 1] += 1.0
         v = h * self.b[cols[0]][:, :, None, :]                   # (n, runs, 1, d)
         o = self.origin[:, None, :]
-        u0 = np.asarray(z, float) - o                            # (runs, K, d)
-        runs, K = u0.shape[:2]
-        # U[j]: the probes after j steps (each step writes the next slot, no copies); U[:n] are
-        # the points the field is evaluated at
-        U = np.empty((n + 1, runs, K, d))
-        U[0] = u0
+        u = np.asarray(z, float) - o                             # (runs, K, d)
+        runs, K = u.shape[:2]
+        U = np.empty((runs, n, K, d))                            # the points the field is evaluated at
         for j in range(n):
-            np.matmul(U[j], M[j], out=U[j + 1])
-            U[j + 1] += v[j]
-        Ur = U[:n].transpose(1, 0, 2, 3).reshape(runs, -1, d)   # (runs, n K, d), step-major as before
-        hz = self._base[:, None] + (Ur @ self._JT).reshape(runs, n, K, -1)
+            U[:, j] = u
+            u = u @ M[j]
+            u += v[j]
+        hz = self._base[:, None] + (U.reshape(runs, -1, d) @ self._JT).reshape(runs, n, K, -1)
         self.failed = ~self._plain(hz)
-        return o + U[n]
+        return o + u
 
 
 class GaussianParticleFlowFilter(Filter):
