@@ -273,8 +273,8 @@ def flow_field_coefficients(lam, y, y_hat, Pxy, Pyy, R, residual=None):
         X = _solve_sym(S, np.concatenate([PT, rr], axis=-1))
         G, z = _T(X[..., :-1]), X[..., -1]              # Pxy C (runs, d, m); C r(y, y_hat)
     else:
-        G = _T(_solve_sym(S, _T(Pxy)))                  # Pxy C        (runs, d, m)
-        z = _solve_sym(S, r(y, y_hat)[..., None])[..., 0]
+        G = _T(_solve_sym(S, PT))                       # Pxy C        (runs, d, m)
+        z = _solve_sym(S, rr)[..., 0]
     # R z; a scalar measurement: one product (the same number as the 1 x 1 einsum)
     c = R[..., 0, :] * z if R.shape[-1] == 1 else _mv(R, z)  # R C r(y, y_hat) (runs, m)
     return G, c

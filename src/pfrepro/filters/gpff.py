@@ -22,7 +22,9 @@ once (:class:`pfrepro.flow.AffineField`, :func:`pfrepro.flow.affine_flow_map`); 
 residual that wraps angles (bearings), Euler steps of the probes use precomputed step maps
 and a check that no angle wrapped between them (a run where one did is integrated with the
 wrapping field itself), and RK stages step the wrapping field. Each is the stepped probe
-integration up to rounding.
+integration up to rounding. For a scalar state and measurement with a plain residual (the
+UNGM) :meth:`GaussianParticleFlowFilter.filter` runs the same arithmetic on (runs, N) and
+(runs,) arrays in fewer numpy calls, bit for bit the general loop's numbers.
 """
 from __future__ import annotations
 
@@ -490,7 +492,7 @@ class GaussianParticleFlowFilter(Filter):
         instead of (runs, N, 1) and (runs, 1, 1) ones and with the flow's map written out for a
         scalar, so that a time step costs about half the calls (at N = 100 the calls on small
         per-run arrays, not the particles, are most of the time). Pinned against the general
-        loop in tests/test_gpff_fast.py."""
+        loop in ``tests/test_gpff_fast.py``."""
         model = self.model
         runs, T, _ = y.shape
         N = self.n_particles
@@ -505,16 +507,16 @@ class GaussianParticleFlowFilter(Filter):
         euler = self.integrator == "euler"
         # constants of _update_scalar: (n + lambda) of the sigma points, the UT weights, R, the
         # stage lambdas and steps as rows, the Euler steps times 1/2 and -1/2, the probe pattern
-        self._sc = (pts.n + pts.lam, pts.Wm, pts.Wc, R[0], R[..., 0, :], self._lams[None, :], hs[None, :],
-                    0.5 * hs[None, :] if euler else None, -0.5 * hs[None, :] if euler else None, cols,
-                    self._probe_pattern[0, :, 0])
+        sc = [pts.n + pts.lam, pts.Wm, pts.Wc, R[0], R[..., 0, :], self._lams[None, :], hs[None, :],
+              0.5 * hs[None, :] if euler else None, -0.5 * hs[None, :] if euler else None, cols,
+              self._probe_pattern[0, :, 0]]
         growth, shift2 = self.max_growth, self.max_shift**2
         tiny = np.finfo(float).tiny
         # a prior variance below p_fast keeps the divergence thresholds (and (n + lambda) P + itself)
         # finite
         big = np.finfo(float).max / 4
         p_fast = big / max(growth, shift2, 1.0)
-        self._sc_sqrt = pts.n + pts.lam <= 1.0 and p_fast <= big
+        sc.append(pts.n + pts.lam <= 1.0 and p_fast <= big)   # (n + lambda) P + itself stays finite
         with np.errstate(all="ignore"):
             for k in range(1, T + 1):
                 x = model.sample_transition(x, k, take_runs(rng, alive) if len(alive) < runs else rng)
@@ -531,7 +533,7 @@ class GaussianParticleFlowFilter(Filter):
                     # shift^2 * prior are finite: then "not (value <= threshold)" is the test of
                     # _diverged (a NaN or infinite mean makes the squared shift NaN or infinite, a
                     # NaN or infinite variance fails its comparison), in a third of the calls
-                    u = self._update_scalar(dev, m, P, yk, k)
+                    u = self._update_scalar(dev, m, P, yk, sc)
                     m1 = np.add.reduce(u, 1) / N
                     d1 = u - m1[:, None]
                     var = np.einsum("rn,rn->r", d1, d1) / (N - 1)
@@ -588,19 +590,19 @@ class GaussianParticleFlowFilter(Filter):
                         Ps[:, k - 1, 0, 0] = var
         return self._result(xs, Ps, diverged_at, runs)
 
-    def _update_scalar(self, dev, m, P, y, k):
+    def _update_scalar(self, dev, m, P, y, sc):
         """The eq-43 update of :meth:`update` for d = m = 1 and a plain residual (see
         :meth:`_filter_scalar`): ``dev`` (runs, N) the prior deviations x - m (overwritten and
         returned as the moved particles), ``m``, ``P``, ``y`` (runs,). Every number is the one
         the general path computes (same operation, same operands, same order), except that for
         Euler the factors 1/2 of A and b are moved onto the step h (a product with 1/2 is exact,
         so h (1/2 w) and (h/2) w are the same number for normal floats)."""
-        c_sig, Wm, Wc, R0, Rr, lam_row, h_row, hh_row, hneg_row, cols, pat = self._sc
+        c_sig, Wm, Wc, R0, Rr, lam_row, h_row, hh_row, hneg_row, cols, pat, sqrt_a = sc
         runs = m.shape[0]
         # sigma points m, m + L, m - L, L the square root of the symmetrised (n + lambda) P
         a = c_sig * P
         # (with P below p_fast and n + lambda <= 1, a + a cannot overflow: 0.5 (a + a) is a itself)
-        L = np.sqrt(a) if self._sc_sqrt else np.sqrt(0.5 * (a + a))
+        L = np.sqrt(a) if sqrt_a else np.sqrt(0.5 * (a + a))
         sig = np.empty((runs, 3, 1))
         sv = sig[:, :, 0]
         sv[:, 0] = m
