@@ -256,3 +256,71 @@ def test_bearings_only_filter_batches():
     for sel in ([0, 1, 2], [5], [7, 3]):
         part = g.filter(y[sel], filter_streams(9, "fast", 8).subset(np.array(sel)))
         assert _same(part.x, full.x[sel]) and _same(part.P, full.P[sel])
+
+
+# ----------------------------------------------------------------------------- normals in blocks
+def _states(streams):
+    return [g.bit_generator.state for g in streams]
+
+
+def _filter_with_streams(g, y, seed, blocks):
+    """``g.filter`` with per-run streams, the normals drawn in blocks or step by step; the result,
+    the warnings, the streams' states afterwards (or the error raised)."""
+    streams = filter_streams(seed, "blocks", y.shape[0])
+    orig = GaussianParticleFlowFilter._normal_blocks
+    g._normal_blocks = (lambda rng, T: orig(g, rng, T)) if blocks else (lambda rng, T: None)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", FilterDivergenceWarning)
+            out = g.filter(y, streams)
+    except FilterDivergenceError as e:
+        out = str(e)
+    del g._normal_blocks
+    return out, _states(streams)
+
+
+@pytest.mark.parametrize("budget", [None, 1000])
+@pytest.mark.parametrize("case", ["UNGM", "UNGM rk4 diverging", "UNGM raise", "BOT", "linear 4-D"])
+def test_normals_in_blocks_are_the_per_step_draws(case, budget, monkeypatch):
+    """The same estimates and the same generator states afterwards, whether each run's normals
+    are drawn a step at a time or in blocks (one block, or many with a small budget), also when
+    runs diverge (they stop drawing) and when the filter raises."""
+    if budget is not None:
+        monkeypatch.setattr(gpff._NormalBlocks, "BUDGET", budget)
+    kw, T = {}, 15
+    if case.startswith("UNGM"):
+        model = UNGM.zhang2016()
+        if case != "UNGM":
+            kw = {"max_shift": 0.7, "integrator": "rk4" if "rk4" in case else "euler",
+                  "on_divergence": "raise" if "raise" in case else "warn"}
+    else:
+        model = BearingsOnly.zhang2016() if case == "BOT" else linear_4d()
+    for runs in (1, 3, 8):
+        y = model.simulate(T, runs, truth_streams(11, runs)).y
+        g = GaussianParticleFlowFilter(model, 25, return_cov=True, **kw)
+        assert g._normal_blocks(filter_streams(0, "x", runs), T) is not None
+        a, sa = _filter_with_streams(g, y, 5, True)
+        b, sb = _filter_with_streams(g, y, 5, False)
+        if isinstance(a, str):
+            assert a == b
+        else:
+            _assert_same_result(a, b)
+        assert sa == sb
+    if "diverging" in case:
+        assert a.diagnostics["n_diverged"] > 0
+
+
+def test_normals_in_blocks_only_for_per_run_streams_and_gaussian_transitions():
+    model = UNGM.zhang2016()
+    g = GaussianParticleFlowFilter(model, 20)
+    assert g._normal_blocks(np.random.default_rng(0), 10) is None        # one shared generator
+    assert g._normal_blocks(filter_streams(0, "x", 2), 10) is not None
+
+    class OwnTransition(UNGM):
+        def sample_transition(self, x, k, rng):
+            return super().sample_transition(x, k, rng)
+
+    assert GaussianParticleFlowFilter(OwnTransition(), 20)._normal_blocks(filter_streams(0, "x", 2), 10) is None
+    blocks = g._normal_blocks(filter_streams(0, "x", 2), 1)
+    with pytest.raises(ValueError, match="unexpected draw"):
+        blocks.take(np.arange(2)).standard_normal((2, 20, 2))

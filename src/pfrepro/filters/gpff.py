@@ -28,11 +28,14 @@ UNGM) :meth:`GaussianParticleFlowFilter.filter` runs the same arithmetic on (run
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 
 from .. import flow
 from ..models.base import StateSpaceModel, require_capabilities
-from ..rng import take_runs
+from ..noise import GaussianNoise
+from ..rng import RunStreams, take_runs
 import warnings
 
 from ..validation import as_finite_float, check_positive_int
@@ -93,6 +96,82 @@ def _moments_dev(x):
     S = P + np.swapaxes(P, -1, -2)
     S *= 0.5
     return m, S, d
+
+
+@contextmanager
+def _settled(blocks):
+    """Settle ``blocks`` (a :class:`_NormalBlocks` or ``None``) however the block exits."""
+    try:
+        yield
+    finally:
+        if blocks is not None:
+            blocks.settle()
+
+
+class _NormalBlocks:
+    """Per-run standard normals of a GPFF run drawn in blocks of time steps (one generator call
+    per run and block instead of one per run and step).
+
+    A GPFF run's only draws are standard normals of one size a step (the prior cloud, then the
+    Gaussian transition noise), and a Generator's normals come one after the other, so serving
+    step k's ``standard_normal(size)`` from a block drawn ahead gives the numbers the per-step
+    call would have drawn, bit for bit. :meth:`settle` leaves every generator where the per-step
+    calls would have left it: a run that stopped drawing (diverged) is rewound to its last
+    block's start and advanced by the normals it used.
+    """
+
+    #: normals per block (all runs), about 8 MB
+    BUDGET = 1 << 20
+
+    def __init__(self, streams, per_step, n_draws):
+        self._gens = list(streams)
+        self._per_step, self._left = per_step, n_draws
+        self._steps = max(1, self.BUDGET // max(1, len(self._gens) * per_step))
+        self._used = np.zeros(len(self._gens), dtype=np.int64)
+        self._drawn = np.zeros(len(self._gens), dtype=np.int64)
+        self._snap = [None] * len(self._gens)
+        self._snap_at = np.zeros(len(self._gens), dtype=np.int64)
+        self._buf, self._slot, self._rows = None, 0, None
+
+    def take(self, alive):
+        """The source of the runs ``alive`` (indices, increasing) for the next draw."""
+        self._rows = None if len(alive) == len(self._gens) else alive
+        return self
+
+    def standard_normal(self, size, dtype=np.float64):
+        runs = range(len(self._gens)) if self._rows is None else self._rows
+        n = int(np.prod(size[1:], dtype=np.int64))
+        if dtype != np.float64 or n != self._per_step or len(size) < 1 or size[0] != len(runs):
+            raise ValueError(f"unexpected draw of shape {size} ({dtype}) in a GPFF run")
+        if self._buf is None or self._slot == self._buf.shape[1]:
+            steps = min(self._steps, self._left)
+            if steps < 1:
+                raise ValueError("more draws than the GPFF run makes")
+            self._buf = np.empty((len(self._gens), steps, n))
+            self._slot = 0
+            for i in runs:
+                g = self._gens[i]
+                self._snap[i], self._snap_at[i] = g.bit_generator.state, self._drawn[i]
+                g.standard_normal(out=self._buf[i].reshape(-1))
+                self._drawn[i] += steps * n
+        rows = self._buf[:, self._slot] if self._rows is None else self._buf[self._rows, self._slot]
+        out = rows.reshape(size) if self._rows is not None else rows.copy().reshape(size)
+        self._slot += 1
+        self._left -= 1
+        if self._rows is None:
+            self._used += n
+        else:
+            self._used[self._rows] += n
+        return out
+
+    def settle(self):
+        """Leave every generator where per-step draws would have (see the class docstring)."""
+        for i in np.flatnonzero(self._drawn > self._used):
+            g = self._gens[i]
+            g.bit_generator.state = self._snap[i]
+            k = int(self._used[i] - self._snap_at[i])
+            if k:
+                g.standard_normal(k)
 
 
 class _WrapCheckedEuler(flow.AffineField):
@@ -434,15 +513,18 @@ class GaussianParticleFlowFilter(Filter):
             return self._filter_scalar(y, rng)
         runs, T, _ = y.shape
         n = self.model.dim_x
-        x = self.sample_prior(rng, (runs, self.n_particles))
+        # per-run streams: the normals of a run drawn in blocks of steps (bit for bit the same)
+        blocks = self._normal_blocks(rng, T)
+        x = self.sample_prior(rng if blocks is None else blocks.take(np.arange(runs)), (runs, self.n_particles))
         xs = np.full((runs, T, n), np.nan)
         Ps = np.full((runs, T, n, n), np.nan) if self.return_cov else None
         alive = np.arange(runs)              # runs still being filtered
         diverged_at = np.zeros(runs, dtype=int)
-        with np.errstate(all="ignore"):
+        with np.errstate(all="ignore"), _settled(blocks):
             for k in range(1, T + 1):
                 # runs that diverged no longer draw; the others keep their own streams
-                x = self.model.sample_transition(x, k, take_runs(rng, alive) if len(alive) < runs else rng)
+                x = self.model.sample_transition(x, k, blocks.take(alive) if blocks is not None else
+                                                 take_runs(rng, alive) if len(alive) < runs else rng)
                 # Each run's fate depends on its own particles only (pfrepro.rng rule 3), and
                 # every batched linear-algebra call of the update works matrix by matrix
                 # (flow.solve_per_run, safe_cholesky(on_error="nan")): a diverging run never
@@ -486,6 +568,17 @@ class GaussianParticleFlowFilter(Filter):
                 f"'raise' makes it an error)"), stacklevel=2)
         return FilterResult(xs, Ps, diagnostics={"diverged_at": diverged_at, "n_diverged": n_div})
 
+    def _normal_blocks(self, rng, T):
+        """A :class:`_NormalBlocks` for per-run streams when the run's draws are the prior's and
+        the model's Gaussian transition noise only (else ``None``: the streams draw step by step)."""
+        model = self.model
+        noise = getattr(model, "process_noise", None)
+        if (not isinstance(rng, RunStreams) or type(self).sample_prior is not Filter.sample_prior
+                or getattr(type(model), "sample_transition", None) is not StateSpaceModel.sample_transition
+                or type(noise) is not GaussianNoise or noise.is_zero or noise.dim != model.dim_x):
+            return None
+        return _NormalBlocks(rng, self.n_particles * model.dim_x, T + 1)
+
     def _filter_scalar(self, y, rng):
         """:meth:`filter` for d = m = 1 and a plain residual, bit for bit: the same numbers, each
         computed by the same numpy operation on the same values, on (runs, N) and (runs,) arrays
@@ -496,7 +589,8 @@ class GaussianParticleFlowFilter(Filter):
         model = self.model
         runs, T, _ = y.shape
         N = self.n_particles
-        x = self.sample_prior(rng, (runs, N))
+        blocks = self._normal_blocks(rng, T)
+        x = self.sample_prior(rng if blocks is None else blocks.take(np.arange(runs)), (runs, N))
         xs = np.full((runs, T, 1), np.nan)
         Ps = np.full((runs, T, 1, 1), np.nan) if self.return_cov else None
         alive = np.arange(runs)
@@ -517,9 +611,10 @@ class GaussianParticleFlowFilter(Filter):
         big = np.finfo(float).max / 4
         p_fast = big / max(growth, shift2, 1.0)
         sc.append(pts.n + pts.lam <= 1.0 and p_fast <= big)   # (n + lambda) P + itself stays finite
-        with np.errstate(all="ignore"):
+        with np.errstate(all="ignore"), _settled(blocks):
             for k in range(1, T + 1):
-                x = model.sample_transition(x, k, take_runs(rng, alive) if len(alive) < runs else rng)
+                x = model.sample_transition(x, k, blocks.take(alive) if blocks is not None else
+                                            take_runs(rng, alive) if len(alive) < runs else rng)
                 xv = x[..., 0]
                 # eqs 51, 52 (particle_moments): the mean, the deviations, 1/(N-1) sum of squares
                 m = np.add.reduce(xv, 1) / N
