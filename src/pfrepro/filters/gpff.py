@@ -23,8 +23,10 @@ residual that wraps angles (bearings), Euler steps of the probes use precomputed
 and a check that no angle wrapped between them (a run where one did is integrated with the
 wrapping field itself), and RK stages step the wrapping field. Each is the stepped probe
 integration up to rounding. For a scalar state and measurement with a plain residual (the
-UNGM) :meth:`GaussianParticleFlowFilter.filter` runs the same arithmetic on (runs, N) and
-(runs,) arrays in fewer numpy calls, bit for bit the general loop's numbers.
+UNGM) the filter loop runs the same arithmetic on (runs, N) and (runs,) arrays in fewer numpy
+calls, bit for bit the general loop's numbers. With per-run random streams and a Gaussian
+transition each run's normals are drawn in blocks of time steps (the same numbers, and every
+generator left where step-by-step draws leave it).
 """
 from __future__ import annotations
 
