@@ -266,8 +266,15 @@ def flow_field_coefficients(lam, y, y_hat, Pxy, Pyy, R, residual=None):
     """
     r = (lambda a, b: a - b) if residual is None else residual
     S = lam * Pyy + R
-    G = _T(_solve_sym(S, _T(Pxy)))                      # Pxy C        (runs, d, m)
-    z = _solve_sym(S, r(y, y_hat)[..., None])[..., 0]
+    PT, rr = _T(np.asarray(Pxy, float)), r(y, y_hat)[..., None]
+    if S.shape[-1] <= 2 and PT.shape[:-2] == rr.shape[:-2]:
+        # one elementwise solve for both right-hand sides (a division or Cramer's rule: every
+        # entry is the same formula on the same numbers as with two solves)
+        X = _solve_sym(S, np.concatenate([PT, rr], axis=-1))
+        G, z = _T(X[..., :-1]), X[..., -1]              # Pxy C (runs, d, m); C r(y, y_hat)
+    else:
+        G = _T(_solve_sym(S, PT))                       # Pxy C        (runs, d, m)
+        z = _solve_sym(S, rr)[..., 0]
     # R z; a scalar measurement: one product (the same number as the 1 x 1 einsum)
     c = R[..., 0, :] * z if R.shape[-1] == 1 else _mv(R, z)  # R C r(y, y_hat) (runs, m)
     return G, c

@@ -22,20 +22,31 @@ once (:class:`pfrepro.flow.AffineField`, :func:`pfrepro.flow.affine_flow_map`); 
 residual that wraps angles (bearings), Euler steps of the probes use precomputed step maps
 and a check that no angle wrapped between them (a run where one did is integrated with the
 wrapping field itself), and RK stages step the wrapping field. Each is the stepped probe
-integration up to rounding.
+integration up to rounding. For a scalar state and measurement with a plain residual (the
+UNGM) the filter loop runs the same arithmetic on (runs, N) and (runs,) arrays in fewer numpy
+calls, bit for bit the general loop's numbers. With per-run random streams and a Gaussian
+transition each run's normals are drawn in blocks of time steps (the same numbers, and every
+generator left where step-by-step draws leave it).
 """
 from __future__ import annotations
+
+from contextlib import contextmanager
 
 import numpy as np
 
 from .. import flow
 from ..models.base import StateSpaceModel, require_capabilities
-from ..rng import take_runs
+from ..noise import GaussianNoise
+from ..rng import RunStreams, take_runs
 import warnings
 
 from ..validation import as_finite_float, check_positive_int
 from .base import DIVERGENCE_POLICIES, Filter, FilterDivergenceError, FilterDivergenceWarning, FilterResult
 from .sigma_points import ScaledSigmaPoints, unscented_transform
+
+#: the package's own integrate_flow (a wrapper put in its place, as pfrepro.cost's counting one,
+#: sends the scalar filter through the general loop, where the probes are integrated)
+_INTEGRATE_FLOW = flow.integrate_flow
 
 __all__ = ["GaussianParticleFlowFilter", "particle_moments"]
 
@@ -64,6 +75,12 @@ def _posterior_moments(x, full_cov=True):
 
 def particle_moments(x):
     """Sample mean and covariance (1/(N-1)) of particles ``(runs, N, d)`` (eqs 51, 52)."""
+    return _moments_dev(x)[:2]
+
+
+def _moments_dev(x):
+    """:func:`particle_moments` and the deviations ``x - m`` it computes on the way (the
+    filter's update starts from the same array)."""
     x = np.asarray(x, float)
     if x.ndim != 3:
         raise ValueError(f"particles must be (runs, N, d), got shape {x.shape}")
@@ -80,7 +97,83 @@ def particle_moments(x):
         P = (np.swapaxes(d, -1, -2) @ d) / (N - 1)
     S = P + np.swapaxes(P, -1, -2)
     S *= 0.5
-    return m, S
+    return m, S, d
+
+
+@contextmanager
+def _settled(blocks):
+    """Settle ``blocks`` (a :class:`_NormalBlocks` or ``None``) however the block exits."""
+    try:
+        yield
+    finally:
+        if blocks is not None:
+            blocks.settle()
+
+
+class _NormalBlocks:
+    """Per-run standard normals of a GPFF run drawn in blocks of time steps (one generator call
+    per run and block instead of one per run and step).
+
+    A GPFF run's only draws are standard normals of one size a step (the prior cloud, then the
+    Gaussian transition noise), and a Generator's normals come one after the other, so serving
+    step k's ``standard_normal(size)`` from a block drawn ahead gives the numbers the per-step
+    call would have drawn, bit for bit. :meth:`settle` leaves every generator where the per-step
+    calls would have left it: a run that stopped drawing (diverged) is rewound to its last
+    block's start and advanced by the normals it used.
+    """
+
+    #: normals per block (all runs), about 8 MB
+    BUDGET = 1 << 20
+
+    def __init__(self, streams, per_step, n_draws):
+        self._gens = list(streams)
+        self._per_step, self._left = per_step, n_draws
+        self._steps = max(1, self.BUDGET // max(1, len(self._gens) * per_step))
+        self._used = np.zeros(len(self._gens), dtype=np.int64)
+        self._drawn = np.zeros(len(self._gens), dtype=np.int64)
+        self._snap = [None] * len(self._gens)
+        self._snap_at = np.zeros(len(self._gens), dtype=np.int64)
+        self._buf, self._slot, self._rows = None, 0, None
+
+    def take(self, alive):
+        """The source of the runs ``alive`` (indices, increasing) for the next draw."""
+        self._rows = None if len(alive) == len(self._gens) else alive
+        return self
+
+    def standard_normal(self, size, dtype=np.float64):
+        runs = range(len(self._gens)) if self._rows is None else self._rows
+        n = int(np.prod(size[1:], dtype=np.int64))
+        if dtype != np.float64 or n != self._per_step or len(size) < 1 or size[0] != len(runs):
+            raise ValueError(f"unexpected draw of shape {size} ({dtype}) in a GPFF run")
+        if self._buf is None or self._slot == self._buf.shape[1]:
+            steps = min(self._steps, self._left)
+            if steps < 1:
+                raise ValueError("more draws than the GPFF run makes")
+            self._buf = np.empty((len(self._gens), steps, n))
+            self._slot = 0
+            for i in runs:
+                g = self._gens[i]
+                self._snap[i], self._snap_at[i] = g.bit_generator.state, self._drawn[i]
+                g.standard_normal(out=self._buf[i].reshape(-1))
+                self._drawn[i] += steps * n
+        rows = self._buf[:, self._slot] if self._rows is None else self._buf[self._rows, self._slot]
+        out = rows.reshape(size) if self._rows is not None else rows.copy().reshape(size)
+        self._slot += 1
+        self._left -= 1
+        if self._rows is None:
+            self._used += n
+        else:
+            self._used[self._rows] += n
+        return out
+
+    def settle(self):
+        """Leave every generator where per-step draws would have (see the class docstring)."""
+        for i in np.flatnonzero(self._drawn > self._used):
+            g = self._gens[i]
+            g.bit_generator.state = self._snap[i]
+            k = int(self._used[i] - self._snap_at[i])
+            if k:
+                g.standard_normal(k)
 
 
 class _WrapCheckedEuler(flow.AffineField):
@@ -106,18 +199,22 @@ class _WrapCheckedEuler(flow.AffineField):
             raise ValueError("this field is tabulated for Euler steps on its own grid")
         lams, index, hs, cols, _ = flow._plan(self.grid, "euler")
         d = self.A.shape[-1]
+        n = len(hs)
         h = hs[:, None, None, None]
-        M = np.eye(d) + h * self.A[cols[0]]                     # (n, runs, d, d)
-        v = h[..., 0] * self.b[cols[0]]                          # (n, runs, d)
+        # I + h A_j: 1 added on the diagonal in place (np.eye(d) + h A broadcasts a 4 x 4 block,
+        # ten times slower; the same sums, 0 + a = a off the diagonal)
+        M = h * self.A[cols[0]]                                  # (n, runs, d, d)
+        M.reshape(-1, d * d)[:, ::d + 1] += 1.0
+        v = h * self.b[cols[0]][:, :, None, :]                   # (n, runs, 1, d)
         o = self.origin[:, None, :]
         u = np.asarray(z, float) - o                             # (runs, K, d)
         runs, K = u.shape[:2]
-        U = np.empty((runs, len(hs), K, d))                      # the points the field is evaluated at
-        for j in range(len(hs)):
+        U = np.empty((runs, n, K, d))                            # the points the field is evaluated at
+        for j in range(n):
             U[:, j] = u
             u = u @ M[j]
-            u += v[j][:, None, :]
-        hz = self._base[:, None] + (U.reshape(runs, -1, d) @ self._JT).reshape(runs, len(hs), K, -1)
+            u += v[j]
+        hz = self._base[:, None] + (U.reshape(runs, -1, d) @ self._JT).reshape(runs, n, K, -1)
         self.failed = ~self._plain(hz)
         return o + u
 
@@ -236,10 +333,17 @@ class GaussianParticleFlowFilter(Filter):
         # a residual that is plain subtraction makes the eq-43 field affine in the state
         # (an angle wrap is not: the bearings-only model keeps integrating probe points)
         self._plain_residual = getattr(type(model), "residual_y", None) is StateSpaceModel.residual_y
+        # how update finds the eq-43 map: in closed form (plain residual), by checked Euler steps
+        # of the probes, or by integrating them with the wrapping field
+        self._mode = "closed" if self._plain_residual else ("checked" if integrator == "euler" else "probes")
         self.points = ScaledSigmaPoints(model.dim_x, alpha, beta, kappa)
         # the eq-43 probes m + s * row: the mean, then one step of one prior sd along each axis
         self._probe_pattern = np.concatenate([np.zeros((1, model.dim_x)), np.eye(model.dim_x)])[None]
         self.return_cov = bool(return_cov)
+        # a scalar state and measurement with a plain residual (the UNGM): :meth:`filter` runs the
+        # eq-43 step on (runs, N) arrays (``_filter_scalar``), the same arithmetic in fewer calls
+        self._scalar = (field == "eq43" and integrator != "exact" and self._plain_residual
+                        and model.dim_x == 1 and model.dim_y == 1)
 
     def prior_statistics(self, x, moments=None):
         """Eqs (47)-(52): particle mean/cov, then UT moments y_hat, Pyy, Pxy of h.
@@ -268,16 +372,17 @@ class GaussianParticleFlowFilter(Filter):
 
         ``moments``: ``particle_moments(x)`` if the caller has it already (not recomputed).
         """
-        if self._plain_residual:
-            return self._update(x, y, moments, "closed")
-        return self._update(x, y, moments, "checked" if self.integrator == "euler" else "probes")
+        return self._update(x, y, moments, self._mode)
 
     def _update_probes(self, x, y, moments=None):
         """:meth:`update` with the eq-43 map always found by integrating d + 1 probe points
         (the reference for the closed form, and the path of a model whose residual wraps)."""
         return self._update(x, y, moments, "probes")
 
-    def _update(self, x, y, moments, mode):
+    def _update(self, x, y, moments, mode, dev=None):
+        """The update in ``mode`` ("closed", "checked" or "probes"); ``dev``: ``x - m`` of the
+        moments if the caller has it (the same array :func:`particle_moments` computed; it is
+        overwritten)."""
         model = self.model
         if self.integrator == "exact":
             m, P = particle_moments(x) if moments is None else moments
@@ -342,7 +447,11 @@ class GaussianParticleFlowFilter(Filter):
 
                 def plain(hz):
                     e = yN[:, None] - hz
-                    dev = np.abs(r(yN[:, None], hz) - e)
+                    dev = r(yN[:, None], hz)
+                    dev -= e
+                    np.abs(dev, out=dev)
+                    if dev.max() <= 1e-9:     # within the tolerance everywhere (NaN fails this)
+                        return np.ones(len(hz), dtype=bool)
                     return np.all(dev <= 1e-9 * (1.0 + np.abs(e)), axis=(1, 2, 3))
 
                 field = _WrapCheckedEuler(A_all, b_all, m, self.grid, self._stages, field, base, JT, plain)
@@ -355,7 +464,7 @@ class GaussianParticleFlowFilter(Filter):
         out = flow.integrate_flow(probes, field, self.grid, self.integrator)
         c = out[:, 0]
         MT = (out[:, 1:] - c[:, None, :]) / s[:, :, None]             # M^T (runs, d, d)
-        u = x - mN
+        u = x - mN if dev is None else dev
         if MT.shape[-1] == 1:
             # d = 1: a product of scalars (numpy's multiply, the same number as the 1 x 1
             # matmul), in place, as is the shift (the same sum c + u M^T)
@@ -400,26 +509,34 @@ class GaussianParticleFlowFilter(Filter):
 
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
         y = self._prepare(y, rng)
+        if self._scalar and flow.integrate_flow is _INTEGRATE_FLOW:
+            # (a wrapped integrate_flow, e.g. pfrepro.cost counting the flow, sees the probe
+            # integration of the general loop)
+            return self._filter_scalar(y, rng)
         runs, T, _ = y.shape
         n = self.model.dim_x
-        x = self.sample_prior(rng, (runs, self.n_particles))
+        # per-run streams: the normals of a run drawn in blocks of steps (bit for bit the same)
+        blocks = self._normal_blocks(rng, T)
+        x = self.sample_prior(rng if blocks is None else blocks.take(np.arange(runs)), (runs, self.n_particles))
         xs = np.full((runs, T, n), np.nan)
         Ps = np.full((runs, T, n, n), np.nan) if self.return_cov else None
         alive = np.arange(runs)              # runs still being filtered
         diverged_at = np.zeros(runs, dtype=int)
-        with np.errstate(all="ignore"):
+        with np.errstate(all="ignore"), _settled(blocks):
             for k in range(1, T + 1):
                 # runs that diverged no longer draw; the others keep their own streams
-                x = self.model.sample_transition(x, k, take_runs(rng, alive) if len(alive) < runs else rng)
+                x = self.model.sample_transition(x, k, blocks.take(alive) if blocks is not None else
+                                                 take_runs(rng, alive) if len(alive) < runs else rng)
                 # Each run's fate depends on its own particles only (pfrepro.rng rule 3), and
                 # every batched linear-algebra call of the update works matrix by matrix
                 # (flow.solve_per_run, safe_cholesky(on_error="nan")): a diverging run never
                 # changes another run's numbers. A cloud whose covariance overflows cannot be
                 # moved (eq 52): diverged in the prediction; then the flow's growth test.
-                m_prior, P_prior = particle_moments(x)
+                m_prior, P_prior, dev = _moments_dev(x)
                 bad = ~np.isfinite(P_prior.reshape(len(alive), -1)).all(axis=1)
                 if not bad.any():
-                    x_new = self.update(x, y[alive, k - 1], moments=(m_prior, P_prior))
+                    # update(), starting from the deviations the moments computed
+                    x_new = self._update(x, y[alive, k - 1], (m_prior, P_prior), self._mode, dev)
                 else:
                     x_new = np.full_like(x, np.nan)
                     if (~bad).any():
@@ -451,6 +568,203 @@ class GaussianParticleFlowFilter(Filter):
                 f"their estimates are NaN from the step in diagnostics['diverged_at'] on. "
                 f"Count them beside any error statistic (on_divergence='drop' silences this warning, "
                 f"'raise' makes it an error)"), stacklevel=2)
+        return FilterResult(xs, Ps, diagnostics={"diverged_at": diverged_at, "n_diverged": n_div})
+
+    def _normal_blocks(self, rng, T):
+        """A :class:`_NormalBlocks` for per-run streams when the run's draws are the prior's and
+        the model's Gaussian transition noise only (else ``None``: the streams draw step by step)."""
+        model = self.model
+        noise = getattr(model, "process_noise", None)
+        if (not isinstance(rng, RunStreams) or type(self).sample_prior is not Filter.sample_prior
+                or getattr(type(model), "sample_transition", None) is not StateSpaceModel.sample_transition
+                or type(noise) is not GaussianNoise or noise.is_zero or noise.dim != model.dim_x):
+            return None
+        return _NormalBlocks(rng, self.n_particles * model.dim_x, T + 1)
+
+    def _filter_scalar(self, y, rng):
+        """:meth:`filter` for d = m = 1 and a plain residual, bit for bit: the same numbers, each
+        computed by the same numpy operation on the same values, on (runs, N) and (runs,) arrays
+        instead of (runs, N, 1) and (runs, 1, 1) ones and with the flow's map written out for a
+        scalar, so that a time step costs about half the calls (at N = 100 the calls on small
+        per-run arrays, not the particles, are most of the time). Pinned against the general
+        loop in ``tests/test_gpff_fast.py``."""
+        model = self.model
+        runs, T, _ = y.shape
+        N = self.n_particles
+        blocks = self._normal_blocks(rng, T)
+        x = self.sample_prior(rng if blocks is None else blocks.take(np.arange(runs)), (runs, N))
+        xs = np.full((runs, T, 1), np.nan)
+        Ps = np.full((runs, T, 1, 1), np.nan) if self.return_cov else None
+        alive = np.arange(runs)
+        diverged_at = np.zeros(runs, dtype=int)
+        pts = self.points
+        R = model.R                               # (1, 1)
+        lams, index, hs, cols, _ = flow._plan(self.grid, self.integrator)
+        euler = self.integrator == "euler"
+        # constants of _update_scalar: (n + lambda) of the sigma points, the UT weights, R, the
+        # stage lambdas and steps as rows, the Euler steps times 1/2 and -1/2, the probe pattern
+        sc = [pts.n + pts.lam, pts.Wm, pts.Wc, R[0], R[..., 0, :], self._lams[None, :], hs[None, :],
+              0.5 * hs[None, :] if euler else None, -0.5 * hs[None, :] if euler else None, cols,
+              self._probe_pattern[0, :, 0]]
+        growth, shift2 = self.max_growth, self.max_shift**2
+        tiny = np.finfo(float).tiny
+        # a prior variance below p_fast keeps the divergence thresholds (and (n + lambda) P + itself)
+        # finite
+        big = np.finfo(float).max / 4
+        p_fast = big / max(growth, shift2, 1.0)
+        sc.append(pts.n + pts.lam <= 1.0 and p_fast <= big)   # (n + lambda) P + itself stays finite
+        with np.errstate(all="ignore"), _settled(blocks):
+            for k in range(1, T + 1):
+                x = model.sample_transition(x, k, blocks.take(alive) if blocks is not None else
+                                            take_runs(rng, alive) if len(alive) < runs else rng)
+                xv = x[..., 0]
+                # eqs 51, 52 (particle_moments): the mean, the deviations, 1/(N-1) sum of squares
+                m = np.add.reduce(xv, 1) / N
+                dev = xv - m[:, None]
+                P = np.einsum("rn,rn->r", dev, dev) / (N - 1)
+                P += P                          # the symmetrised 1 x 1 covariance: (P + P^T) / 2
+                P *= 0.5
+                yk = y[alive, k - 1, 0] if len(alive) < runs else y[:, k - 1, 0]
+                if (P < p_fast).all():
+                    # every prior variance finite and below p_fast, so growth * prior and
+                    # shift^2 * prior are finite: then "not (value <= threshold)" is the test of
+                    # _diverged (a NaN or infinite mean makes the squared shift NaN or infinite, a
+                    # NaN or infinite variance fails its comparison), in a third of the calls
+                    u = self._update_scalar(dev, m, P, yk, sc)
+                    m1 = np.add.reduce(u, 1) / N
+                    d1 = u - m1[:, None]
+                    var = np.einsum("rn,rn->r", d1, d1) / (N - 1)
+                    if Ps is not None:          # the full covariance's diagonal, symmetrised
+                        var += var
+                        var *= 0.5
+                    prior = np.maximum(P, tiny)
+                    good = var <= growth * prior
+                    sh = m1 - m
+                    sh *= sh
+                    good &= sh <= shift2 * prior
+                    bad = ~good
+                else:
+                    bad = ~np.isfinite(P)
+                    x_new = np.full_like(x, np.nan)
+                    if (~bad).any():
+                        x_new[~bad] = self.update(x[~bad], y[alive[~bad], k - 1])
+                    u = x_new[..., 0]
+                    # the divergence test (_diverged) on the moved particles' mean and variances
+                    m1 = np.add.reduce(u, 1) / N
+                    d1 = u - m1[:, None]
+                    var = np.einsum("rn,rn->r", d1, d1) / (N - 1)
+                    if Ps is not None:
+                        var += var
+                        var *= 0.5
+                    bad |= ~np.isfinite(m1)
+                    bad |= ~np.isfinite(var)
+                    prior = np.maximum(P, tiny)
+                    bad |= var > growth * prior
+                    sh = m1 - m
+                    sh *= sh
+                    bad |= sh > shift2 * prior
+                x = u[..., None]
+                if bad.any():
+                    if self.on_divergence == "raise":
+                        raise FilterDivergenceError(
+                            f"GPFF diverged at step {k} in runs {alive[bad][:10].tolist()} (particles "
+                            f"non-finite, or the flow grew a variance more than {self.max_growth:g}x or "
+                            f"moved the mean more than {self.max_shift:g} prior sd); "
+                            f"on_divergence='warn' keeps the other runs")
+                    diverged_at[alive[bad]] = k
+                    alive, x = alive[~bad], x[~bad]
+                    if alive.size == 0:
+                        break
+                    m1, _, var = _posterior_moments(x, Ps is not None)
+                    m1, var = m1[:, 0], var[:, 0]
+                if len(alive) < runs:
+                    xs[alive, k - 1, 0] = m1
+                    if Ps is not None:
+                        Ps[alive, k - 1, 0, 0] = var
+                else:
+                    xs[:, k - 1, 0] = m1
+                    if Ps is not None:
+                        Ps[:, k - 1, 0, 0] = var
+        return self._result(xs, Ps, diverged_at, runs)
+
+    def _update_scalar(self, dev, m, P, y, sc):
+        """The eq-43 update of :meth:`update` for d = m = 1 and a plain residual (see
+        :meth:`_filter_scalar`): ``dev`` (runs, N) the prior deviations x - m (overwritten and
+        returned as the moved particles), ``m``, ``P``, ``y`` (runs,). Every number is the one
+        the general path computes (same operation, same operands, same order), except that for
+        Euler the factors 1/2 of A and b are moved onto the step h (a product with 1/2 is exact,
+        so h (1/2 w) and (h/2) w are the same number for normal floats)."""
+        c_sig, Wm, Wc, R0, Rr, lam_row, h_row, hh_row, hneg_row, cols, pat, sqrt_a = sc
+        runs = m.shape[0]
+        # sigma points m, m + L, m - L, L the square root of the symmetrised (n + lambda) P
+        a = c_sig * P
+        # (with P below p_fast and n + lambda <= 1, a + a cannot overflow: 0.5 (a + a) is a itself)
+        L = np.sqrt(a) if sqrt_a else np.sqrt(0.5 * (a + a))
+        sig = np.empty((runs, 3, 1))
+        sv = sig[:, :, 0]
+        sv[:, 0] = m
+        np.add(m, L, out=sv[:, 1])
+        np.subtract(m, L, out=sv[:, 2])
+        Y = self.model.h(sig)                                       # (runs, 3, 1)
+        # unscented_transform and the cross covariance (eqs 47-50), the same einsums
+        y_hat = np.einsum("i,...ij->...j", Wm, Y)[:, 0]
+        dy = Y - y_hat[:, None, None]
+        Pyy = np.einsum("i,...ij,...ik->...jk", Wc, dy, dy)[:, 0, 0]
+        Pxy = np.einsum("i,rij,rik->rjk", Wc, sig - m[:, None, None], dy)[:, 0, 0]
+        Pyy = 0.5 * (Pyy + Pyy)
+        # flow_field_coefficients at every stage lambda, laid out (runs, L): S = lam Pyy + R,
+        # G = Pxy / S, c = R (y - y_hat) / S; A = -1/2 J^T G^T, b = 1/2 [(y - y_hat) + c] G^T
+        S = Pyy[:, None] * lam_row
+        S += R0
+        G = Pxy[:, None] / S
+        e = (y - y_hat)[:, None]
+        w = e / S
+        w *= Rr                                                     # c
+        w += e                                                      # (y - y_hat) + c
+        w *= G
+        JT = Pxy / P
+        if hneg_row is not None:
+            # Euler: the steps' maps M_j = 1 + h A_j, v_j = h b_j (flow._step_maps), the 1/2 on h
+            M = JT[:, None] * G
+            M *= hneg_row
+            M += 1.0
+            v = w
+            v *= hh_row
+        else:
+            A = JT[:, None] * G
+            A *= -0.5
+            w *= 0.5
+            Mt, vt_ = flow._step_maps(A.T, w.T, h_row.T, cols, self.integrator, np.multiply, 1.0)
+            M, v = Mt.T, vt_.T
+        # flow.affine_flow_map for d = 1: suffix products, then the sum over the steps along a
+        # contiguous axis (a fresh (runs, n - 1) array, as the general path's copy)
+        Sfx = np.cumprod(M[:, ::-1], axis=1)[:, ::-1]
+        vt = (v[:, :-1] * Sfx[:, 1:]).sum(axis=-1)
+        vt += v[:, -1]
+        # the two probes m + 0 s, m + s through the map (AffineField.integrate), and M^T, c read
+        # off them as in update
+        s = np.sqrt(P)
+        mc = m[:, None]
+        probes = mc + pat * s[:, None]                              # (runs, 2)
+        probes -= mc
+        probes *= Sfx[:, :1]
+        probes += mc
+        probes += vt[:, None]
+        c0 = probes[:, 0]
+        MT = probes[:, 1] - c0
+        MT /= s
+        dev *= MT[:, None]
+        dev += c0[:, None]
+        return dev
+
+    def _result(self, xs, Ps, diverged_at, runs):
+        n_div = int((diverged_at > 0).sum())
+        if n_div and self.on_divergence == "warn":
+            warnings.warn(FilterDivergenceWarning(
+                f"GPFF: {n_div} of {runs} runs diverged (first at step {int(diverged_at[diverged_at > 0].min())}); "
+                f"their estimates are NaN from the step in diagnostics['diverged_at'] on. "
+                f"Count them beside any error statistic (on_divergence='drop' silences this warning, "
+                f"'raise' makes it an error)"), stacklevel=3)
         return FilterResult(xs, Ps, diagnostics={"diverged_at": diverged_at, "n_diverged": n_div})
 
     def __repr__(self) -> str:
