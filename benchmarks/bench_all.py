@@ -149,25 +149,52 @@ def _timed(filt, y, rng_seed, name):
         gc.enable()
 
 
+def steady_heap() -> bool:
+    """Tell glibc's allocator to keep what this process frees (``mallopt``: no trimming of the heap,
+    blocks up to 32 MB from the heap instead of fresh mappings); ``False`` where the C library is
+    not glibc. Without it, whether a filter's large temporaries come back as fresh pages (a page
+    fault per 4 kB, every call) depends on the thresholds glibc adapts to what the process freed
+    before: in one process the filters timed earlier set them, in a process of its own the filter's
+    own sizes do, and the same code measured up to a third slower or faster between the two."""
+    import ctypes
+    import ctypes.util
+
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        mallopt = libc.mallopt
+    except (OSError, AttributeError):
+        return False
+    M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
+    return bool(mallopt(M_TRIM_THRESHOLD, 2**30)) and bool(mallopt(M_MMAP_THRESHOLD, 32 * 2**20))
+
+
 def _worker(conn, filt, y, seed, name, blas_threads):
     """One configuration's timing process: answers ``"single"`` / ``"batched"`` with (wall, CPU)
-    of one call, until ``None``. A process of its own, so that the allocator's state (what the heap
+    of one call and ``"warm-up"`` with ``None`` once warm, until ``None``. A process of its own, so that the allocator's state (what the heap
     kept or gave back after other filters' calls, and the page faults that follow) is this
     filter's alone: a filter's time does not depend on which filters ran before it."""
     if blas_threads is not None:
         import threadpoolctl
 
         threadpoolctl.threadpool_limits(blas_threads, user_api="blas")
-    _timed(filt, y[:1], seed, name)                  # warm-up
     while (what := conn.recv()) is not None:
-        conn.send(_timed(filt, y[:1] if what == "single" else y, seed, name))
+        if what == "warm-up":
+            # one call of each kind: the heap settles to this filter's own pattern of temporaries
+            # (glibc raises its mmap threshold to the chunks a process frees), which every repeat meets
+            _timed(filt, y[:1], seed, name)
+            _timed(filt, y, seed, name)
+            conn.send(None)
+        else:
+            conn.send(_timed(filt, y[:1] if what == "single" else y, seed, name))
     conn.close()
 
 
 def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026, blas_threads=None, isolate: bool = True):
     """Time every configuration: ``repeats`` interleaved rounds (every filter once per round, so a
     drift of the machine's load hits every filter alike), each filter in a worker process of its
-    own (``isolate``; forked, so it holds the parent's filters and data) and one call at a time."""
+    own (``isolate``; forked, so it holds the parent's filters and data, and the allocator settings
+    of :func:`steady_heap` where the caller made them), warmed up one at a time and timed one call
+    at a time."""
     import multiprocessing as mp
 
     built, keys = {}, {}
@@ -194,6 +221,9 @@ def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026, blas_thr
             proc = ctx.Process(target=_worker, args=(there, filt, y, seed, n, blas_threads), daemon=True)
             proc.start()
             workers[n] = (here, proc)
+        for here, _ in workers.values():            # one at a time: no worker runs beside a timed one
+            here.send("warm-up")
+            here.recv()
 
         def timed(n, what):
             workers[n][0].send(what)
@@ -361,17 +391,17 @@ WHY = {
     "Kalman": "no particles: the count sees 2-4 model calls a step, the time is the filter's matrix "
               "algebra (gains, Cholesky factors, sigma points)",
     "GPFF": "work a time step costs whatever N is, which at N = 100 the count (N transitions and 2d + 1 "
-            "measurement calls) cannot spread: one random-generator call per run for the transition "
-            "(about half of the time the count allows), and about 45 numpy calls on per-run arrays for "
-            "the moments, the unscented transform, the flow's coefficients and its map (eq 43: in closed "
-            "form over all lambda steps with a plain residual, checked Euler steps of d + 1 probes with "
-            "the bearing's angle residual)",
+            "measurement calls) cannot spread: the transition's standard normals (as many as the bootstrap PF "
+            "at N = 100 draws) are 35-42 % of a growth-model step and about a quarter of a bearings-only one; "
+            "the rest is numpy calls on per-run arrays (the unscented transform, the flow's coefficients at "
+            "every lambda and its map, the moments; on the bearings-only model also 20 checked Euler steps of "
+            "the probes for the angle residual and about 4000 tiny matrix products a step)",
     "CMS-PF": "the partition of the 2N pool, the sort of the N weights that picks the big and small "
               "particles, and the chaotic carrier's burn-in (1000 iterations a chain) are work outside "
               "the model calls",
-    "ESPF": "the fitness selection partitions the 3N pool (whose order every later sum keeps), and the "
-            "filter makes six random draws a step per run (two normal, three uniform, one permutation) "
-            "against the bootstrap PF's two, outside the model calls",
+    "ESPF": "the filter makes six random draws a step per run (two normal, three uniform, one permutation: "
+            "about a third of its step, against the bootstrap PF's two), and the fitness selection partitions "
+            "the 3N pool, whose order every later sum keeps (a fifth of its step), outside the model calls",
     "DPF": "the parameter weights' Beta fits and the DEKF's augmented-state Jacobians are work "
            "outside the model calls",
     "IMM": "per mode: mixing, the per-mode likelihood normalisation and (IMMPFOR) the replacement's "
@@ -388,9 +418,9 @@ WHY = {
 WHY_FILTER = {
     "PF multinomial": "the multinomial scheme sorts its N uniforms and binary-searches the cumulative "
                       "weights in them, run by run (about 40 % of its step), work outside the model calls",
-    "IMMPFOR": "the replacement step (eqs 22-25: the joint whitening, the parents' nearest-neighbour "
-               "distances and steps, the new particles' L z; about 40 % of its time) is work outside "
-               "the model calls",
+    "IMMPFOR": "the replacement step (eqs 22-25, 40 % of its time: the joint whitening with the weighted and "
+               "unweighted spreads of all 3 x 500 particles, the parents' nearest-neighbour steps over the 3 "
+               "modes, the new particles' L z, the parent-slot draw) is work outside the model calls",
     "JMPF": "the mode draw, the sort of the particles by mode with its gathers and scatter, and the mode "
             "models' f (an einsum, several times slower than a matrix product, which keeps a run's numbers "
             "independent of the batch), outside the model calls",
@@ -509,8 +539,12 @@ def main(argv=None):
 
         threadpoolctl.threadpool_limits(a.blas_threads, user_api="blas")
         info += f", BLAS limited to {a.blas_threads} thread(s) for the measurement"
+    keeps_freed = False
     if not a.same_process:
-        info += ", each filter timed in a process of its own"
+        # set before the workers fork, which inherit it; the per-model table below is measured under it too
+        keeps_freed = steady_heap()
+        info += ", each filter timed in a process of its own" + (" whose allocator keeps what it frees"
+                                                                 if keeps_freed else "")
     df = annotate(measure(configs, T, runs, repeats, blas_threads=a.blas_threads, isolate=not a.same_process))
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -530,6 +564,7 @@ def main(argv=None):
         per_model.to_csv(BOOK_MODELS_CSV, float_format="%.6g")
         BOOK_CSV.with_suffix(".json").write_text(json.dumps(
             {"machine": info, "T": T, "runs": runs, "repeats": repeats, "blas_threads": a.blas_threads,
+             "worker_processes": not a.same_process, "allocator_keeps_freed": keeps_freed,
              "script": "benchmarks/bench_all.py"}, indent=1) + "\n", encoding="utf-8")
     print(info)
     cols = ["count per step", "single ns/particle-step", "batched ns/particle-step",
