@@ -155,6 +155,22 @@ def _ning(sv=1.0):
     return UNGM(time_offset=0, Q=1.0, R=sv ** 2, x0=0.1, m0=0.0, P0=1.0)
 
 
+def _ning_with_nan_pools(monkeypatch):
+    """Ning's model whose log-likelihood is NaN where the state is below -1 (finite states), and
+    8 steps of 3 runs simulated from it: pools holding NaN."""
+    m = _ning()
+    plain = m.log_likelihood
+
+    def nan_below(y, x):
+        out = np.array(plain(y, x))
+        out[x[..., 0] < -1.0] = np.nan
+        return out
+
+    sim = m.simulate(8, 3, np.random.default_rng(2))
+    monkeypatch.setattr(m, "log_likelihood", nan_below)
+    return m, sim
+
+
 CMS_CASES = [dict(N=40), dict(N=40, n_th=1.0), dict(N=30, n_th=0.0, carrier="chebyshev", big_fraction=0.5),
              dict(N=21, carrier="randn", big_fraction=0.01, resampling="multinomial"),
              dict(N=16, carrier=ChaosCarrier("logistic", u=3.9, init="run"), resampling="residual"),
@@ -211,16 +227,7 @@ def test_cms_filter_bit_identical_every_batch_size_and_scheme(runs, N, scheme, m
 def test_cms_nan_likelihoods_take_the_selection_rule(monkeypatch):
     """NaN log-likelihoods in the 2N pool count as -inf in the selection, as in
     ``select_top_likelihood``: the reference's numbers."""
-    m = _ning()
-    plain = m.log_likelihood
-
-    def nan_below(y, x):
-        out = np.array(plain(y, x))
-        out[x[..., 0] < -1.0] = np.nan
-        return out
-
-    sim = m.simulate(8, 3, np.random.default_rng(2))
-    monkeypatch.setattr(m, "log_likelihood", nan_below)
+    m, sim = _ning_with_nan_pools(monkeypatch)
     new = CMSParticleFilter(m, 12).filter(sim.y, RunStreams.from_entropy(3, 3))
     old = CMSParticleFilter(m, 12)
     monkeypatch.setattr(old, "_loop", loop_ref.__get__(old))
@@ -378,16 +385,7 @@ def test_espf_bit_identical_for_a_vector_state(monkeypatch):
 def test_espf_nan_likelihoods_take_the_selection_rule(monkeypatch):
     """A pool holding NaN log-likelihoods (a model that returns NaN at some states) is selected
     with NaN as -inf, as ``select_top_likelihood`` does: the reference's particles."""
-    m = _ning()
-    plain = m.log_likelihood
-
-    def nan_below(y, x):                         # NaN where the state is below -1 (finite states)
-        out = np.array(plain(y, x))
-        out[x[..., 0] < -1.0] = np.nan
-        return out
-
-    sim = m.simulate(8, 3, np.random.default_rng(2))
-    monkeypatch.setattr(m, "log_likelihood", nan_below)
+    m, sim = _ning_with_nan_pools(monkeypatch)
     new = EvolutionSamplingParticleFilter(m, 12).filter(sim.y, RunStreams.from_entropy(3, 3))
     old = EvolutionSamplingParticleFilter(m, 12)
     monkeypatch.setattr(old, "_loop", types.MethodType(espf_loop_reference, old))

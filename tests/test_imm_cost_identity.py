@@ -293,8 +293,10 @@ def test_both_resampling_paths_are_exercised(scenario):
     assert (some.any(axis=0) & ~some.all(axis=0)).any()
 
 
-def test_replacement_is_its_first_implementation_on_random_sets():
-    rng = np.random.default_rng(5)
+def _replacement_inputs(seed):
+    """Random arguments of ``IMMPFOR.replacement`` (4 runs, 3 modes, N = 40, the 6-D state's scales),
+    with a run whose modes do not resample; returns them and N."""
+    rng = np.random.default_rng(seed)
     R, r, N, n = 4, 3, 40, 6
     x = rng.normal(size=(R, r, N, n)) * np.array([1e4, 1e2, 1.0, 1e4, 1e2, 1.0])
     w = rng.gamma(0.3, size=(R, r, N))
@@ -305,6 +307,11 @@ def test_replacement_is_its_first_implementation_on_random_sets():
     other = rng.integers(0, N, size=(R, r, N))
     do = rng.random((R, r)) < 0.6
     do[1] = False                                      # a run with no mode to resample
+    return x, w, u, M, counts, other, do, N
+
+
+def test_replacement_is_its_first_implementation_on_random_sets():
+    x, w, u, M, counts, other, do, N = _replacement_inputs(5)
     for kw in (dict(), dict(metric="diagonal"), dict(density="weights"), dict(mix_modes=False)):
         new = IMMPFOR(tracking_system(), N, **kw).replacement(x, w, u, M, counts, other, do)
         old = _OldIMMPFOR(tracking_system(), N, **kw).replacement(x, w, u, M, counts, other, do)
@@ -373,17 +380,7 @@ def test_subtract_rows_is_the_broadcast_subtraction():
 
 
 def test_replacement_in_place_is_the_replacement_into_a_new_array():
-    rng = np.random.default_rng(6)
-    R, r, N, n = 4, 3, 40, 6
-    x = rng.normal(size=(R, r, N, n)) * np.array([1e4, 1e2, 1.0, 1e4, 1e2, 1.0])
-    w = rng.gamma(0.3, size=(R, r, N))
-    w /= w.sum(axis=-1, keepdims=True)
-    u = rng.dirichlet(np.ones(r), size=R)
-    M = rng.dirichlet(np.ones(r), size=(R, r)).transpose(0, 2, 1)
-    counts = _counts_from_below(_systematic_below(w, rng.random((R, r)), N))
-    other = rng.integers(0, N, size=(R, r, N))
-    do = rng.random((R, r)) < 0.6
-    do[1] = False
+    x, w, u, M, counts, other, do, N = _replacement_inputs(6)
     for kw in (dict(), dict(metric="diagonal"), dict(density="weights"), dict(mix_modes=False)):
         f = IMMPFOR(tracking_system(), N, **kw)
         new, nd = f.replacement(x, w, u, M, counts, other, do)

@@ -507,6 +507,18 @@ class GaussianParticleFlowFilter(Filter):
         bad |= (shift > self.max_shift**2 * prior).any(axis=1)
         return bad, (m, P)
 
+    def _drop_diverged(self, k, alive, bad, x, diverged_at):
+        """The runs still alive and their particles once the runs ``bad`` diverged at step ``k``
+        (recorded in ``diverged_at``); with ``on_divergence='raise'`` the error instead."""
+        if self.on_divergence == "raise":
+            raise FilterDivergenceError(
+                f"GPFF diverged at step {k} in runs {alive[bad][:10].tolist()} (particles "
+                f"non-finite, or the flow grew a variance more than {self.max_growth:g}x or "
+                f"moved the mean more than {self.max_shift:g} prior sd); "
+                f"on_divergence='warn' keeps the other runs")
+        diverged_at[alive[bad]] = k
+        return alive[~bad], x[~bad]
+
     def filter(self, y, rng: np.random.Generator | None = None) -> FilterResult:
         y = self._prepare(y, rng)
         if self._scalar and flow.integrate_flow is _INTEGRATE_FLOW:
@@ -545,14 +557,7 @@ class GaussianParticleFlowFilter(Filter):
                 bad |= failed
                 x = x_new
                 if bad.any():
-                    if self.on_divergence == "raise":
-                        raise FilterDivergenceError(
-                            f"GPFF diverged at step {k} in runs {alive[bad][:10].tolist()} (particles "
-                            f"non-finite, or the flow grew a variance more than {self.max_growth:g}x or "
-                            f"moved the mean more than {self.max_shift:g} prior sd); "
-                            f"on_divergence='warn' keeps the other runs")
-                    diverged_at[alive[bad]] = k
-                    alive, x = alive[~bad], x[~bad]
+                    alive, x = self._drop_diverged(k, alive, bad, x, diverged_at)
                     if alive.size == 0:
                         break
                 if bad.any():    # the survivors' moments, recomputed on their own array
@@ -665,14 +670,7 @@ class GaussianParticleFlowFilter(Filter):
                     bad |= sh > shift2 * prior
                 x = u[..., None]
                 if bad.any():
-                    if self.on_divergence == "raise":
-                        raise FilterDivergenceError(
-                            f"GPFF diverged at step {k} in runs {alive[bad][:10].tolist()} (particles "
-                            f"non-finite, or the flow grew a variance more than {self.max_growth:g}x or "
-                            f"moved the mean more than {self.max_shift:g} prior sd); "
-                            f"on_divergence='warn' keeps the other runs")
-                    diverged_at[alive[bad]] = k
-                    alive, x = alive[~bad], x[~bad]
+                    alive, x = self._drop_diverged(k, alive, bad, x, diverged_at)
                     if alive.size == 0:
                         break
                     m1, _, var = _posterior_moments(x, Ps is not None)
