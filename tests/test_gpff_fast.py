@@ -324,3 +324,21 @@ def test_normals_in_blocks_only_for_per_run_streams_and_gaussian_transitions():
     blocks = g._normal_blocks(filter_streams(0, "x", 2), 1)
     with pytest.raises(ValueError, match="unexpected draw"):
         blocks.take(np.arange(2)).standard_normal((2, 20, 2))
+
+
+@pytest.mark.parametrize("model", ["scalar", "2-D"])
+def test_the_divergence_warning_points_at_the_caller(model):
+    """Both loops (the scalar one runs one call deeper) warn at the line that called ``filter``."""
+    if model == "scalar":
+        m = UNGM()
+    else:
+        m = LinearGaussianModel(F=0.9 * np.eye(2), H=np.eye(2), Q=np.eye(2), R=0.01 * np.eye(2),
+                                x0=np.zeros(2), m0=np.zeros(2), P0=np.eye(2))
+    sim = m.simulate(10, 4, truth_streams(1, 4))
+    f = GaussianParticleFlowFilter(m, 50, max_shift=1e-3)
+    assert f._scalar == (model == "scalar")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        f.filter(sim.y, filter_streams(2, "gpff", 4))
+    hits = [w for w in caught if issubclass(w.category, FilterDivergenceWarning)]
+    assert hits and all(w.filename == __file__ for w in hits)

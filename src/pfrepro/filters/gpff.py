@@ -566,14 +566,7 @@ class GaussianParticleFlowFilter(Filter):
                 xs[alive, k - 1] = post[0]
                 if Ps is not None:
                     Ps[alive, k - 1] = post[1]
-        n_div = int((diverged_at > 0).sum())
-        if n_div and self.on_divergence == "warn":
-            warnings.warn(FilterDivergenceWarning(
-                f"GPFF: {n_div} of {runs} runs diverged (first at step {int(diverged_at[diverged_at > 0].min())}); "
-                f"their estimates are NaN from the step in diagnostics['diverged_at'] on. "
-                f"Count them beside any error statistic (on_divergence='drop' silences this warning, "
-                f"'raise' makes it an error)"), stacklevel=2)
-        return FilterResult(xs, Ps, diagnostics={"diverged_at": diverged_at, "n_diverged": n_div})
+        return self._result(xs, Ps, diverged_at, runs, stacklevel=3)
 
     def _normal_blocks(self, rng, T):
         """A :class:`_NormalBlocks` for per-run streams when the run's draws are the prior's and
@@ -683,7 +676,7 @@ class GaussianParticleFlowFilter(Filter):
                     xs[:, k - 1, 0] = m1
                     if Ps is not None:
                         Ps[:, k - 1, 0, 0] = var
-        return self._result(xs, Ps, diverged_at, runs)
+        return self._result(xs, Ps, diverged_at, runs, stacklevel=4)
 
     def _update_scalar(self, dev, m, P, y, sc):
         """The eq-43 update of :meth:`update` for d = m = 1 and a plain residual (see
@@ -755,14 +748,16 @@ class GaussianParticleFlowFilter(Filter):
         dev += c0[:, None]
         return dev
 
-    def _result(self, xs, Ps, diverged_at, runs):
+    def _result(self, xs, Ps, diverged_at, runs, stacklevel):
+        """The filter's result, with the divergence warning (``on_divergence='warn'``) pointed at the
+        caller of ``filter`` (``stacklevel`` counts from here)."""
         n_div = int((diverged_at > 0).sum())
         if n_div and self.on_divergence == "warn":
             warnings.warn(FilterDivergenceWarning(
                 f"GPFF: {n_div} of {runs} runs diverged (first at step {int(diverged_at[diverged_at > 0].min())}); "
                 f"their estimates are NaN from the step in diagnostics['diverged_at'] on. "
                 f"Count them beside any error statistic (on_divergence='drop' silences this warning, "
-                f"'raise' makes it an error)"), stacklevel=3)
+                f"'raise' makes it an error)"), stacklevel=stacklevel)
         return FilterResult(xs, Ps, diagnostics={"diverged_at": diverged_at, "n_diverged": n_div})
 
     def __repr__(self) -> str:
