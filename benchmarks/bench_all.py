@@ -390,8 +390,10 @@ def derive(df: pd.DataFrame) -> pd.DataFrame:
 WHY = {
     "Kalman": "no particles: the count sees 2-4 model calls a step, the time is the filter's matrix "
               "algebra (gains, Cholesky factors, sigma points)",
-    "GPFF": "work a time step costs whatever N is, which at N = 100 the count (N transitions and 2d + 1 "
-            "measurement calls) cannot spread: the transition's standard normals (as many as the bootstrap PF "
+    "GPFF": "nearly all of the counted evaluations are transitions, which on the growth model cost several "
+            "times a likelihood evaluation (the bootstrap PF's count is half of each); and work a time step costs "
+            "whatever N is, which at N = 100 the count (N transitions and 2d + 1 measurement calls) cannot "
+            "spread: the transition's standard normals (as many as the bootstrap PF "
             "at N = 100 draws) are 35-42 % of a growth-model step and about a quarter of a bearings-only one; "
             "the rest is numpy calls on per-run arrays (the unscented transform, the flow's coefficients at "
             "every lambda and its map, the moments; on the bearings-only model also 20 checked Euler steps of "
