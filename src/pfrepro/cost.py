@@ -337,7 +337,8 @@ def count_predicted(bench: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
         table also ``same N`` and ``within at the same N``. Where the table has a ratio's range
         over the benchmark's repeats (:func:`repeat_range_columns`), also ``within in every
         repeat`` (its highest <= ``limit``) and ``over in every repeat`` (its lowest > ``limit``),
-        with the suffix `` at the same N`` for the same-N ratio; a filter in neither is at the edge.
+        and for the same-N ratio ``within in every repeat at the same N`` and ``over in every
+        repeat at the same N``; a filter in neither is at the edge.
 
     Raises
     ------
