@@ -342,3 +342,22 @@ def test_the_divergence_warning_points_at_the_caller(model):
         f.filter(sim.y, filter_streams(2, "gpff", 4))
     hits = [w for w in caught if issubclass(w.category, FilterDivergenceWarning)]
     assert hits and all(w.filename == __file__ for w in hits)
+
+
+def test_a_run_that_stops_early_drew_few_normals_ahead():
+    """Blocks grow 8, 16, 32, ... steps: a run that stops drawing at step 3 of 50 (a diverged run)
+    drew one 8-step block, not the horizon (which made the eq-41 filter 40 % slower), and settle()
+    still leaves its generator where step-by-step draws would have."""
+    from pfrepro.rng import RunStreams
+
+    streams = RunStreams.from_entropy(7, 2)
+    blocks = gpff._NormalBlocks(streams, 5, 50)
+    for _ in range(3):
+        blocks.take(np.arange(2)).standard_normal((2, 5))
+    for _ in range(47):
+        blocks.take(np.array([1])).standard_normal((1, 5))
+    assert blocks._drawn[0] == 8 * 5 and blocks._drawn[1] == 50 * 5
+    blocks.settle()
+    ref = RunStreams.from_entropy(7, 2)
+    ref[0].standard_normal(3 * 5)
+    assert ref[0].bit_generator.state == streams[0].bit_generator.state
