@@ -155,7 +155,7 @@ def steady_heap() -> bool:
     not glibc. Without it, whether a filter's large temporaries come back as fresh pages (a page
     fault per 4 kB, every call) depends on the thresholds glibc adapts to what the process freed
     before: in one process the filters timed earlier set them, in a process of its own the filter's
-    own sizes do, and the same code measured up to a third slower or faster between the two."""
+    own sizes do, and the same code measured up to two fifths slower or faster between the two."""
     import ctypes
     import ctypes.util
 
