@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from pfrepro.cost import SAME_MODEL_RATIO, SAME_N_RATIO, count_model_calls, repeat_range_columns
+from pfrepro.cost import SAME_MODEL_RATIO, SAME_N_RATIO, UNGM_RATIO, count_model_calls, repeat_range_columns
 from pfrepro.montecarlo import filter_streams, truth_streams
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -170,9 +170,10 @@ def steady_heap() -> bool:
 
 def _worker(conn, filt, y, seed, name, blas_threads):
     """One configuration's timing process: answers ``"single"`` / ``"batched"`` with (wall, CPU)
-    of one call and ``"warm-up"`` with ``None`` once warm, until ``None``. A process of its own, so that the allocator's state (what the heap
-    kept or gave back after other filters' calls, and the page faults that follow) is this
-    filter's alone: a filter's time does not depend on which filters ran before it."""
+    of one call and ``"warm-up"`` with ``None`` once warm, until ``None``. A process of its own,
+    so that the allocator's state (what the heap kept or gave back after other filters' calls, and
+    the page faults that follow) is this filter's alone: a filter's time does not depend on which
+    filters ran before it."""
     if blas_threads is not None:
         import threadpoolctl
 
@@ -265,8 +266,6 @@ def measure(configs, T: int, runs: int, repeats: int, seed: int = 2026, blas_thr
     return derive(pd.DataFrame(rows).set_index("filter"))
 
 
-#: the columns of the ratios against the bootstrap PF on the same model, and with the same particle count
-SAME_MODEL_COLUMN, SAME_N_COLUMN = SAME_MODEL_RATIO, SAME_N_RATIO
 #: the batched time of one repeat (``REPEAT_COLUMN k``, seconds per step and run): the ratios' range
 REPEAT_COLUMN = "batched s/step/run, repeat"
 #: rows that are yardsticks only, not among the particle filters the table judges
@@ -348,7 +347,7 @@ def derive(df: pd.DataFrame) -> pd.DataFrame:
     base = float(ref.iloc[0]) if len(ref) else np.nan
     df["time/count vs PF (single)"] = df["single ns/evaluation"] / base
     refb = df.loc[df.index.str.startswith("PF systematic"), "batched ns/evaluation"]
-    df["time/count vs PF (batched)"] = df["batched ns/evaluation"] / float(refb.iloc[0]) if len(refb) else np.nan
+    df[UNGM_RATIO] = df["batched ns/evaluation"] / float(refb.iloc[0]) if len(refb) else np.nan
     if "batched CPU s/step/run" in df:
         # the same ratio on CPU time: on a loaded machine (other processes on the cores) wall time
         # counts the waits, CPU time only this process's work
@@ -360,9 +359,9 @@ def derive(df: pd.DataFrame) -> pd.DataFrame:
         # (the bearings-only h is two arctan2 and an angle wrap a particle, the UNGM's one cosine):
         # the count predicts a filter's time relative to the bootstrap PF on the SAME model, where
         # the table has one (else the first PF row, the UNGM's)
-        df[SAME_MODEL_COLUMN], same_n = _against_same_model(df, df["batched ns/evaluation"])
+        df[SAME_MODEL_RATIO], same_n = _against_same_model(df, df["batched ns/evaluation"])
         if same_n is not None:
-            df[SAME_N_COLUMN] = same_n
+            df[SAME_N_RATIO] = same_n
         if "batched CPU s/step/run" in df:
             df["time/count vs same-model PF (batched, CPU)"] = _against_same_model(
                 df, 1e9 * df["batched CPU s/step/run"] / per_step)[0]
@@ -371,12 +370,12 @@ def derive(df: pd.DataFrame) -> pd.DataFrame:
         # its count in every repeat, over it in every repeat, or at the edge
         reps = sorted(int(c.rsplit(" ", 1)[1]) for c in df.columns if c.startswith(REPEAT_COLUMN))
         if reps:
-            ratios = {SAME_MODEL_COLUMN: [], SAME_N_COLUMN: []}
+            ratios = {SAME_MODEL_RATIO: [], SAME_N_RATIO: []}
             for r in reps:
                 sm, sn = _against_same_model(df, 1e9 * df[f"{REPEAT_COLUMN} {r}"] / per_step)
-                ratios[SAME_MODEL_COLUMN].append(sm)
+                ratios[SAME_MODEL_RATIO].append(sm)
                 if sn is not None:
-                    ratios[SAME_N_COLUMN].append(sn)
+                    ratios[SAME_N_RATIO].append(sn)
             for col, per_repeat in ratios.items():
                 if per_repeat:
                     low, high = repeat_range_columns(col)
@@ -475,9 +474,9 @@ def annotate(df: pd.DataFrame, limit: float = 2.0) -> pd.DataFrame:
     out["particle filter"] = (out["particles"].notna() & (out["family"] != "Kalman")
                               & ~out.index.isin(REFERENCE_ROWS))
     nan = pd.Series(np.nan, index=out.index)
-    same = out.get(SAME_MODEL_COLUMN, nan)
+    same = out.get(SAME_MODEL_RATIO, nan)
     whys = []
-    for name, fam, sm, b, one in zip(out.index, out["family"], same, out["time/count vs PF (batched)"],
+    for name, fam, sm, b, one in zip(out.index, out["family"], same, out[UNGM_RATIO],
                                      out["time/count vs PF (single)"]):
         if fam == "Kalman" or sm > limit:
             whys.append(why(name, fam) if max(sm, b, one) > limit else "")
